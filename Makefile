@@ -1,0 +1,41 @@
+# bvh_collision: the commands of DESIGN.md section 5.
+#   make deps    install the Debian packages the build and tests need (idempotent)
+#   make build   configure and build the package and its tests (Release) in ./build
+#   make test    catkin_lint + every unit and launch test; last line `N passed, N failed, N skipped`
+#                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
+#                CI=true: both
+#   make demo    start the node on the demo robot and report what it does
+SHELL := /bin/bash
+# catkin needs Debian's own python3 (with catkin_pkg) ahead of any other interpreter.
+export PATH := /usr/bin:$(PATH)
+
+BUILD ?= build
+JOBS ?= 2
+
+DEB_PACKAGES := \
+  build-essential cmake python3 python3-catkin-pkg catkin catkin-lint \
+  ros-core-dev libroscpp-dev rosbash python3-roslaunch python3-rostest librostest-dev \
+  python3-rosnode python3-rosservice python3-rosparam \
+  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev \
+  liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev \
+  libgtest-dev libgmock-dev nlohmann-json3-dev
+
+.PHONY: all deps build test demo clean
+all: build
+
+deps:
+	@scripts/install_deps.sh $(DEB_PACKAGES)
+
+build: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	$(MAKE) -C $(BUILD) -j$(JOBS) all
+	$(MAKE) -C $(BUILD) -j$(JOBS) tests
+
+test: deps build
+	@BUILD=$(BUILD) JOBS=$(JOBS) scripts/run_tests.sh
+
+demo: deps build
+	@scripts/demo.sh
+
+clean:
+	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel

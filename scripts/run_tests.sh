@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The body of `make test`: catkin_lint, then every unit and launch test of the Release build
+# (unless SANITIZE=1), then the unit tests under AddressSanitizer and UndefinedBehaviorSanitizer
+# in their own build folder (when SANITIZE=1 or CI=true). The last line is the combined count,
+# `N passed, N failed, N skipped`; the exit status is non-zero when anything failed.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+export PATH="/usr/bin:$PATH"
+
+BUILD=${BUILD:-build}
+SAN_BUILD=${SAN_BUILD:-build-sanitize}
+JOBS=${JOBS:-2}
+run_normal=1; run_sanitized=0
+[[ "${SANITIZE:-0}" == "1" ]] && { run_normal=0; run_sanitized=1; }
+[[ "${CI:-}" == "true" ]] && run_sanitized=1
+
+lint_dir="$BUILD/lint_results"
+result_dirs=("$lint_dir")
+status=0
+
+# catkin_lint: one test case, failed on any error (warnings are printed, not fatal).
+rm -rf "$lint_dir" && mkdir -p "$lint_dir"
+echo "== catkin_lint"
+if lint_out=$(catkin_lint -W1 . 2>&1); then lint_failure=""; else
+  lint_failure="<failure message=\"catkin_lint reported errors\"/>"; status=1; fi
+echo "$lint_out"
+cat > "$lint_dir/catkin_lint.xml" <<XML
+<testsuite name="catkin_lint" tests="1"><testcase classname="catkin_lint" name="package">${lint_failure}</testcase></testsuite>
+XML
+
+if [[ $run_normal == 1 ]]; then
+  echo "== unit and launch tests ($BUILD)"
+  rm -rf "$BUILD/test_results"
+  make -C "$BUILD" run_tests || status=1
+  # catkin_test_results is the gate; its counts double gtest cases, so the summary counts XML.
+  catkin_test_results "$BUILD/test_results" > /dev/null || status=1
+  result_dirs+=("$BUILD/test_results")
+fi
+
+if [[ $run_sanitized == 1 ]]; then
+  echo "== unit tests under ASan + UBSan ($SAN_BUILD)"
+  if cmake -S . -B "$SAN_BUILD" -DBVH_COLLISION_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$SAN_BUILD.configure.log" 2>&1 \
+      && make -C "$SAN_BUILD" -j"$JOBS" unit_tests; then
+    rm -rf "$SAN_BUILD/test_results"
+    ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1} \
+      UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1} \
+      make -C "$SAN_BUILD" run_tests_bvh_collision_gtest || status=1
+    catkin_test_results "$SAN_BUILD/test_results" > /dev/null || status=1
+    result_dirs+=("$SAN_BUILD/test_results")
+  else
+    cat "$SAN_BUILD.configure.log" 2>/dev/null | tail -20
+    echo "sanitizer build failed"; status=1
+    mkdir -p "$SAN_BUILD/test_results"
+    echo '<testsuite><testcase classname="sanitizer" name="build"><failure/></testcase></testsuite>' \
+      > "$SAN_BUILD/test_results/build_failure.xml"
+    result_dirs+=("$SAN_BUILD/test_results")
+  fi
+fi
+
+echo "== summary"
+[[ $run_normal == 1 ]] && python3 scripts/test_summary.py "release" "$BUILD/test_results" | tail -1
+[[ $run_sanitized == 1 ]] && python3 scripts/test_summary.py "sanitized" "$SAN_BUILD/test_results" | tail -1
+python3 scripts/test_summary.py "total" "${result_dirs[@]}" > "$BUILD/test_summary.txt" || status=1
+grep '^FAILED' "$BUILD/test_summary.txt"
+tail -1 "$BUILD/test_summary.txt" | sed 's/^total: //'
+exit $status

@@ -1,0 +1,20 @@
+// The collision_checker node (DESIGN.md section 4).
+#include <ros/ros.h>
+
+#include "bvh_collision/ros/collision_checker_node.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "collision_checker");
+  // These handles outlive the node object: when the last NodeHandle goes, roscpp shuts down and
+  // rosconsole drops every later message, including the start-up error below.
+  ros::NodeHandle nh;
+  ros::NodeHandle private_nh("~");
+  try {
+    bvh_collision::CollisionCheckerNode node(nh, private_nh);
+    ros::spin();
+  } catch (const bvh_collision::NodeStartupError& e) {
+    ROS_FATAL_STREAM("collision_checker cannot start: " << e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,38 @@
+// Where tests find the real robots of ../shared/robots (DESIGN.md section 6).
+// BVH_COLLISION_ROBOTS overrides the default folder beside the repository. When the folder is
+// missing a test is skipped with a message, except under CI=true, where that is a failure.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace bvh_collision::test {
+
+inline std::string robots_dir() {
+  const char* env = std::getenv("BVH_COLLISION_ROBOTS");
+  return (env != nullptr && *env != '\0') ? std::string(env) : std::string(BVH_COLLISION_DEFAULT_ROBOTS);
+}
+
+inline bool running_in_ci() {
+  const char* ci = std::getenv("CI");
+  return ci != nullptr && std::string(ci) == "true";
+}
+
+inline std::string source_dir() { return BVH_COLLISION_SOURCE_DIR; }
+
+}  // namespace bvh_collision::test
+
+// Use at the top of a test body that needs ../shared/robots.
+#define BVH_REQUIRE_ROBOTS()                                                                   \
+  do {                                                                                         \
+    const std::string dir_ = ::bvh_collision::test::robots_dir();                               \
+    if (!std::filesystem::is_directory(dir_)) {                                                \
+      if (::bvh_collision::test::running_in_ci()) {                                            \
+        FAIL() << "robots folder '" << dir_ << "' is missing (CI=true: this is a failure)";    \
+      }                                                                                        \
+      GTEST_SKIP() << "robots folder '" << dir_ << "' is missing; set BVH_COLLISION_ROBOTS";   \
+    }                                                                                          \
+  } while (false)

@@ -1,0 +1,142 @@
+// The architecture of DESIGN.md section 1, checked on the sources: every file belongs to one
+// layer, lower layers never include higher ones, the core includes no ROS header (and OctoMap only
+// in octomap_bridge), and the built core library links no ROS library.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kSource = BVH_COLLISION_SOURCE_DIR;
+
+// Which project layers each folder may include (its own included).
+const std::map<std::string, std::set<std::string>> kAllowed = {
+    {"geometry", {"geometry"}},
+    {"bvh", {"geometry", "bvh"}},
+    {"octree", {"geometry", "octree"}},
+    {"robot", {"geometry", "bvh", "robot"}},
+    {"checker", {"geometry", "bvh", "octree", "robot", "checker"}},
+    {"ros", {"geometry", "bvh", "octree", "robot", "checker", "ros"}},
+    {"nodes", {"geometry", "bvh", "octree", "robot", "checker", "ros"}},
+};
+const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "checker"};
+
+struct Include {
+  std::string file;
+  int line;
+  std::string target;
+};
+
+std::vector<Include> includes_of(const fs::path& file) {
+  static const std::regex re(R"(^\s*#\s*include\s*[<"]([^>"]+)[>"])");
+  std::vector<Include> out;
+  std::ifstream in(file);
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    std::smatch m;
+    if (std::regex_search(text, m, re)) out.push_back({file.string(), line, m[1]});
+  }
+  return out;
+}
+
+// Source files by layer: include/bvh_collision/<layer>/ and src/<layer>/.
+std::map<std::string, std::vector<fs::path>> files_by_layer() {
+  std::map<std::string, std::vector<fs::path>> out;
+  for (const std::string root : {"include/bvh_collision", "src"}) {
+    const fs::path dir = fs::path(kSource) / root;
+    if (!fs::exists(dir)) continue;
+    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+      if (!entry.is_regular_file()) continue;
+      const fs::path rel = fs::relative(entry.path(), dir);
+      const std::string layer = rel.begin()->string();
+      out[layer].push_back(entry.path());
+    }
+  }
+  return out;
+}
+
+bool is_ros_header(const std::string& target) {
+  static const std::regex re(
+      R"(^(ros|tf2_ros|tf2|rosbag|message_filters|diagnostic_updater|[a-z_]*_msgs|std_srvs|xmlrpcpp)/)");
+  // Generated bvh_collision messages live directly under bvh_collision/ (no layer folder).
+  static const std::regex generated(R"(^bvh_collision/[A-Z][A-Za-z]*\.h$)");
+  return std::regex_search(target, re) || std::regex_match(target, generated);
+}
+
+TEST(Layers, EveryFileIsInALayerFolder) {
+  for (const auto& [layer, files] : files_by_layer()) {
+    EXPECT_TRUE(kAllowed.count(layer)) << "files outside any layer folder: " << files.front();
+  }
+}
+
+TEST(Layers, LowerLayersNeverIncludeHigherOnes) {
+  const auto layers = files_by_layer();
+  ASSERT_FALSE(layers.empty()) << "no sources found under " << kSource;
+  for (const auto& [layer, files] : layers) {
+    if (!kAllowed.count(layer)) continue;
+    for (const auto& file : files) {
+      for (const Include& inc : includes_of(file)) {
+        static const std::regex project(R"(^bvh_collision/([a-z_]+)/)");
+        std::smatch m;
+        if (!std::regex_search(inc.target, m, project)) continue;
+        EXPECT_TRUE(kAllowed.at(layer).count(m[1])) << inc.file << ":" << inc.line << " (layer "
+                                                    << layer << ") includes " << inc.target;
+      }
+    }
+  }
+}
+
+TEST(Layers, CoreIncludesNoRosHeaderAndOctomapOnlyInTheBridge) {
+  for (const auto& [layer, files] : files_by_layer()) {
+    if (!kCore.count(layer)) continue;
+    for (const auto& file : files) {
+      for (const Include& inc : includes_of(file)) {
+        EXPECT_FALSE(is_ros_header(inc.target)) << inc.file << ":" << inc.line << " includes "
+                                                << inc.target << " in the ROS-free core";
+        EXPECT_FALSE(inc.target.rfind("fcl/", 0) == 0 || inc.target.rfind("CGAL/", 0) == 0)
+            << inc.file << ":" << inc.line << ": FCL and CGAL are test oracles, not core deps";
+        if (inc.target.rfind("octomap/", 0) == 0) {
+          EXPECT_NE(file.filename().string().find("octomap_bridge"), std::string::npos)
+              << inc.file << ":" << inc.line << ": only octomap_bridge may include OctoMap";
+        }
+      }
+    }
+  }
+}
+
+TEST(Layers, IncludeCheckRecognisesRosHeaders) {
+  // The check above is only as good as this classifier.
+  EXPECT_TRUE(is_ros_header("ros/ros.h"));
+  EXPECT_TRUE(is_ros_header("sensor_msgs/PointCloud2.h"));
+  EXPECT_TRUE(is_ros_header("tf2_ros/buffer.h"));
+  EXPECT_TRUE(is_ros_header("bvh_collision/CheckState.h"));
+  EXPECT_FALSE(is_ros_header("bvh_collision/robot/robot_description.h"));
+  EXPECT_FALSE(is_ros_header("urdf_model/model.h"));
+  EXPECT_FALSE(is_ros_header("Eigen/Core"));
+}
+
+TEST(Layers, CoreLibraryLinksNoRosLibrary) {
+  const std::string lib = BVH_COLLISION_CORE_LIBRARY;
+  ASSERT_TRUE(fs::exists(lib)) << lib;
+  FILE* pipe = popen(("ldd '" + lib + "' 2>&1").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), buf.size(), pipe) != nullptr) output += buf.data();
+  ASSERT_EQ(pclose(pipe), 0) << output;
+  EXPECT_NE(output.find("liburdfdom_model"), std::string::npos) << "ldd output unexpected:\n" << output;
+  static const std::regex ros_lib(
+      R"(lib(roscpp|rosconsole|rostime|cpp_common|xmlrpcpp|tf2|tf2_ros|message_filters|roslib)[._])");
+  EXPECT_FALSE(std::regex_search(output, ros_lib)) << "core links ROS:\n" << output;
+}
+
+}  // namespace

@@ -1,0 +1,62 @@
+// Launch test: a node given a missing, malformed or unusable robot description (or a bad
+// parameter) exits non-zero at start-up with a message that says what is wrong.
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include <array>
+#include <cstdio>
+#include <sys/wait.h>
+
+namespace {
+
+struct RunResult {
+  int exit_code = -1;  // 124: killed by the timeout, i.e. the node kept running
+  std::string output;
+};
+
+// Starts the node as a user would (rosrun) in namespace `ns`, with a timeout.
+RunResult run_node_in(const std::string& ns) {
+  const std::string cmd = "timeout 30 rosrun bvh_collision collision_checker __ns:=/" + ns + " 2>&1";
+  RunResult r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+void expect_startup_failure(const std::string& ns, const std::string& reason) {
+  const RunResult r = run_node_in(ns);
+  EXPECT_NE(r.exit_code, 0) << "node exited 0 in /" << ns << ":\n" << r.output;
+  EXPECT_NE(r.exit_code, 124) << "node kept running in /" << ns << ":\n" << r.output;
+  EXPECT_LT(r.exit_code, 128) << "node crashed (signal) in /" << ns << ":\n" << r.output;
+  EXPECT_NE(r.output.find(reason), std::string::npos)
+      << "message for /" << ns << " does not say '" << reason << "':\n" << r.output;
+}
+
+TEST(NodeBadRobot, MissingDescription) {
+  expect_startup_failure("nothing_here", "robot_description' is not set");
+}
+
+TEST(NodeBadRobot, EmptyDescription) { expect_startup_failure("empty", "robot description is empty"); }
+
+TEST(NodeBadRobot, MalformedXml) { expect_startup_failure("malformed", "not well-formed XML"); }
+
+TEST(NodeBadRobot, NotAUrdf) { expect_startup_failure("not_urdf", "no <robot> root element"); }
+
+TEST(NodeBadRobot, DanglingJoint) { expect_startup_failure("dangling_joint", "ghost"); }
+
+TEST(NodeBadRobot, NegativeResolution) {
+  expect_startup_failure("bad_resolution", "~resolution must be a positive number");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_node_bad_robot");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
