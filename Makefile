@@ -24,7 +24,7 @@ DEB_PACKAGES := \
 all: build
 
 deps:
-	@scripts/install_deps.sh $(DEB_PACKAGES)
+	@bash scripts/install_deps.sh $(DEB_PACKAGES)
 
 build: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
@@ -32,10 +32,10 @@ build: deps
 	$(MAKE) -C $(BUILD) -j$(JOBS) tests
 
 test: deps build
-	@BUILD=$(BUILD) JOBS=$(JOBS) scripts/run_tests.sh
+	@BUILD=$(BUILD) JOBS=$(JOBS) bash scripts/run_tests.sh
 
 demo: deps build
-	@scripts/demo.sh
+	@bash scripts/demo.sh
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel
