@@ -1,0 +1,37 @@
+// Basic geometric value types: vectors, rigid transforms, triangles.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace bvh_collision {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+// A rigid transform x -> R x + t, stored as 12 doubles (no homogeneous row).
+struct Transform {
+  Mat3 R = Mat3::Identity();
+  Vec3 t = Vec3::Zero();
+
+  static Transform Identity() { return {}; }
+  static Transform Translation(const Vec3& t) { return {Mat3::Identity(), t}; }
+
+  Vec3 operator*(const Vec3& p) const { return R * p + t; }
+  Transform operator*(const Transform& o) const { return {R * o.R, R * o.t + t}; }
+  Transform inverse() const { return {R.transpose(), -(R.transpose() * t)}; }
+};
+
+// The pose of b in a's frame, a^-1 * b, computed as R_a^T (t_b - t_a): two poses far from the
+// origin with the same translation cancel exactly, so results do not depend on where the scene is.
+inline Transform relative_transform(const Transform& a, const Transform& b) {
+  return {a.R.transpose() * b.R, a.R.transpose() * (b.t - a.t)};
+}
+
+struct Triangle {
+  Vec3 v[3];
+  const Vec3& operator[](int i) const { return v[i]; }
+  Vec3& operator[](int i) { return v[i]; }
+};
+
+}  // namespace bvh_collision

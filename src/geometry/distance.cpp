@@ -1,0 +1,151 @@
+#include "bvh_collision/geometry/distance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "bvh_collision/geometry/intersection.h"
+
+namespace bvh_collision {
+namespace {
+
+double clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
+
+// Keeps the candidate pair (x on a, y on b) if it is closer than the best so far.
+void consider(ClosestPoints& best, double& best_sq, const Vec3& x, const Vec3& y) {
+  const double sq = (x - y).squaredNorm();
+  if (sq < best_sq) {
+    best_sq = sq;
+    best.on_a = x;
+    best.on_b = y;
+  }
+}
+
+}  // namespace
+
+Vec3 closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double dd = d.squaredNorm();
+  if (dd == 0.0) return a;
+  return a + clamp01((p - a).dot(d) / dd) * d;
+}
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a);
+  const double nn = n.squaredNorm();
+  if (nn > 0.0 && std::isfinite(nn)) {
+    // Inside the prism over the triangle: the projection onto the plane is the closest point.
+    const Vec3 ap = p - a, bp = p - b, cp = p - c;
+    const bool inside = (b - a).cross(ap).dot(n) >= 0.0 && (c - b).cross(bp).dot(n) >= 0.0 &&
+                        (a - c).cross(cp).dot(n) >= 0.0;
+    if (inside) return p - (ap.dot(n) / nn) * n;
+  }
+  // Otherwise (or for a zero-area triangle) the closest point lies on an edge.
+  const Vec3 candidates[3] = {closest_point_on_segment(p, a, b), closest_point_on_segment(p, b, c),
+                              closest_point_on_segment(p, c, a)};
+  int best = 0;
+  double best_sq = (candidates[0] - p).squaredNorm();
+  for (int i = 1; i < 3; ++i) {
+    const double sq = (candidates[i] - p).squaredNorm();
+    if (sq < best_sq) {
+      best_sq = sq;
+      best = i;
+    }
+  }
+  return candidates[best];
+}
+
+ClosestPoints segment_segment_distance(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2) {
+  ClosestPoints best;
+  double best_sq = std::numeric_limits<double>::infinity();
+  // End points against the other segment: these cover parallel segments and every clamped case.
+  consider(best, best_sq, p1, closest_point_on_segment(p1, q1, q2));
+  consider(best, best_sq, p2, closest_point_on_segment(p2, q1, q2));
+  consider(best, best_sq, closest_point_on_segment(q1, p1, p2), q1);
+  consider(best, best_sq, closest_point_on_segment(q2, p1, p2), q2);
+  // Interior pair: the common perpendicular, from the cross product (whose relative error grows
+  // as 1/angle, not 1/angle^2 as the a*e - b*b form does). Only used when both parameters fall
+  // strictly inside; then it is the global minimum.
+  const Vec3 d1 = p2 - p1, d2 = q2 - q1, r = q1 - p1;
+  const Vec3 n = d1.cross(d2);
+  const double nn = n.squaredNorm();
+  if (nn > 0.0) {
+    const double s = r.cross(d2).dot(n) / nn;
+    const double t = r.cross(d1).dot(n) / nn;
+    if (s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0) {
+      const Vec3 x = p1 + s * d1;
+      consider(best, best_sq, x, closest_point_on_segment(x, q1, q2));
+    }
+  }
+  best.distance = std::sqrt(best_sq);
+  return best;
+}
+
+namespace {
+
+// The closest pair over vertex-face and edge-edge features: the distance of disjoint triangles,
+// and a common point (distance ~0) of touching ones.
+ClosestPoints feature_closest_pair(const Triangle& a, const Triangle& b) {
+  ClosestPoints best;
+  double best_sq = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    consider(best, best_sq, a[i], closest_point_on_triangle(a[i], b[0], b[1], b[2]));
+    consider(best, best_sq, closest_point_on_triangle(b[i], a[0], a[1], a[2]), b[i]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const ClosestPoints e = segment_segment_distance(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
+      consider(best, best_sq, e.on_a, e.on_b);
+    }
+  }
+  best.distance = std::sqrt(best_sq);
+  return best;
+}
+
+}  // namespace
+
+Vec3 intersection_point(const Triangle& a, const Triangle& b) {
+  // An edge of one triangle that crosses the other's plane inside it.
+  for (int pass = 0; pass < 2; ++pass) {
+    const Triangle& s = pass == 0 ? a : b;
+    const Triangle& t = pass == 0 ? b : a;
+    const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+    for (int i = 0; i < 3; ++i) {
+      const Vec3& u = s[i];
+      const Vec3& v = s[(i + 1) % 3];
+      const double du = (u - t[0]).dot(n), dv = (v - t[0]).dot(n);
+      if (du * dv > 0.0 || du == dv) continue;
+      const Vec3 x = u + (du / (du - dv)) * (v - u);
+      if ((closest_point_on_triangle(x, t[0], t[1], t[2]) - x).squaredNorm() <=
+          1e-24 * (1.0 + x.squaredNorm())) {
+        return x;
+      }
+    }
+  }
+  // Coplanar or degenerate contact: a contained vertex or crossing edges.
+  const ClosestPoints c = feature_closest_pair(a, b);
+  return 0.5 * (c.on_a + c.on_b);
+}
+
+ClosestPoints triangle_triangle_distance(const Triangle& a_in, const Triangle& b_in) {
+  // Work relative to a's first vertex: differences of nearby large coordinates are exact.
+  const Vec3 origin = a_in[0];
+  Triangle a, b;
+  for (int i = 0; i < 3; ++i) {
+    a[i] = a_in[i] - origin;
+    b[i] = b_in[i] - origin;
+  }
+  ClosestPoints best;
+  // The exact decision is made on the given coordinates (the shifted copies may have rounded).
+  if (triangles_intersect(a_in, b_in)) {
+    best.on_a = best.on_b = intersection_point(a, b) + origin;
+    return best;
+  }
+  // Disjoint triangles: the closest pair is vertex-face or edge-edge.
+  best = feature_closest_pair(a, b);
+  best.on_a += origin;
+  best.on_b += origin;
+  return best;
+}
+
+}  // namespace bvh_collision

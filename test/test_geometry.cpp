@@ -1,0 +1,316 @@
+// The geometry layer against CGAL's exact kernels: orientation predicates, triangle-triangle
+// intersection (random, grid-degenerate and named hard cases) and distances with witnesses.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/geometry/predicates.h"
+#include "cgal_oracle.h"
+
+namespace bvh_collision {
+namespace {
+
+using test::cgal_orient3d;
+using test::cgal_segment_distance;
+using test::cgal_triangle_distance;
+using test::cgal_triangles_intersect;
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(20261122);
+  return r;
+}
+
+Vec3 random_point(double lo = 0.0, double hi = 1.0) {
+  std::uniform_real_distribution<double> u(lo, hi);
+  return {u(rng()), u(rng()), u(rng())};
+}
+
+// Points on a small integer grid: coplanar, collinear, shared and zero-area cases abound.
+// Scaling by a power of two and adding a power-of-two offset keep every coordinate exact.
+Vec3 grid_point(int n, double scale, double offset) {
+  std::uniform_int_distribution<int> u(0, n);
+  return Vec3(u(rng()), u(rng()), u(rng())) * scale + Vec3::Constant(offset);
+}
+
+Triangle tri(const Vec3& a, const Vec3& b, const Vec3& c) { return Triangle{{a, b, c}}; }
+
+// ---------------------------------------------------------------------------------- predicates
+
+TEST(Predicates, Orient3dMatchesCgalOnRandomPoints) {
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 a = random_point(), b = random_point(), c = random_point(), d = random_point();
+    ASSERT_EQ(orient3d(a, b, c, d), cgal_orient3d(a, b, c, d));
+  }
+}
+
+TEST(Predicates, Orient3dMatchesCgalOnNearlyCoplanarPoints) {
+  // d is computed on the plane of a, b, c and then nudged by a few ulps: the floating-point
+  // determinant is noise here, so the filter fails and the exact path decides.
+  int exact_zero = 0, nonzero = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = std::pow(10.0, std::uniform_int_distribution<int>(-3, 4)(rng()));
+    const Vec3 offset = random_point(-1e4, 1e4);
+    const Vec3 a = offset + scale * random_point(), b = offset + scale * random_point();
+    const Vec3 c = offset + scale * random_point();
+    const double u = std::uniform_real_distribution<double>(-1, 2)(rng());
+    const double v = std::uniform_real_distribution<double>(-1, 2)(rng());
+    Vec3 d = a + u * (b - a) + v * (c - a);
+    const int nudge = std::uniform_int_distribution<int>(-2, 2)(rng());
+    for (int k = 0; k < std::abs(nudge); ++k) {
+      d.z() = std::nextafter(d.z(), nudge > 0 ? INFINITY : -INFINITY);
+    }
+    const int ours = orient3d(a, b, c, d);
+    ASSERT_EQ(ours, cgal_orient3d(a, b, c, d)) << "case " << i;
+    (ours == 0 ? exact_zero : nonzero)++;
+  }
+  EXPECT_GT(nonzero, 0);
+}
+
+TEST(Predicates, Orient3dExactZeroOnGrid) {
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 a = grid_point(3, 0.25, 8192), b = grid_point(3, 0.25, 8192);
+    const Vec3 c = grid_point(3, 0.25, 8192), d = grid_point(3, 0.25, 8192);
+    ASSERT_EQ(orient3d(a, b, c, d), cgal_orient3d(a, b, c, d));
+  }
+}
+
+TEST(Predicates, Orient2dMatchesCgal) {
+  using P2 = test::Epick::Point_2;
+  for (int i = 0; i < 20000; ++i) {
+    const bool grid = i % 2 == 0;
+    const Vec3 a = grid ? grid_point(4, 1.0 / 8, 1024) : random_point();
+    const Vec3 b = grid ? grid_point(4, 1.0 / 8, 1024) : random_point();
+    Vec3 c = grid ? grid_point(4, 1.0 / 8, 1024) : a + 0.37 * (b - a);
+    for (int k = 0; k < 3; ++k) {
+      const int x = (k + 1) % 3, y = (k + 2) % 3;
+      const int cgal = static_cast<int>(CGAL::orientation(P2(a[x], a[y]), P2(b[x], b[y]), P2(c[x], c[y])));
+      ASSERT_EQ(orient2d(a, b, c, k), cgal) << "case " << i << " axis " << k;
+    }
+  }
+}
+
+TEST(Predicates, ProjectionAxisIsMinusOneExactlyForZeroArea) {
+  EXPECT_EQ(projection_axis(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(2, 2, 2)), -1);
+  EXPECT_EQ(projection_axis(Vec3(1, 2, 3), Vec3(1, 2, 3), Vec3(1, 2, 3)), -1);
+  EXPECT_EQ(projection_axis(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)), 2);
+  // A sliver one ulp off the line is not degenerate.
+  EXPECT_GE(projection_axis(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(2, 2, std::nextafter(2.0, 3.0))), 0);
+}
+
+// ------------------------------------------------------------------- triangle intersection
+
+TEST(TriangleIntersection, MatchesCgalOnRandomTriangles) {
+  int hits = 0;
+  for (int i = 0; i < 50000; ++i) {
+    const Triangle a = tri(random_point(), random_point(), random_point());
+    const Triangle b = tri(random_point(), random_point(), random_point());
+    const bool expected = cgal_triangles_intersect(a, b);
+    ASSERT_EQ(triangles_intersect(a, b), expected) << "case " << i;
+    ASSERT_EQ(triangles_intersect(b, a), expected) << "case " << i << " swapped";
+    hits += expected;
+  }
+  EXPECT_GT(hits, 5000);  // both answers well represented
+  EXPECT_LT(hits, 45000);
+}
+
+TEST(TriangleIntersection, MatchesCgalOnDegenerateGridTriangles) {
+  // Coordinates on a 4x4x4 grid: coplanar, shared-edge, shared-vertex, touching and zero-area
+  // triangles are common. Repeated at several scales and far from the origin.
+  const double scales[] = {1.0 / 1024, 1.0, 128.0};
+  const double offsets[] = {0.0, 1024.0, 8192.0};
+  int hits = 0, degenerate = 0;
+  for (double scale : scales) {
+    for (double offset : offsets) {
+      for (int i = 0; i < 15000; ++i) {
+        const Triangle a = tri(grid_point(3, scale, offset), grid_point(3, scale, offset), grid_point(3, scale, offset));
+        const Triangle b = tri(grid_point(3, scale, offset), grid_point(3, scale, offset), grid_point(3, scale, offset));
+        const bool expected = cgal_triangles_intersect(a, b);
+        ASSERT_EQ(triangles_intersect(a, b), expected)
+            << "scale " << scale << " offset " << offset << " case " << i << "\n a " << a[0].transpose()
+            << " | " << a[1].transpose() << " | " << a[2].transpose() << "\n b " << b[0].transpose()
+            << " | " << b[1].transpose() << " | " << b[2].transpose();
+        hits += expected;
+        degenerate += projection_axis(a[0], a[1], a[2]) < 0;
+      }
+    }
+  }
+  EXPECT_GT(hits, 1000);
+  EXPECT_GT(degenerate, 1000);
+}
+
+TEST(TriangleIntersection, MatchesCgalOnNearContactPairs) {
+  // b is a copy of a moved by a tiny vector: contact decided at the last bits.
+  for (int i = 0; i < 20000; ++i) {
+    const Triangle a = tri(random_point(), random_point(), random_point());
+    const Vec3 n = (a[1] - a[0]).cross(a[2] - a[0]).normalized();
+    const double step = std::ldexp(1.0, -std::uniform_int_distribution<int>(30, 60)(rng()));
+    const double sign = (i % 2 == 0) ? 1.0 : -1.0;
+    Triangle b = tri(a[0] + sign * step * n, random_point(), random_point());
+    if (i % 3 == 0) b = tri(a[0] + sign * step * n, a[1] + random_point(-1, 1), a[2] + sign * step * n);
+    ASSERT_EQ(triangles_intersect(a, b), cgal_triangles_intersect(a, b)) << "case " << i;
+  }
+}
+
+struct NamedCase {
+  const char* name;
+  Triangle a, b;
+  bool intersect;
+};
+
+std::vector<NamedCase> hard_cases() {
+  const Vec3 o(0, 0, 0), x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  const double ulp = std::nextafter(1.0, 2.0) - 1.0;
+  return {
+      {"coplanar_overlapping", tri(o, x, y), tri(Vec3(0.2, 0.2, 0), Vec3(2, 0.2, 0), Vec3(0.2, 2, 0)), true},
+      {"coplanar_disjoint", tri(o, x, y), tri(Vec3(0.6, 0.6, 0), Vec3(2, 0.6, 0), Vec3(0.6, 2, 0)), false},
+      {"coplanar_one_inside_other", tri(o, 4 * x, 4 * y), tri(Vec3(1, 1, 0), Vec3(1.5, 1, 0), Vec3(1, 1.5, 0)), true},
+      {"coplanar_touching_edges", tri(o, x, y), tri(Vec3(0.5, 0.5, 0), Vec3(1, 1, 0), Vec3(0, 1, 0) + Vec3(1, 0, 0)), true},
+      {"shared_edge", tri(o, x, y), tri(o, x, z), true},
+      {"shared_edge_coplanar_opposite", tri(o, x, y), tri(o, x, -y), true},
+      {"shared_vertex", tri(o, x, y), tri(o, -x + z, -y + z), true},
+      {"vertex_touching_face", tri(o, x, y), tri(Vec3(0.25, 0.25, 0), Vec3(0.25, 0.25, 1), Vec3(1, 1, 1)), true},
+      {"vertex_one_ulp_above_face", tri(o, x, y), tri(Vec3(0.25, 0.25, ulp), Vec3(0.25, 0.25, 1), Vec3(1, 1, 1)), false},
+      {"edge_touching_edge", tri(o, x, z), tri(Vec3(0.5, -1, 0), Vec3(0.5, 1, 0), Vec3(0.5, 0, -1)), true},
+      {"edge_crossing_edge_one_ulp_apart", tri(o, x, z), tri(Vec3(0.5, -1, -ulp), Vec3(0.5, 1, -ulp), Vec3(0.5, 0, -1)), false},
+      {"parallel_planes_1e-12_apart", tri(o, x, y), tri(Vec3(0, 0, 1e-12), Vec3(1, 0, 1e-12), Vec3(0, 1, 1e-12)), false},
+      {"sliver_aspect_1e6_crossing", tri(Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(0, 1e-6, 0)), tri(Vec3(0, 5e-7, -1), Vec3(0, 5e-7, 1), Vec3(0, 1, 0)), true},
+      {"sliver_aspect_1e6_missing", tri(Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(0, 1e-6, 0)), tri(Vec3(0, 2e-6, -1), Vec3(0, 2e-6, 1), Vec3(0, 1, 0)), false},
+      {"zero_area_segment_through_face", tri(Vec3(0.2, 0.2, -1), Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 1)), tri(o, x, y), true},
+      {"zero_area_segment_beside_face", tri(Vec3(0.6, 0.6, -1), Vec3(0.6, 0.6, 0), Vec3(0.6, 0.6, 1)), tri(o, x, y), false},
+      {"zero_area_point_on_face", tri(Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 0)), tri(o, x, y), true},
+      {"zero_area_point_off_face", tri(Vec3(0.2, 0.2, ulp), Vec3(0.2, 0.2, ulp), Vec3(0.2, 0.2, ulp)), tri(o, x, y), false},
+      {"zero_area_both_crossing_segments", tri(Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 0)), tri(Vec3(0, -1, 0), Vec3(0, 1, 0), Vec3(0, 0.5, 0)), true},
+      {"zero_area_both_skew_segments", tri(Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 0)), tri(Vec3(0, -1, ulp), Vec3(0, 1, ulp), Vec3(0, 0.5, ulp)), false},
+      {"zero_area_collinear_overlapping", tri(o, x, 0.5 * x), tri(0.75 * x, 2 * x, 1.5 * x), true},
+      {"zero_area_collinear_disjoint", tri(o, x, 0.5 * x), tri(1.25 * x, 2 * x, 1.5 * x), false},
+  };
+}
+
+TEST(TriangleIntersection, NamedHardCases) {
+  for (const NamedCase& c : hard_cases()) {
+    SCOPED_TRACE(c.name);
+    EXPECT_EQ(cgal_triangles_intersect(c.a, c.b), c.intersect) << "the case's expectation is wrong";
+    EXPECT_EQ(triangles_intersect(c.a, c.b), c.intersect);
+    EXPECT_EQ(triangles_intersect(c.b, c.a), c.intersect);
+    // Far from the origin (exact power-of-two offset) the answer is the same.
+    for (double offset : {1024.0, 8192.0}) {
+      Triangle a = c.a, b = c.b;
+      for (int i = 0; i < 3; ++i) {
+        a[i] += Vec3::Constant(offset);
+        b[i] += Vec3::Constant(offset);
+      }
+      EXPECT_EQ(triangles_intersect(a, b), cgal_triangles_intersect(a, b)) << "offset " << offset;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------- distances
+
+// |ours - exact| within 1e-9 relative, or a few ulps of the coordinates' magnitude for
+// distances below what doubles at that magnitude can resolve.
+void expect_distance_close(double ours, double exact, double coordinate_scale, const std::string& what) {
+  const double allowed = 1e-9 * exact + 8 * std::numeric_limits<double>::epsilon() * coordinate_scale;
+  EXPECT_NEAR(ours, exact, allowed) << what;
+}
+
+void expect_witnesses_consistent(const ClosestPoints& d, const Triangle& a, const Triangle& b, double scale) {
+  const double slack = 64 * std::numeric_limits<double>::epsilon() * scale;
+  EXPECT_NEAR((d.on_a - d.on_b).norm(), d.distance, slack + 1e-12 * d.distance);
+  EXPECT_LE((closest_point_on_triangle(d.on_a, a[0], a[1], a[2]) - d.on_a).norm(), slack);
+  EXPECT_LE((closest_point_on_triangle(d.on_b, b[0], b[1], b[2]) - d.on_b).norm(), slack);
+}
+
+TEST(Distance, TriangleTriangleMatchesCgalOnRandomPairs) {
+  for (int i = 0; i < 5000; ++i) {
+    const Triangle a = tri(random_point(), random_point(), random_point());
+    const Vec3 shift = random_point(-1, 1);
+    const Triangle b = tri(random_point() + shift, random_point() + shift, random_point() + shift);
+    const ClosestPoints d = triangle_triangle_distance(a, b);
+    expect_distance_close(d.distance, cgal_triangle_distance(a, b), 2.0, "case " + std::to_string(i));
+    expect_witnesses_consistent(d, a, b, 2.0);
+    if (HasFailure()) return;
+  }
+}
+
+TEST(Distance, TriangleTriangleMatchesCgalOnGridPairsIncludingDegenerate) {
+  for (int i = 0; i < 5000; ++i) {
+    const Triangle a = tri(grid_point(3, 0.5, 1024), grid_point(3, 0.5, 1024), grid_point(3, 0.5, 1024));
+    const Triangle b = tri(grid_point(3, 0.5, 1024), grid_point(3, 0.5, 1024), grid_point(3, 0.5, 1024));
+    const ClosestPoints d = triangle_triangle_distance(a, b);
+    expect_distance_close(d.distance, cgal_triangle_distance(a, b), 1024.0, "case " + std::to_string(i));
+    expect_witnesses_consistent(d, a, b, 1024.0);
+    if (HasFailure()) return;
+  }
+}
+
+TEST(Distance, TriangleTriangleNearContact) {
+  // Gaps from 1e-3 down to 1e-15 along a's normal, including rotated copies.
+  for (int i = 0; i < 3000; ++i) {
+    const Triangle a = tri(random_point(), random_point(), random_point());
+    const Vec3 n = (a[1] - a[0]).cross(a[2] - a[0]).normalized();
+    const double gap = std::pow(10.0, -std::uniform_int_distribution<int>(3, 15)(rng()));
+    const Triangle b = tri(a[0] + gap * n, a[0] + gap * n + random_point(-1, 1), a[1] + (gap + 0.5) * n);
+    const ClosestPoints d = triangle_triangle_distance(a, b);
+    expect_distance_close(d.distance, cgal_triangle_distance(a, b), 2.0, "case " + std::to_string(i));
+    if (HasFailure()) return;
+  }
+}
+
+TEST(Distance, ParallelEdgesAt1e12) {
+  // Edges parallel (and nearly parallel) at 1e-12: the a*e - b*b formula fails here.
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 p1 = random_point(), dir = random_point(-1, 1).normalized();
+    const Vec3 perp = dir.cross(random_point(-1, 1)).normalized();
+    const double length = 0.1 + random_point().x();
+    const double twist = (i % 2 == 0) ? 0.0 : 1e-9 * random_point().y();
+    const Vec3 p2 = p1 + length * dir;
+    const Vec3 q1 = p1 + 1e-12 * perp + 0.3 * length * dir;
+    const Vec3 q2 = q1 + length * (dir + twist * perp);
+    const ClosestPoints d = segment_segment_distance(p1, p2, q1, q2);
+    expect_distance_close(d.distance, cgal_segment_distance(p1, p2, q1, q2), 2.0, "case " + std::to_string(i));
+    if (HasFailure()) return;
+  }
+}
+
+TEST(Distance, SegmentSegmentMatchesCgal) {
+  for (int i = 0; i < 20000; ++i) {
+    const bool degenerate = i % 10 == 0;
+    const Vec3 p1 = random_point(), p2 = degenerate ? p1 : random_point();
+    const Vec3 q1 = random_point(), q2 = random_point();
+    const ClosestPoints d = segment_segment_distance(p1, p2, q1, q2);
+    expect_distance_close(d.distance, cgal_segment_distance(p1, p2, q1, q2), 1.0, "case " + std::to_string(i));
+    if (HasFailure()) return;
+  }
+}
+
+TEST(Distance, HardCasesAgreeWithCgal) {
+  for (const NamedCase& c : hard_cases()) {
+    SCOPED_TRACE(c.name);
+    const ClosestPoints d = triangle_triangle_distance(c.a, c.b);
+    const double exact = cgal_triangle_distance(c.a, c.b);
+    expect_distance_close(d.distance, exact, 2.0, c.name);
+    EXPECT_EQ(d.distance == 0.0, c.intersect);
+  }
+}
+
+TEST(Distance, TranslationFarFromOriginChangesNothing) {
+  for (int i = 0; i < 2000; ++i) {
+    const Triangle a = tri(grid_point(8, 1.0 / 64, 0), grid_point(8, 1.0 / 64, 0), grid_point(8, 1.0 / 64, 0));
+    const Triangle b = tri(grid_point(8, 1.0 / 64, 0), grid_point(8, 1.0 / 64, 0), grid_point(8, 1.0 / 64, 0));
+    const double base = triangle_triangle_distance(a, b).distance;
+    for (double offset : {1024.0, 8192.0}) {
+      Triangle ta = a, tb = b;
+      for (int k = 0; k < 3; ++k) {
+        ta[k] += Vec3::Constant(offset);
+        tb[k] += Vec3::Constant(offset);
+      }
+      ASSERT_EQ(triangles_intersect(ta, tb), triangles_intersect(a, b));
+      ASSERT_NEAR(triangle_triangle_distance(ta, tb).distance, base, 1e-12 * (1 + base)) << "case " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace bvh_collision
