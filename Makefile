@@ -17,8 +17,8 @@ DEB_PACKAGES := \
   ros-core-dev libroscpp-dev rosbash python3-roslaunch python3-rostest librostest-dev \
   python3-rosnode python3-rosservice python3-rosparam \
   libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev \
-  liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev \
-  libgtest-dev libgmock-dev nlohmann-json3-dev
+  liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev \
+  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev
 
 .PHONY: all deps build test demo clean
 all: build

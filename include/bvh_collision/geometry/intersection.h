@@ -6,6 +6,8 @@
 // treated as the segment (or point) it is, and still intersects what that segment touches.
 #pragma once
 
+#include <algorithm>
+
 #include "bvh_collision/geometry/types.h"
 
 namespace bvh_collision {
@@ -24,5 +26,17 @@ bool segment_intersects_triangle(const Vec3& u, const Vec3& v, const Vec3& a, co
 
 // Closed segments (possibly points) in 3-D.
 bool segments_intersect(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2);
+
+// Closed sphere against closed axis-aligned box, exactly as the geometry is: the squared distance
+// from the centre to the box is at most r^2. (The seed's "distance between the centres <= r"
+// misses a sphere touching a large box's face, and accepts nothing it should not only by luck.)
+inline bool sphere_intersects_box(const Vec3& centre, double r, const Vec3& box_min, const Vec3& box_max) {
+  double d2 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double excess = std::max(box_min[i] - centre[i], 0.0) + std::max(centre[i] - box_max[i], 0.0);
+    d2 += excess * excess;
+  }
+  return d2 <= r * r;
+}
 
 }  // namespace bvh_collision

@@ -1,0 +1,90 @@
+// Queries on BVHs: collision and distance between two meshes under poses, ray casting, and point
+// containment for closed meshes. Semantics follow DESIGN.md section 2:
+//  - touching is collision; with padding p a pair collides when its distance d <= p;
+//  - tolerance eps: collision is reported whenever d <= p and may be reported when d <= p + eps
+//    (never a false negative); eps = 0 is exact;
+//  - closed meshes are solids: one wholly inside the other collides (distance 0).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "bvh_collision/bvh/bvh.h"
+
+namespace bvh_collision {
+
+// The seed's cost terms: T = Nu*Cu + Nv*Cv + Np*Cp.
+struct QueryStats {
+  std::uint64_t volume_updates = 0;   // Nu: volumes carried into another frame
+  std::uint64_t volume_tests = 0;     // Nv: volume overlap / distance-bound tests
+  std::uint64_t primitive_tests = 0;  // Np: triangle pair tests
+  QueryStats& operator+=(const QueryStats& o) {
+    volume_updates += o.volume_updates;
+    volume_tests += o.volume_tests;
+    primitive_tests += o.primitive_tests;
+    return *this;
+  }
+};
+
+struct CollisionRequest {
+  double padding = 0.0;
+  double tolerance = 0.0;
+  std::size_t max_contacts = 0;  // 0: boolean, stop at the first collision
+  bool solids = true;            // closed meshes bound solids (containment counts)
+};
+
+struct MeshContact {
+  Vec3 position = Vec3::Zero();  // world frame
+  Vec3 normal = Vec3::UnitZ();   // world frame, from b towards a
+  double depth = 0.0;            // penetration estimate; 0 for touching, padding and containment
+  std::int32_t triangle_a = -1, triangle_b = -1;  // mesh triangle indices; -1 for containment
+};
+
+struct CollisionResult {
+  bool collision = false;
+  // Decided by the tolerance without reaching triangles: the distance is <= padding + tolerance.
+  bool within_tolerance = false;
+  std::vector<MeshContact> contacts;
+  QueryStats stats;
+};
+
+struct DistanceRequest {
+  double tolerance = 0.0;  // the reported distance may exceed the true one by this much
+};
+
+struct DistanceResult {
+  double distance = std::numeric_limits<double>::infinity();
+  Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();  // world frame witnesses
+  std::int32_t triangle_a = -1, triangle_b = -1;
+  QueryStats stats;
+};
+
+struct RayHit {
+  bool hit = false;
+  double distance = std::numeric_limits<double>::infinity();  // along the unit direction
+  Vec3 point = Vec3::Zero();
+  std::int32_t triangle = -1;
+};
+
+template <class BV>
+CollisionResult collide(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>& b,
+                        const Transform& pose_b, const CollisionRequest& request = {});
+
+template <class BV>
+DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>& b,
+                        const Transform& pose_b, const DistanceRequest& request = {});
+
+// First hit (or, with any_hit, some hit) of the ray origin + s * direction, 0 <= s <= max_range
+// (direction need not be unit; distances are along the unit direction), in world frame.
+template <class BV>
+RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, const Vec3& direction,
+               double max_range, bool any_hit = false, QueryStats* stats = nullptr);
+
+// Is the point (in the mesh's own frame) inside or on the closed mesh? Decided by the parity of
+// exact ray crossings; a ray grazing an edge or vertex is replaced by another one. For a mesh
+// that is not closed, answers whether the point lies on it.
+template <class BV>
+bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats = nullptr);
+
+}  // namespace bvh_collision

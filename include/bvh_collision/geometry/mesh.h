@@ -1,0 +1,34 @@
+// An indexed triangle mesh and the topological facts the collision layers need.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+struct TriangleMesh {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<std::int32_t, 3>> triangles;
+
+  Triangle triangle(std::size_t i) const {
+    const auto& t = triangles[i];
+    return Triangle{{vertices[t[0]], vertices[t[1]], vertices[t[2]]}};
+  }
+  bool empty() const { return triangles.empty(); }
+};
+
+// Closed (watertight) and consistently oriented: after merging vertices at equal positions, every
+// edge is used by exactly two triangles, once in each direction. Such a mesh bounds a solid.
+bool is_closed(const TriangleMesh& mesh);
+
+// One vertex (as an index) from each connected component (triangles sharing a vertex position).
+// A mesh wholly inside a solid has all of these inside it; one outside has none.
+std::vector<std::int32_t> component_representatives(const TriangleMesh& mesh);
+
+// The 12 triangles of an axis-aligned box centred on the origin, outward winding.
+TriangleMesh box_mesh(const Vec3& size);
+
+}  // namespace bvh_collision

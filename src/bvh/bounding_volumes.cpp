@@ -1,0 +1,201 @@
+#include "bvh_collision/bvh/bounding_volumes.h"
+
+#include <Eigen/Eigenvalues>
+
+namespace bvh_collision {
+namespace {
+
+// Grows a fitted interval by a few ulps of its magnitude: projections onto non-axis directions
+// round, and a volume must contain its points.
+void pad_interval(double& lo, double& hi) {
+  const double m = 8 * std::numeric_limits<double>::epsilon() * (std::abs(lo) + std::abs(hi));
+  lo -= m;
+  hi += m;
+}
+
+// Extents of points along the columns of `axes`.
+void project_extents(const Vec3* p, std::size_t n, const Mat3& axes, Vec3& lo, Vec3& hi) {
+  lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 q = axes.transpose() * p[i];
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  for (int k = 0; k < 3; ++k) pad_interval(lo[k], hi[k]);
+}
+
+template <int K>
+Kdop<K> fit_kdop(const Vec3* p, std::size_t n) {
+  Kdop<K> k;
+  for (std::size_t i = 0; i < n; ++i) k.extend(p[i]);
+  for (int s = 3; s < Kdop<K>::kSlabs; ++s) pad_interval(k.lo[s], k.hi[s]);
+  return k;
+}
+
+}  // namespace
+
+namespace detail {
+
+Mat3 principal_axes(const Vec3* points, std::size_t n) {
+  if (n == 0) return Mat3::Identity();
+  Vec3 mean = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) mean += points[i];
+  mean /= static_cast<double>(n);
+  Mat3 cov = Mat3::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 d = points[i] - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> solver(cov);
+  const Mat3 v = solver.eigenvectors();  // ascending eigenvalues
+  Mat3 axes;
+  axes.col(0) = v.col(2).normalized();
+  axes.col(1) = v.col(1).normalized();
+  axes.col(2) = axes.col(0).cross(axes.col(1)).normalized();
+  if (!axes.allFinite()) return Mat3::Identity();
+  return axes;
+}
+
+}  // namespace detail
+
+template <>
+Aabb fit_volume<Aabb>(const Vec3* points, std::size_t n) {
+  Aabb b;
+  for (std::size_t i = 0; i < n; ++i) b.extend(points[i]);  // min/max are exact: no padding
+  return b;
+}
+
+template <>
+Obb fit_volume<Obb>(const Vec3* points, std::size_t n) {
+  Obb b;
+  b.axes = detail::principal_axes(points, n);
+  Vec3 lo, hi;
+  project_extents(points, n, b.axes, lo, hi);
+  b.center = b.axes * (0.5 * (lo + hi));
+  b.half = 0.5 * (hi - lo);
+  return b;
+}
+
+template <>
+Sphere fit_volume<Sphere>(const Vec3* p, std::size_t n) {
+  Sphere s;
+  if (n == 0) return s;
+  // Ritter: a diameter from two far-apart points, then grow to take in the rest.
+  auto farthest = [&](const Vec3& from) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < n; ++i) {
+      if ((p[i] - from).squaredNorm() > (p[best] - from).squaredNorm()) best = i;
+    }
+    return best;
+  };
+  const std::size_t y = farthest(p[0]);
+  const std::size_t z = farthest(p[y]);
+  s.center = 0.5 * (p[y] + p[z]);
+  s.radius = 0.5 * (p[y] - p[z]).norm();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d = (p[i] - s.center).norm();
+    if (d > s.radius) {
+      const double r = 0.5 * (s.radius + d);
+      s.center += ((r - s.radius) / d) * (p[i] - s.center);
+      s.radius = r;
+    }
+  }
+  // The box centre sometimes does better; keep the smaller, with its radius measured exactly.
+  const Aabb box = fit_volume<Aabb>(p, n);
+  double r_ritter = 0.0, r_box = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    r_ritter = std::max(r_ritter, (p[i] - s.center).norm());
+    r_box = std::max(r_box, (p[i] - center(box)).norm());
+  }
+  if (r_box < r_ritter) {
+    s.center = center(box);
+    r_ritter = r_box;
+  }
+  s.radius = r_ritter * (1 + 4 * std::numeric_limits<double>::epsilon()) +
+             4 * std::numeric_limits<double>::epsilon() * s.center.cwiseAbs().sum();
+  return s;
+}
+
+template <>
+Rss fit_volume<Rss>(const Vec3* points, std::size_t n) {
+  Rss r;
+  r.axes = detail::principal_axes(points, n);  // the rectangle spans the two widest directions
+  Vec3 lo, hi;
+  project_extents(points, n, r.axes, lo, hi);
+  r.center = r.axes * (0.5 * (lo + hi));
+  r.half[0] = 0.5 * (hi[0] - lo[0]);
+  r.half[1] = 0.5 * (hi[1] - lo[1]);
+  r.radius = 0.5 * (hi[2] - lo[2]);
+  return r;
+}
+
+template <>
+Kdop14 fit_volume<Kdop14>(const Vec3* p, std::size_t n) { return fit_kdop<14>(p, n); }
+template <>
+Kdop18 fit_volume<Kdop18>(const Vec3* p, std::size_t n) { return fit_kdop<18>(p, n); }
+template <>
+Kdop26 fit_volume<Kdop26>(const Vec3* p, std::size_t n) { return fit_kdop<26>(p, n); }
+
+Obb merge(const Obb& a, const Obb& b) {
+  // The seed's method: refit to the 16 corners.
+  Vec3 corners[16];
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 s((i & 4) ? 1 : -1, (i & 2) ? 1 : -1, (i & 1) ? 1 : -1);
+    corners[i] = a.center + a.axes * s.cwiseProduct(a.half);
+    corners[8 + i] = b.center + b.axes * s.cwiseProduct(b.half);
+  }
+  return fit_volume<Obb>(corners, 16);
+}
+
+Rss merge(const Rss& a, const Rss& b) {
+  // Fit a rectangle swept sphere to the 8 rectangle corners; it holds both rectangles, so
+  // adding the larger radius holds both volumes.
+  Vec3 corners[8];
+  for (int i = 0; i < 4; ++i) {
+    const double sx = (i & 2) ? 1 : -1, sy = (i & 1) ? 1 : -1;
+    corners[i] = a.center + a.axes.col(0) * (sx * a.half[0]) + a.axes.col(1) * (sy * a.half[1]);
+    corners[4 + i] = b.center + b.axes.col(0) * (sx * b.half[0]) + b.axes.col(1) * (sy * b.half[1]);
+  }
+  Rss m = fit_volume<Rss>(corners, 8);
+  m.radius += std::max(a.radius, b.radius);
+  return m;
+}
+
+bool contains(const Aabb& v, const Vec3& p) {
+  return (p.array() >= v.min.array()).all() && (p.array() <= v.max.array()).all();
+}
+
+bool contains(const Obb& v, const Vec3& p) {
+  const Vec3 q = v.axes.transpose() * (p - v.center);
+  const double pad = kVolumeMargin * (v.half.sum() + v.center.cwiseAbs().sum() + 1e-300);
+  return (q.cwiseAbs().array() <= v.half.array() + pad).all();
+}
+
+bool contains(const Sphere& v, const Vec3& p) {
+  return (p - v.center).norm() <= v.radius * (1 + kVolumeMargin) + kVolumeMargin * v.center.cwiseAbs().sum();
+}
+
+bool contains(const Rss& v, const Vec3& p) {
+  const Vec3 q = v.axes.transpose() * (p - v.center);
+  const Vec3 on_rect(std::clamp(q.x(), -v.half[0], v.half[0]), std::clamp(q.y(), -v.half[1], v.half[1]), 0.0);
+  const double pad = kVolumeMargin * (v.half[0] + v.half[1] + v.radius + v.center.cwiseAbs().sum());
+  return (q - on_rect).norm() <= v.radius + pad;
+}
+
+template <>
+const char* volume_name<Aabb>() { return "AABB"; }
+template <>
+const char* volume_name<Obb>() { return "OBB"; }
+template <>
+const char* volume_name<Sphere>() { return "sphere"; }
+template <>
+const char* volume_name<Kdop14>() { return "14-DOP"; }
+template <>
+const char* volume_name<Kdop18>() { return "18-DOP"; }
+template <>
+const char* volume_name<Kdop26>() { return "26-DOP"; }
+template <>
+const char* volume_name<Rss>() { return "RSS"; }
+
+}  // namespace bvh_collision

@@ -1,0 +1,393 @@
+#include "bvh_collision/bvh/queries.h"
+
+#include <algorithm>
+
+#include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/geometry/predicates.h"
+
+namespace bvh_collision {
+namespace {
+
+struct NodePair {
+  std::int32_t a, b;
+};
+
+Triangle carried(const Triangle& t, const RelativeFrame& f) {
+  if (f.pure_translation) return Triangle{{t[0] + f.t, t[1] + f.t, t[2] + f.t}};
+  return Triangle{{f.apply(t[0]), f.apply(t[1]), f.apply(t[2])}};
+}
+
+Vec3 unit_normal(const Triangle& t) {
+  const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double len = n.norm();
+  return len > 0.0 ? Vec3(n / len) : Vec3(Vec3::UnitZ());
+}
+
+// How far the vertices of `s` reach behind the plane of `t` (0 when none do).
+double penetration_behind(const Triangle& s, const Triangle& t) {
+  const Vec3 n = unit_normal(t);
+  double depth = 0.0;
+  for (int i = 0; i < 3; ++i) depth = std::max(depth, -(s[i] - t[0]).dot(n));
+  return depth;
+}
+
+// Which of a node pair to descend: the larger volume, unless it is a leaf.
+template <class BV>
+bool descend_a(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
+  if (nb.is_leaf()) return true;
+  if (na.is_leaf()) return false;
+  return na.size >= nb.size;
+}
+
+// ------------------------------------------------------------------------------------ collide
+
+template <class BV>
+class CollisionTraversal {
+ public:
+  CollisionTraversal(const Bvh<BV>& a, const Bvh<BV>& b, const Transform& pose_a, const Transform& pose_b,
+                     const CollisionRequest& request, CollisionResult& result)
+      : a_(a), b_(b), pose_a_(pose_a), frame_(RelativeFrame::from(relative_transform(pose_a, pose_b))),
+        request_(request), result_(result) {}
+
+  void run() {
+    std::vector<NodePair> stack{{0, 0}};
+    while (!stack.empty() && !done()) {
+      const NodePair p = stack.back();
+      stack.pop_back();
+      const BvhNode<BV>& na = a_.nodes()[p.a];
+      const BvhNode<BV>& nb = b_.nodes()[p.b];
+      ++result_.stats.volume_tests;
+      if (!overlap(na.volume, nb.volume, frame_, request_.padding)) continue;
+      if (request_.max_contacts == 0 && request_.tolerance > 0.0 &&
+          na.slack + nb.slack <= request_.tolerance) {
+        result_.collision = result_.within_tolerance = true;  // d <= padding + tolerance
+        return;
+      }
+      if (na.is_leaf() && nb.is_leaf()) {
+        leaf_pair(na, nb);
+      } else if (descend_a(na, nb)) {
+        stack.push_back({na.right, p.b});
+        stack.push_back({na.left, p.b});
+      } else {
+        stack.push_back({p.a, nb.right});
+        stack.push_back({p.a, nb.left});
+      }
+    }
+  }
+
+ private:
+  bool done() const {
+    return result_.collision && (request_.max_contacts == 0 || result_.contacts.size() >= request_.max_contacts);
+  }
+
+  void leaf_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
+    for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j) {
+      const Triangle tb = carried(b_.triangles()[j], frame_);
+      for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
+        ++result_.stats.primitive_tests;
+        const Triangle& ta = a_.triangles()[i];
+        if (request_.padding == 0.0) {
+          if (!triangles_intersect(ta, tb)) continue;
+          record(ta, tb, i, j, nullptr);
+        } else {
+          const ClosestPoints d = triangle_triangle_distance(ta, tb);
+          if (d.distance > request_.padding) continue;
+          record(ta, tb, i, j, &d);
+        }
+        if (done()) return;
+      }
+    }
+  }
+
+  void record(const Triangle& ta, const Triangle& tb, std::int32_t i, std::int32_t j, const ClosestPoints* d) {
+    result_.collision = true;
+    if (request_.max_contacts == 0) return;
+    MeshContact c;
+    c.triangle_a = a_.triangle_id(i);
+    c.triangle_b = b_.triangle_id(j);
+    if (d != nullptr && d->distance > 0.0) {  // within padding, apart
+      c.position = pose_a_ * (0.5 * (d->on_a + d->on_b));
+      c.normal = pose_a_.R * (d->on_a - d->on_b).normalized();
+    } else {
+      c.position = pose_a_ * intersection_point(ta, tb);
+      c.normal = pose_a_.R * unit_normal(tb);
+      c.depth = std::min(penetration_behind(ta, tb), penetration_behind(tb, ta));
+    }
+    result_.contacts.push_back(c);
+  }
+
+  const Bvh<BV>& a_;
+  const Bvh<BV>& b_;
+  const Transform& pose_a_;
+  const RelativeFrame frame_;
+  const CollisionRequest& request_;
+  CollisionResult& result_;
+};
+
+// Is some component of `inner` (pose relative to `outer`'s frame: inner_in_outer) inside the
+// closed mesh `outer`? Returns the contained point in outer's frame.
+template <class BV>
+bool component_inside(const Bvh<BV>& outer, const Bvh<BV>& inner, const Transform& inner_in_outer,
+                      QueryStats& stats, Vec3* where) {
+  if (!outer.closed() || outer.empty()) return false;
+  for (const Vec3& p : inner.component_points()) {
+    const Vec3 q = inner_in_outer * p;
+    ++stats.volume_tests;
+    if (!contains(outer.root().volume, q)) continue;
+    if (contains_point(outer, q, &stats)) {
+      *where = q;
+      return true;
+    }
+  }
+  return false;
+}
+
+// ----------------------------------------------------------------------------------- distance
+
+template <class BV>
+class DistanceTraversal {
+ public:
+  DistanceTraversal(const Bvh<BV>& a, const Bvh<BV>& b, const Transform& b_in_a, double tolerance,
+                    DistanceResult& result)
+      : a_(a), b_(b), frame_(RelativeFrame::from(b_in_a)), tolerance_(tolerance), result_(result) {}
+
+  void run() {
+    struct Entry {
+      std::int32_t a, b;
+      double bound;
+    };
+    std::vector<Entry> stack{{0, 0, bound(0, 0)}};
+    while (!stack.empty()) {
+      const Entry e = stack.back();
+      stack.pop_back();
+      if (e.bound >= best_ - tolerance_) continue;
+      const BvhNode<BV>& na = a_.nodes()[e.a];
+      const BvhNode<BV>& nb = b_.nodes()[e.b];
+      if (na.is_leaf() && nb.is_leaf()) {
+        leaf_pair(na, nb);
+        if (best_ == 0.0) break;
+        continue;
+      }
+      Entry c1, c2;
+      if (descend_a(na, nb)) {
+        c1 = {na.left, e.b, bound(na.left, e.b)};
+        c2 = {na.right, e.b, bound(na.right, e.b)};
+      } else {
+        c1 = {e.a, nb.left, bound(e.a, nb.left)};
+        c2 = {e.a, nb.right, bound(e.a, nb.right)};
+      }
+      if (c1.bound < c2.bound) std::swap(c1, c2);  // the nearer pair is taken next
+      if (c1.bound < best_ - tolerance_) stack.push_back(c1);
+      if (c2.bound < best_ - tolerance_) stack.push_back(c2);
+    }
+    result_.distance = best_;
+  }
+
+ private:
+  double bound(std::int32_t i, std::int32_t j) {
+    ++result_.stats.volume_tests;
+    return distance_lower_bound(a_.nodes()[i].volume, b_.nodes()[j].volume, frame_);
+  }
+
+  void leaf_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
+    for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j) {
+      const Triangle tb = carried(b_.triangles()[j], frame_);
+      for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
+        ++result_.stats.primitive_tests;
+        const ClosestPoints d = triangle_triangle_distance(a_.triangles()[i], tb);
+        if (d.distance < best_) {
+          best_ = d.distance;
+          result_.point_a = d.on_a;
+          result_.point_b = d.on_b;
+          result_.triangle_a = a_.triangle_id(i);
+          result_.triangle_b = b_.triangle_id(j);
+          if (best_ == 0.0) return;
+        }
+      }
+    }
+  }
+
+  const Bvh<BV>& a_;
+  const Bvh<BV>& b_;
+  const RelativeFrame frame_;
+  const double tolerance_;
+  DistanceResult& result_;
+  double best_ = std::numeric_limits<double>::infinity();
+};
+
+// ---------------------------------------------------------------------------- ray crossings
+
+enum class Crossing { kNone, kProper, kOnSurface, kDegenerate };
+
+// How the segment q -> far meets closed triangle t, exactly.
+Crossing classify_crossing(const Vec3& q, const Vec3& far, const Triangle& t) {
+  const int sq = orient3d(t[0], t[1], t[2], q);
+  const int sf = orient3d(t[0], t[1], t[2], far);
+  if (sq * sf > 0) return Crossing::kNone;
+  if (sq == 0) {
+    return segment_intersects_triangle(q, q, t[0], t[1], t[2]) ? Crossing::kOnSurface : Crossing::kNone;
+  }
+  const int o1 = orient3d(q, far, t[0], t[1]), o2 = orient3d(q, far, t[1], t[2]), o3 = orient3d(q, far, t[2], t[0]);
+  const bool positive = o1 >= 0 && o2 >= 0 && o3 >= 0, negative = o1 <= 0 && o2 <= 0 && o3 <= 0;
+  if (!positive && !negative) return Crossing::kNone;
+  if (sf == 0 || o1 == 0 || o2 == 0 || o3 == 0) return Crossing::kDegenerate;  // grazes an edge
+  return Crossing::kProper;
+}
+
+}  // namespace
+
+template <class BV>
+bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
+  if (bvh.empty()) return false;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const BV& root = bvh.root().volume;
+  const double reach = 2.0 * (radius(root) + (point - center(root)).norm()) + 1.0;
+  // Directions with no simple rational relation to axis-aligned geometry.
+  static const Vec3 kDirections[] = {{0.5773, 0.5774, 0.5775}, {-0.8017, 0.2672, 0.5345},
+                                     {0.2357, -0.9428, 0.2357}, {0.6247, 0.4685, -0.6247},
+                                     {-0.3015, -0.3015, -0.9045}, {0.9701, -0.1213, 0.2091}};
+  for (const Vec3& dir : kDirections) {
+    const Vec3 far = point + reach * dir.normalized();
+    const Ray ray(point, far - point, 1.0);
+    int crossings = 0;
+    bool degenerate = false;
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty() && !degenerate) {
+      const BvhNode<BV>& n = bvh.nodes()[stack.back()];
+      stack.pop_back();
+      ++s.volume_tests;
+      if (!ray_hits(n.volume, ray)) continue;
+      if (!n.is_leaf()) {
+        stack.push_back(n.left);
+        stack.push_back(n.right);
+        continue;
+      }
+      for (std::int32_t i = n.first; i < n.first + n.count && !degenerate; ++i) {
+        ++s.primitive_tests;
+        const Crossing c = classify_crossing(point, far, bvh.triangles()[i]);
+        if (c == Crossing::kOnSurface) return true;
+        degenerate = c == Crossing::kDegenerate;
+        crossings += c == Crossing::kProper;
+      }
+    }
+    if (!degenerate) return bvh.closed() && crossings % 2 == 1;
+  }
+  return bvh.closed();  // every ray grazed an edge: err towards "inside" (never a false negative)
+}
+
+template <class BV>
+CollisionResult collide(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>& b, const Transform& pose_b,
+                        const CollisionRequest& request) {
+  CollisionResult result;
+  if (a.empty() || b.empty()) return result;
+  CollisionTraversal<BV>(a, b, pose_a, pose_b, request, result).run();
+  if (result.collision || !request.solids) return result;
+  // No surfaces within reach: one solid may still hold the other.
+  const Transform b_in_a = relative_transform(pose_a, pose_b);
+  Vec3 where;
+  const bool b_in_a_solid = component_inside(a, b, b_in_a, result.stats, &where);
+  if (b_in_a_solid) where = pose_a * where;
+  const bool a_in_b_solid = !b_in_a_solid && component_inside(b, a, relative_transform(pose_b, pose_a), result.stats, &where);
+  if (a_in_b_solid) where = pose_b * where;
+  if (b_in_a_solid || a_in_b_solid) {
+    result.collision = true;
+    if (request.max_contacts > 0) {
+      MeshContact c;
+      c.position = where;
+      result.contacts.push_back(c);
+    }
+  }
+  return result;
+}
+
+template <class BV>
+DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>& b, const Transform& pose_b,
+                        const DistanceRequest& request) {
+  DistanceResult result;
+  if (a.empty() || b.empty()) return result;
+  const Transform b_in_a = relative_transform(pose_a, pose_b);
+  DistanceTraversal<BV>(a, b, b_in_a, request.tolerance, result).run();
+  if (result.distance > 0.0) {
+    // Solids: a component wholly inside the other mesh is at distance 0.
+    Vec3 where;  // in a's frame
+    bool inside = component_inside(a, b, b_in_a, result.stats, &where);
+    if (!inside && component_inside(b, a, relative_transform(pose_b, pose_a), result.stats, &where)) {
+      where = b_in_a * where;  // found in b's frame
+      inside = true;
+    }
+    if (inside) {
+      result.distance = 0.0;
+      result.point_a = result.point_b = where;
+      result.triangle_a = result.triangle_b = -1;
+    }
+  }
+  result.point_a = pose_a * result.point_a;
+  result.point_b = pose_a * result.point_b;
+  return result;
+}
+
+template <class BV>
+RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, const Vec3& direction,
+               double max_range, bool any_hit, QueryStats* stats) {
+  RayHit hit;
+  const double len = direction.norm();
+  if (bvh.empty() || !(len > 0.0)) return hit;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const Vec3 o = pose.R.transpose() * (origin - pose.t);
+  const Vec3 d = pose.R.transpose() * (direction / len);
+  double best = max_range > 0.0 ? max_range : std::numeric_limits<double>::max();
+  std::vector<std::int32_t> stack{0};
+  while (!stack.empty()) {
+    const BvhNode<BV>& n = bvh.nodes()[stack.back()];
+    stack.pop_back();
+    ++s.volume_tests;
+    if (!ray_hits(n.volume, Ray(o, d, best))) continue;
+    if (!n.is_leaf()) {
+      stack.push_back(n.right);
+      stack.push_back(n.left);
+      continue;
+    }
+    for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+      ++s.primitive_tests;
+      const Triangle& t = bvh.triangles()[i];
+      // Moller-Trumbore, with the hit accepted on the closed triangle.
+      const Vec3 e1 = t[1] - t[0], e2 = t[2] - t[0], p = d.cross(e2);
+      const double det = e1.dot(p);
+      if (det == 0.0) continue;
+      const Vec3 r = o - t[0];
+      const double u = r.dot(p) / det, qv = d.dot(r.cross(e1)) / det;
+      const double dist = e2.dot(r.cross(e1)) / det;
+      if (u < 0.0 || qv < 0.0 || u + qv > 1.0 || dist < 0.0 || dist > best) continue;
+      best = dist;
+      hit.hit = true;
+      hit.distance = dist;
+      hit.triangle = bvh.triangle_id(i);
+      if (any_hit) break;
+    }
+    if (any_hit && hit.hit) break;
+  }
+  if (hit.hit) hit.point = origin + hit.distance * (direction / len);
+  return hit;
+}
+
+#define BVH_COLLISION_INSTANTIATE_QUERIES(BV)                                                          \
+  template CollisionResult collide<BV>(const Bvh<BV>&, const Transform&, const Bvh<BV>&, const Transform&, \
+                                       const CollisionRequest&);                                       \
+  template DistanceResult distance<BV>(const Bvh<BV>&, const Transform&, const Bvh<BV>&, const Transform&, \
+                                       const DistanceRequest&);                                        \
+  template RayHit raycast<BV>(const Bvh<BV>&, const Transform&, const Vec3&, const Vec3&, double, bool,   \
+                              QueryStats*);                                                            \
+  template bool contains_point<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);
+
+BVH_COLLISION_INSTANTIATE_QUERIES(Aabb)
+BVH_COLLISION_INSTANTIATE_QUERIES(Obb)
+BVH_COLLISION_INSTANTIATE_QUERIES(Sphere)
+BVH_COLLISION_INSTANTIATE_QUERIES(Kdop14)
+BVH_COLLISION_INSTANTIATE_QUERIES(Kdop18)
+BVH_COLLISION_INSTANTIATE_QUERIES(Kdop26)
+BVH_COLLISION_INSTANTIATE_QUERIES(Rss)
+
+}  // namespace bvh_collision

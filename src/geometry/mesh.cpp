@@ -1,0 +1,83 @@
+#include "bvh_collision/geometry/mesh.h"
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <tuple>
+
+namespace bvh_collision {
+namespace {
+
+// Vertex ids after merging equal positions (STL files repeat every vertex per triangle).
+std::vector<std::int32_t> welded_ids(const TriangleMesh& mesh) {
+  std::map<std::tuple<double, double, double>, std::int32_t> first;
+  std::vector<std::int32_t> id(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3& v = mesh.vertices[i];
+    id[i] = first.emplace(std::make_tuple(v.x(), v.y(), v.z()), static_cast<std::int32_t>(i)).first->second;
+  }
+  return id;
+}
+
+std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t x) {
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
+  return x;
+}
+
+}  // namespace
+
+bool is_closed(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return false;
+  const std::vector<std::int32_t> id = welded_ids(mesh);
+  // Directed edge -> count; closed and oriented iff each directed edge appears once and its
+  // reverse appears once too.
+  std::map<std::pair<std::int32_t, std::int32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = id[t[k]], b = id[t[(k + 1) % 3]];
+      if (a == b) return false;  // a degenerate edge: not a proper surface
+      if (++directed[{a, b}] > 1) return false;
+    }
+  }
+  for (const auto& [edge, count] : directed) {
+    if (directed.find({edge.second, edge.first}) == directed.end()) return false;
+  }
+  return true;
+}
+
+std::vector<std::int32_t> component_representatives(const TriangleMesh& mesh) {
+  const std::vector<std::int32_t> id = welded_ids(mesh);
+  std::vector<std::int32_t> parent(mesh.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const auto& t : mesh.triangles) {
+    const std::int32_t r0 = find_root(parent, id[t[0]]);
+    for (int k = 1; k < 3; ++k) parent[find_root(parent, id[t[k]])] = r0;
+  }
+  std::vector<std::int32_t> reps;
+  std::vector<bool> seen(mesh.vertices.size(), false);
+  for (const auto& t : mesh.triangles) {
+    const std::int32_t root = find_root(parent, id[t[0]]);
+    if (!seen[root]) {
+      seen[root] = true;
+      reps.push_back(t[0]);
+    }
+  }
+  return reps;
+}
+
+TriangleMesh box_mesh(const Vec3& size) {
+  TriangleMesh m;
+  const Vec3 h = 0.5 * size;
+  for (int i = 0; i < 8; ++i) {
+    m.vertices.emplace_back((i & 4) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 1) ? h.z() : -h.z());
+  }
+  // Outward winding (counter-clockwise seen from outside).
+  m.triangles = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                 {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+  return m;
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,286 @@
+// BVHs against brute force: every volume type x every builder finds exactly the colliding
+// triangle pairs and the minimum distance that an all-pairs search finds, on random meshes and on
+// real link meshes, over near-contact poses; tolerance never gives a false negative; solids.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "mesh_fixtures.h"
+
+namespace bvh_collision {
+namespace {
+
+using test::brute_force_distance;
+using test::brute_force_pairs;
+using test::near_contact_pose;
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(7);
+  return r;
+}
+
+constexpr BuildMethod kMethods[] = {BuildMethod::kTopDownMedian, BuildMethod::kSah, BuildMethod::kBottomUp};
+
+// Pairs of meshes to test on: random closed meshes, a soup, and real link meshes when present.
+// Poses and brute-force answers are computed once and shared by every volume type.
+struct MeshPair {
+  std::string name;
+  TriangleMesh a, b;
+  std::vector<Transform> poses;                          // b in a's frame, near contact
+  std::vector<std::vector<std::pair<int, int>>> pairs;   // brute-force colliding pairs per pose
+  std::vector<double> distances;                         // brute-force distance, first kDistancePoses
+};
+constexpr int kPoses = 250;
+constexpr int kDistancePoses = 16;
+
+MeshPair make_pair(std::string name, TriangleMesh a, TriangleMesh b) {
+  MeshPair mp{std::move(name), std::move(a), std::move(b), {}, {}, {}};
+  const auto guide_a = Bvh<Aabb>::build(mp.a), guide_b = Bvh<Aabb>::build(mp.b);
+  for (int p = 0; p < kPoses; ++p) {
+    mp.poses.push_back(near_contact_pose(rng(), guide_a, guide_b));
+    if (p % 8 == 7) mp.poses.back().t += Vec3(0.1, -0.05, 0.08);  // a few far apart too
+    auto pairs = brute_force_pairs(mp.a, mp.b, mp.poses.back());
+    std::sort(pairs.begin(), pairs.end());
+    mp.pairs.push_back(std::move(pairs));
+    if (p < kDistancePoses) mp.distances.push_back(brute_force_distance(mp.a, mp.b, mp.poses.back()));
+  }
+  return mp;
+}
+
+const std::vector<MeshPair>& mesh_pairs() {
+  static const std::vector<MeshPair> pairs = [] {
+    std::vector<MeshPair> out;
+    out.push_back(make_pair("bumpy spheres", test::bumpy_sphere(rng(), 0.1, 10, 16, 0.15), test::bumpy_sphere(rng(), 0.06, 8, 12, 0.3)));
+    out.push_back(make_pair("soups", test::triangle_soup(rng(), 150, 0.2, 0.03), test::triangle_soup(rng(), 120, 0.15, 0.05)));
+    if (std::filesystem::is_directory(test::robots_dir())) {
+      const std::string panda = "panda/moveit_resources_panda_description/meshes/collision/";
+      out.push_back(make_pair("panda link3/link4", test::robot_mesh(panda + "link3.stl"), test::robot_mesh(panda + "link4.stl")));
+      out.push_back(make_pair("panda hand/finger", test::robot_mesh(panda + "hand.stl"), test::robot_mesh(panda + "finger.stl")));
+    }
+    return out;
+  }();
+  return pairs;
+}
+
+template <class BV>
+class BvhOracle : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::is_directory(test::robots_dir()) && test::running_in_ci()) {
+      FAIL() << "robots folder '" << test::robots_dir() << "' missing (CI=true: this is a failure)";
+    }
+  }
+};
+using VolumeTypes = ::testing::Types<Aabb, Obb, Sphere, Kdop14, Kdop18, Kdop26, Rss>;
+TYPED_TEST_SUITE(BvhOracle, VolumeTypes);
+
+TYPED_TEST(BvhOracle, VolumesContainTheirTriangles) {
+  const TriangleMesh mesh = test::bumpy_sphere(rng(), 0.3, 12, 20, 0.2);
+  for (BuildMethod method : kMethods) {
+    const auto bvh = Bvh<TypeParam>::build(mesh, {method, 4, 64});
+    for (const auto& node : bvh.nodes()) {
+      for (int i = node.first; i < node.first + node.count; ++i) {
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(contains(node.volume, bvh.triangles()[i][k])) << build_method_name(method);
+      }
+      if (!node.is_leaf()) {
+        EXPECT_EQ(node.count, bvh.nodes()[node.left].count + bvh.nodes()[node.right].count);
+      } else {
+        EXPECT_LE(node.count, 4);
+      }
+    }
+  }
+}
+
+TYPED_TEST(BvhOracle, CollidingPairsEqualBruteForce) {
+  int poses = 0, colliding = 0;
+  for (const MeshPair& mp : mesh_pairs()) {
+    for (BuildMethod m : kMethods) {
+      const auto a = Bvh<TypeParam>::build(mp.a, {m}), b = Bvh<TypeParam>::build(mp.b, {m});
+      for (std::size_t p = 0; p < mp.poses.size(); ++p, ++poses) {
+        const auto& expected = mp.pairs[p];
+        colliding += !expected.empty();
+        CollisionRequest all;
+        all.max_contacts = std::numeric_limits<std::size_t>::max();
+        all.solids = false;
+        const CollisionResult r = collide(a, Transform(), b, mp.poses[p], all);
+        std::vector<std::pair<int, int>> found;
+        for (const MeshContact& c : r.contacts) found.push_back({c.triangle_a, c.triangle_b});
+        std::sort(found.begin(), found.end());
+        ASSERT_EQ(found, expected) << mp.name << ", " << build_method_name(m) << ", pose " << p;
+        CollisionRequest boolean;
+        boolean.solids = false;
+        ASSERT_EQ(collide(a, Transform(), b, mp.poses[p], boolean).collision, !expected.empty());
+      }
+    }
+  }
+  EXPECT_GT(colliding, poses / 5) << "poses should be near contact, both ways";
+  EXPECT_LT(colliding, poses * 4 / 5);
+}
+
+TYPED_TEST(BvhOracle, DistanceEqualsBruteForce) {
+  for (const MeshPair& mp : mesh_pairs()) {
+    for (BuildMethod m : kMethods) {
+      const auto a = Bvh<TypeParam>::build(mp.a, {m}), b = Bvh<TypeParam>::build(mp.b, {m});
+      for (std::size_t p = 0; p < mp.distances.size(); ++p) {
+        const double expected = mp.distances[p];
+        const Transform world = test::random_rotation(rng(), Vec3(0.3, -2.0, 1.0));
+        const DistanceResult r = distance(a, world, b, world * mp.poses[p], {});
+        ASSERT_NEAR(r.distance, expected, 1e-9 * expected + 1e-15) << mp.name << ", " << build_method_name(m);
+        // Witnesses: on the two meshes, as far apart as reported.
+        ASSERT_NEAR((r.point_a - r.point_b).norm(), r.distance, 1e-12);
+        const Triangle ta = mp.a.triangle(r.triangle_a), tb = mp.b.triangle(r.triangle_b);
+        const Vec3 pa = world.inverse() * r.point_a, pb = (world * mp.poses[p]).inverse() * r.point_b;
+        ASSERT_LT((closest_point_on_triangle(pa, ta[0], ta[1], ta[2]) - pa).norm(), 1e-12);
+        ASSERT_LT((closest_point_on_triangle(pb, tb[0], tb[1], tb[2]) - pb).norm(), 1e-12);
+      }
+    }
+  }
+}
+
+TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
+  const double tolerances[] = {0.0, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05};
+  int shortcuts = 0;
+  for (const MeshPair& mp : mesh_pairs()) {
+    const auto a = Bvh<TypeParam>::build(mp.a), b = Bvh<TypeParam>::build(mp.b);
+    for (std::size_t p = 0; p < mp.distances.size(); ++p) {
+      const double d = mp.distances[p];
+      for (double eps : tolerances) {
+        CollisionRequest request;
+        request.tolerance = eps;
+        request.solids = false;
+        const CollisionResult r = collide(a, Transform(), b, mp.poses[p], request);
+        if (d == 0.0) {
+          ASSERT_TRUE(r.collision) << mp.name << " eps " << eps << ": false negative";
+        }
+        if (r.collision) {
+          ASSERT_LE(d, eps) << mp.name << " eps " << eps << ": reported beyond the tolerance";
+        }
+        shortcuts += r.within_tolerance;
+      }
+    }
+  }
+  EXPECT_GT(shortcuts, 0) << "the tolerance never took effect";
+}
+
+TYPED_TEST(BvhOracle, PaddingMatchesDistance) {
+  const MeshPair& mp = mesh_pairs()[0];
+  const auto a = Bvh<TypeParam>::build(mp.a), b = Bvh<TypeParam>::build(mp.b);
+  for (std::size_t p = 0; p < mp.distances.size(); ++p) {
+    const Transform& pose = mp.poses[p];
+    const double d = mp.distances[p];
+    for (double padding : {0.001, 0.004}) {
+      CollisionRequest request;
+      request.padding = padding;
+      request.solids = false;
+      ASSERT_EQ(collide(a, Transform(), b, pose, request).collision, d <= padding) << "d = " << d;
+    }
+  }
+}
+
+TYPED_TEST(BvhOracle, SolidsContainment) {
+  // A small closed box inside a large one: no surfaces touch, yet they collide.
+  const auto big = Bvh<TypeParam>::build(box_mesh(Vec3(1, 1, 1)));
+  const auto small = Bvh<TypeParam>::build(box_mesh(Vec3(0.1, 0.2, 0.1)));
+  ASSERT_TRUE(big.closed());
+  const Transform inside = test::random_rotation(rng(), Vec3(0.1, 0.2, -0.15));
+  EXPECT_TRUE(collide(big, Transform(), small, inside).collision);
+  EXPECT_TRUE(collide(small, inside, big, Transform()).collision);  // either order
+  EXPECT_EQ(distance(big, Transform(), small, inside).distance, 0.0);
+  CollisionRequest surfaces_only;
+  surfaces_only.solids = false;
+  EXPECT_FALSE(collide(big, Transform(), small, inside, surfaces_only).collision);
+  // Outside, beside it: free.
+  const Transform outside = test::random_rotation(rng(), Vec3(0.9, 0.0, 0.0));
+  EXPECT_FALSE(collide(big, Transform(), small, outside).collision);
+  EXPECT_GT(distance(big, Transform(), small, outside).distance, 0.2);
+  // An open mesh (one face removed) bounds no solid.
+  TriangleMesh open = box_mesh(Vec3(1, 1, 1));
+  open.triangles.pop_back();
+  const auto open_bvh = Bvh<TypeParam>::build(open);
+  EXPECT_FALSE(open_bvh.closed());
+  EXPECT_FALSE(collide(open_bvh, Transform(), small, inside).collision);
+}
+
+TYPED_TEST(BvhOracle, EmptyMeshCollidesWithNothing) {
+  const auto empty = Bvh<TypeParam>::build(TriangleMesh{});
+  const auto box = Bvh<TypeParam>::build(box_mesh(Vec3(1, 1, 1)));
+  EXPECT_TRUE(empty.empty());
+  EXPECT_FALSE(collide(empty, Transform(), box, Transform()).collision);
+  EXPECT_FALSE(collide(box, Transform(), empty, Transform()).collision);
+  EXPECT_TRUE(std::isinf(distance(box, Transform(), empty, Transform()).distance));
+  EXPECT_FALSE(raycast(empty, Transform(), Vec3::Zero(), Vec3::UnitX(), 10.0).hit);
+}
+
+TYPED_TEST(BvhOracle, RaycastEqualsBruteForce) {
+  const TriangleMesh mesh = test::bumpy_sphere(rng(), 0.2, 10, 16, 0.2);
+  const auto bvh = Bvh<TypeParam>::build(mesh);
+  const Transform pose = test::random_rotation(rng(), Vec3(1, 2, 3));
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < 300; ++i) {
+    const Vec3 origin = pose * Vec3(n(rng()), n(rng()), n(rng())) * 0.3;
+    const Vec3 dir = Vec3(n(rng()), n(rng()), n(rng()));
+    const RayHit hit = raycast(bvh, pose, origin, dir, 2.0);
+    // Brute force in the mesh frame.
+    double best = std::numeric_limits<double>::infinity();
+    const Vec3 o = pose.inverse() * origin, d = pose.R.transpose() * dir.normalized();
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle tri = mesh.triangle(t);
+      if (!segment_intersects_triangle(o, o + 2.0 * d, tri[0], tri[1], tri[2])) continue;
+      const Vec3 nrm = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+      const double s = (tri[0] - o).dot(nrm) / d.dot(nrm);
+      best = std::min(best, s);
+    }
+    ASSERT_EQ(hit.hit, std::isfinite(best)) << "ray " << i;
+    if (hit.hit) {
+      ASSERT_NEAR(hit.distance, best, 1e-9);
+      ASSERT_NEAR((hit.point - origin).norm(), hit.distance, 1e-9);
+    }
+  }
+}
+
+TEST(BoundingVolumes, SphereBoxTestIsTheExactOne) {
+  // The seed's test -- "distance between the centres <= radius" -- against the exact one.
+  // A sphere of radius 1 touching the face of a cube of side 10: centres are 6 apart.
+  const Vec3 box_min(-5, -5, -5), box_max(5, 5, 5), centre(6, 0, 0);
+  const double r = 1.0;
+  const bool seed_test = (centre - 0.5 * (box_min + box_max)).norm() <= r;
+  EXPECT_FALSE(seed_test) << "the centre-distance test misses this overlap";
+  EXPECT_TRUE(sphere_intersects_box(centre, r, box_min, box_max));
+  // Near a corner: close to the box in distance of centres terms, yet apart.
+  const Vec3 near_corner(5.8, 5.8, 5.8);
+  EXPECT_FALSE(sphere_intersects_box(near_corner, 1.0, box_min, box_max));
+  // Against a brute-force oracle: sample the sphere densely.
+  std::uniform_real_distribution<double> u(-8, 8);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 c(u(rng()), u(rng()), u(rng()));
+    const double rr = std::abs(u(rng())) / 2;
+    const Vec3 closest = c.cwiseMax(box_min).cwiseMin(box_max);
+    EXPECT_EQ(sphere_intersects_box(c, rr, box_min, box_max), (closest - c).norm() <= rr);
+  }
+}
+
+TEST(BoundingVolumes, MergesContainBothVolumes) {
+  for (int i = 0; i < 200; ++i) {
+    const TriangleMesh m1 = test::triangle_soup(rng(), 5, 1.0, 0.2), m2 = test::triangle_soup(rng(), 5, 3.0, 0.5);
+    const std::vector<Vec3>& p1 = m1.vertices;
+    std::vector<Vec3> p2 = m2.vertices;
+    for (Vec3& p : p2) p += Vec3(2, 0, 1);
+    auto check = [&](auto tag) {
+      using BV = decltype(tag);
+      const BV merged = merge(fit_volume<BV>(p1.data(), p1.size()), fit_volume<BV>(p2.data(), p2.size()));
+      for (const Vec3& p : p1) ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
+      for (const Vec3& p : p2) ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
+    };
+    check(Aabb{});
+    check(Obb{});
+    check(Sphere{});
+    check(Kdop14{});
+    check(Kdop18{});
+    check(Kdop26{});
+    check(Rss{});
+  }
+}
+
+}  // namespace
+}  // namespace bvh_collision
