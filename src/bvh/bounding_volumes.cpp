@@ -74,6 +74,7 @@ Obb fit_volume<Obb>(const Vec3* points, std::size_t n) {
   project_extents(points, n, b.axes, lo, hi);
   b.center = b.axes * (0.5 * (lo + hi));
   b.half = 0.5 * (hi - lo);
+  b.radius = b.half.norm() * (1 + 4 * std::numeric_limits<double>::epsilon());
   return b;
 }
 

@@ -297,7 +297,12 @@ struct BvhBuilder {
       top_down(0, static_cast<int>(order.size()), 0);
     }
     out.triangles_.reserve(order.size());
-    for (std::int32_t t : order) out.triangles_.push_back(mesh.triangle(t));
+    for (std::int32_t t : order) {
+      const Triangle tri = mesh.triangle(t);
+      out.triangles_.push_back(tri);
+      out.planes_.push_back(TrianglePlane::of(tri[0], tri[1], tri[2]));
+      out.spheres_.push_back(TriangleSphere::of(tri));
+    }
     out.triangle_ids_ = order;
     compute_slack();
     return std::move(out);
@@ -312,6 +317,7 @@ Bvh<BV> Bvh<BV>::build(const TriangleMesh& mesh, const BuildOptions& options) {
 template <class BV>
 std::size_t Bvh<BV>::memory_bytes() const {
   return nodes_.size() * sizeof(BvhNode<BV>) + triangles_.size() * sizeof(Triangle) +
+         planes_.size() * sizeof(TrianglePlane) + spheres_.size() * sizeof(TriangleSphere) +
          triangle_ids_.size() * sizeof(std::int32_t) + component_points_.size() * sizeof(Vec3);
 }
 

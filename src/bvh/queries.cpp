@@ -1,6 +1,7 @@
 #include "bvh_collision/bvh/queries.h"
 
 #include <algorithm>
+#include <array>
 
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
@@ -11,6 +12,36 @@ namespace {
 
 struct NodePair {
   std::int32_t a, b;
+};
+
+// A stack that lives on the C++ stack for the usual depths (no allocation per query) and moves
+// to the heap only when a degenerate hierarchy needs more.
+template <class T, std::size_t N = 256>
+class TraversalStack {
+ public:
+  bool empty() const { return size_ == 0; }
+  void push(const T& v) {
+    if (size_ < N) {
+      local_[size_++] = v;
+    } else {
+      overflow_.push_back(v);
+      ++size_;
+    }
+  }
+  T pop() {
+    --size_;
+    if (size_ >= N) {
+      const T v = overflow_.back();
+      overflow_.pop_back();
+      return v;
+    }
+    return local_[size_];
+  }
+
+ private:
+  std::array<T, N> local_;
+  std::vector<T> overflow_;
+  std::size_t size_ = 0;
 };
 
 Triangle carried(const Triangle& t, const RelativeFrame& f) {
@@ -51,14 +82,14 @@ class CollisionTraversal {
         request_(request), result_(result) {}
 
   void run() {
-    std::vector<NodePair> stack{{0, 0}};
+    TraversalStack<NodePair> stack;
+    stack.push({0, 0});
     while (!stack.empty() && !done()) {
-      const NodePair p = stack.back();
-      stack.pop_back();
+      const NodePair p = stack.pop();
       const BvhNode<BV>& na = a_.nodes()[p.a];
       const BvhNode<BV>& nb = b_.nodes()[p.b];
       ++result_.stats.volume_tests;
-      if (!overlap(na.volume, nb.volume, frame_, request_.padding)) continue;
+      if (!overlaps(na.volume, p.b)) continue;
       if (request_.max_contacts == 0 && request_.tolerance > 0.0 &&
           na.slack + nb.slack <= request_.tolerance) {
         result_.collision = result_.within_tolerance = true;  // d <= padding + tolerance
@@ -67,16 +98,38 @@ class CollisionTraversal {
       if (na.is_leaf() && nb.is_leaf()) {
         leaf_pair(na, nb);
       } else if (descend_a(na, nb)) {
-        stack.push_back({na.right, p.b});
-        stack.push_back({na.left, p.b});
+        stack.push({na.right, p.b});
+        stack.push({na.left, p.b});
       } else {
-        stack.push_back({p.a, nb.right});
-        stack.push_back({p.a, nb.left});
+        stack.push({p.a, nb.right});
+        stack.push({p.a, nb.left});
       }
     }
   }
 
  private:
+  // b's volumes carried into a's frame, once per node and query, for types where that pays.
+  bool overlaps(const BV& va, std::int32_t b) {
+    if constexpr (CarriesVolumes<BV>::value) {
+      thread_local std::vector<BV> carried;
+      thread_local std::vector<std::uint64_t> stamp;
+      thread_local std::uint64_t query = 0;
+      if (b == 0) ++query;  // the root is visited first, once per query
+      if (carried.size() < b_.nodes().size()) {
+        carried.resize(b_.nodes().size());
+        stamp.resize(b_.nodes().size(), 0);
+      }
+      if (stamp[b] != query) {
+        carried[b] = carry(b_.nodes()[b].volume, frame_);
+        stamp[b] = query;
+        ++result_.stats.volume_updates;
+      }
+      return overlap_carried(va, carried[b], request_.padding);
+    } else {
+      return overlap(va, b_.nodes()[b].volume, frame_, request_.padding);
+    }
+  }
+
   bool done() const {
     return result_.collision && (request_.max_contacts == 0 || result_.contacts.size() >= request_.max_contacts);
   }
@@ -84,13 +137,19 @@ class CollisionTraversal {
   void leaf_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
     for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j) {
       const Triangle tb = carried(b_.triangles()[j], frame_);
+      const TrianglePlane pb = TrianglePlane::of(tb[0], tb[1], tb[2]);
+      const Vec3 cb = frame_.apply(b_.spheres()[j].center);
       for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
         ++result_.stats.primitive_tests;
         const Triangle& ta = a_.triangles()[i];
         if (request_.padding == 0.0) {
+          // Certified float plane tests first; the exact test only when they cannot tell.
+          if (pb.separates(ta[0], ta[1], ta[2]) || a_.planes()[i].separates(tb[0], tb[1], tb[2])) continue;
           if (!triangles_intersect(ta, tb)) continue;
           record(ta, tb, i, j, nullptr);
         } else {
+          const double reach = request_.padding + a_.spheres()[i].radius + b_.spheres()[j].radius;
+          if ((a_.spheres()[i].center - cb).squaredNorm() > reach * reach * (1 + 1e-9)) continue;
           const ClosestPoints d = triangle_triangle_distance(ta, tb);
           if (d.distance > request_.padding) continue;
           record(ta, tb, i, j, &d);
@@ -157,10 +216,10 @@ class DistanceTraversal {
       std::int32_t a, b;
       double bound;
     };
-    std::vector<Entry> stack{{0, 0, bound(0, 0)}};
+    TraversalStack<Entry> stack;
+    stack.push({0, 0, bound(0, 0)});
     while (!stack.empty()) {
-      const Entry e = stack.back();
-      stack.pop_back();
+      const Entry e = stack.pop();
       if (e.bound >= best_ - tolerance_) continue;
       const BvhNode<BV>& na = a_.nodes()[e.a];
       const BvhNode<BV>& nb = b_.nodes()[e.b];
@@ -178,8 +237,8 @@ class DistanceTraversal {
         c2 = {e.a, nb.right, bound(e.a, nb.right)};
       }
       if (c1.bound < c2.bound) std::swap(c1, c2);  // the nearer pair is taken next
-      if (c1.bound < best_ - tolerance_) stack.push_back(c1);
-      if (c2.bound < best_ - tolerance_) stack.push_back(c2);
+      if (c1.bound < best_ - tolerance_) stack.push(c1);
+      if (c2.bound < best_ - tolerance_) stack.push(c2);
     }
     result_.distance = best_;
   }
@@ -193,7 +252,12 @@ class DistanceTraversal {
   void leaf_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
     for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j) {
       const Triangle tb = carried(b_.triangles()[j], frame_);
+      const Vec3 cb = frame_.apply(b_.spheres()[j].center);
+      const double rb = b_.spheres()[j].radius;
       for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
+        // Bounding spheres of the two triangles: most pairs end here.
+        const double lb = (a_.spheres()[i].center - cb).norm() - a_.spheres()[i].radius - rb;
+        if (lb * (1 + 1e-12) >= best_ - tolerance_) continue;
         ++result_.stats.primitive_tests;
         const ClosestPoints d = triangle_triangle_distance(a_.triangles()[i], tb);
         if (d.distance < best_) {

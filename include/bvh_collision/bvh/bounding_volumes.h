@@ -19,13 +19,50 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <type_traits>
 
 #include "bvh_collision/geometry/types.h"
 
 namespace bvh_collision {
 
+// The volume tests sit in the innermost traversal loops; GCC's -O2 inliner otherwise keeps some
+// of them out of line.
+#define BVH_HOT [[gnu::always_inline]] inline
+
 // Relative slack for conservative comparisons (thousands of ulps; negligible for pruning).
 constexpr double kVolumeMargin = 1e-12;
+
+namespace detail {
+// c = a^T * b for 3x3 matrices, and a^T * v, written out.
+BVH_HOT Mat3 transpose_times(const Mat3& a, const Mat3& b) {
+  Mat3 c;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) c(i, j) = a(0, i) * b(0, j) + a(1, i) * b(1, j) + a(2, i) * b(2, j);
+  }
+  return c;
+}
+BVH_HOT Mat3 times(const Mat3& a, const Mat3& b) {
+  Mat3 c;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) c(i, j) = a(i, 0) * b(0, j) + a(i, 1) * b(1, j) + a(i, 2) * b(2, j);
+  }
+  return c;
+}
+BVH_HOT Vec3 transpose_times(const Mat3& a, const Vec3& v) {
+  return {a(0, 0) * v[0] + a(1, 0) * v[1] + a(2, 0) * v[2], a(0, 1) * v[0] + a(1, 1) * v[1] + a(2, 1) * v[2],
+          a(0, 2) * v[0] + a(1, 2) * v[1] + a(2, 2) * v[2]};
+}
+BVH_HOT Vec3 times(const Mat3& a, const Vec3& v) {
+  return {a(0, 0) * v[0] + a(0, 1) * v[1] + a(0, 2) * v[2], a(1, 0) * v[0] + a(1, 1) * v[1] + a(1, 2) * v[2],
+          a(2, 0) * v[0] + a(2, 1) * v[1] + a(2, 2) * v[2]};
+}
+BVH_HOT Mat3 abs_plus_epsilon(const Mat3& m) {
+  Mat3 r;
+  for (int k = 0; k < 9; ++k) r.data()[k] = std::abs(m.data()[k]) + 1e-12;
+  return r;
+}
+
+}  // namespace detail
 
 // The pose of mesh b in mesh a's frame, with what the volume tests need precomputed.
 struct RelativeFrame {
@@ -38,12 +75,12 @@ struct RelativeFrame {
     RelativeFrame f;
     f.R = b_in_a.R;
     f.t = b_in_a.t;
-    f.abs_R = (b_in_a.R.cwiseAbs().array() + 1e-12).matrix();
+    f.abs_R = detail::abs_plus_epsilon(b_in_a.R);
     f.pure_translation = b_in_a.R == Mat3::Identity();
     if (f.pure_translation) f.abs_R = Mat3::Identity();
     return f;
   }
-  Vec3 apply(const Vec3& p) const { return R * p + t; }
+  Vec3 apply(const Vec3& p) const { return detail::times(R, p) + t; }
 };
 
 // A ray for conservative volume tests: origin, direction, and precomputed inverse direction.
@@ -62,40 +99,64 @@ struct Ray {
 
 namespace detail {
 
-// Separating-axis test for two boxes: a axis-aligned with half extents ha at ca; b with axes
-// B (columns, in a's frame; abs_B its absolute values) and half extents hb at cb. Returns false
-// only when some axis separates them by more than `padding`.
-inline bool boxes_overlap(const Vec3& ca, const Vec3& ha, const Mat3& B, const Mat3& abs_B,
-                          const Vec3& cb, const Vec3& hb, double padding) {
-  const Vec3 T = cb - ca;
-  const double scale = ha.sum() + hb.sum() + T.cwiseAbs().sum();
-  const double slack = padding + kVolumeMargin * scale;
+// Separating-axis test for two boxes in a's box frame: a is axis-aligned with half extents ha
+// centred at the origin; b has axes B (columns; abs_B = |B| + epsilon) and half extents hb at
+// centre T. Returns false only when some axis separates them by more than `padding`.
+// Written out in scalars: at -O2 the compiler does not inline Eigen's small products here.
+BVH_HOT bool boxes_overlap(const Vec3& T, const Vec3& ha, const Mat3& B, const Mat3& abs_B, const Vec3& hb,
+                           double padding) {
+  const double scale = ha[0] + ha[1] + ha[2] + hb[0] + hb[1] + hb[2] + std::abs(T[0]) + std::abs(T[1]) + std::abs(T[2]);
+  const double s = padding + kVolumeMargin * scale;
+  // a's face axes
+  if (std::abs(T[0]) > ha[0] + abs_B(0, 0) * hb[0] + abs_B(0, 1) * hb[1] + abs_B(0, 2) * hb[2] + s) return false;
+  if (std::abs(T[1]) > ha[1] + abs_B(1, 0) * hb[0] + abs_B(1, 1) * hb[1] + abs_B(1, 2) * hb[2] + s) return false;
+  if (std::abs(T[2]) > ha[2] + abs_B(2, 0) * hb[0] + abs_B(2, 1) * hb[1] + abs_B(2, 2) * hb[2] + s) return false;
+  // b's face axes
+  for (int j = 0; j < 3; ++j) {
+    const double ra = ha[0] * abs_B(0, j) + ha[1] * abs_B(1, j) + ha[2] * abs_B(2, j);
+    if (std::abs(T[0] * B(0, j) + T[1] * B(1, j) + T[2] * B(2, j)) > ra + hb[j] + s) return false;
+  }
+  // a_i x b_j, written out (i1, i2 and j1, j2 are the other two indices, cyclically)
+#define BVH_CROSS_AXIS(i, i1, i2, j, j1, j2)                                                         \
+  if (std::abs(T[i2] * B(i1, j) - T[i1] * B(i2, j)) >                                               \
+      ha[i1] * abs_B(i2, j) + ha[i2] * abs_B(i1, j) + hb[j1] * abs_B(i, j2) + hb[j2] * abs_B(i, j1) + s) \
+    return false;
+  BVH_CROSS_AXIS(0, 1, 2, 0, 1, 2)
+  BVH_CROSS_AXIS(0, 1, 2, 1, 2, 0)
+  BVH_CROSS_AXIS(0, 1, 2, 2, 0, 1)
+  BVH_CROSS_AXIS(1, 2, 0, 0, 1, 2)
+  BVH_CROSS_AXIS(1, 2, 0, 1, 2, 0)
+  BVH_CROSS_AXIS(1, 2, 0, 2, 0, 1)
+  BVH_CROSS_AXIS(2, 0, 1, 0, 1, 2)
+  BVH_CROSS_AXIS(2, 0, 1, 1, 2, 0)
+  BVH_CROSS_AXIS(2, 0, 1, 2, 0, 1)
+#undef BVH_CROSS_AXIS
+  return true;
+}
+
+// A lower bound on the distance between the two boxes (same frame convention): the largest gap
+// along the 15 separating axes (cross axes normalised) or between circumscribed spheres.
+inline double boxes_distance_lower_bound(const Vec3& T, const Vec3& ha, const Mat3& B, const Mat3& abs_B,
+                                         const Vec3& hb) {
+  double gap = T.norm() - ha.norm() - hb.norm();
   for (int i = 0; i < 3; ++i) {
-    if (std::abs(T[i]) > ha[i] + abs_B.row(i).dot(hb) + slack) return false;
+    gap = std::max(gap, std::abs(T[i]) - ha[i] - (abs_B(i, 0) * hb[0] + abs_B(i, 1) * hb[1] + abs_B(i, 2) * hb[2]));
   }
   for (int j = 0; j < 3; ++j) {
-    if (std::abs(T.dot(B.col(j))) > ha.dot(abs_B.col(j)) + hb[j] + slack) return false;
+    const double t = T[0] * B(0, j) + T[1] * B(1, j) + T[2] * B(2, j);
+    gap = std::max(gap, std::abs(t) - hb[j] - (ha[0] * abs_B(0, j) + ha[1] * abs_B(1, j) + ha[2] * abs_B(2, j)));
   }
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
+      const double len2 = 1.0 - B(i, j) * B(i, j);  // |a_i x b_j|^2 for orthonormal axes
+      if (len2 < 1e-6) continue;                   // nearly parallel: no useful axis
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       const double ra = ha[i1] * abs_B(i2, j) + ha[i2] * abs_B(i1, j);
       const double rb = hb[j1] * abs_B(i, j2) + hb[j2] * abs_B(i, j1);
-      if (std::abs(T[i2] * B(i1, j) - T[i1] * B(i2, j)) > ra + rb + slack) return false;
+      gap = std::max(gap, (std::abs(T[i2] * B(i1, j) - T[i1] * B(i2, j)) - ra - rb) / std::sqrt(len2));
     }
   }
-  return true;
-}
-
-// A lower bound on the distance between the two boxes: the largest gap along a face axis, or
-// between circumscribed spheres, reduced by the margin.
-inline double boxes_distance_lower_bound(const Vec3& ca, const Vec3& ha, const Mat3& B,
-                                         const Mat3& abs_B, const Vec3& cb, const Vec3& hb) {
-  const Vec3 T = cb - ca;
-  double gap = T.norm() - ha.norm() - hb.norm();
-  for (int i = 0; i < 3; ++i) gap = std::max(gap, std::abs(T[i]) - ha[i] - abs_B.row(i).dot(hb));
-  for (int j = 0; j < 3; ++j) gap = std::max(gap, std::abs(T.dot(B.col(j))) - ha.dot(abs_B.col(j)) - hb[j]);
   const double scale = ha.sum() + hb.sum() + T.cwiseAbs().sum();
   return gap - kVolumeMargin * scale;
 }
@@ -142,17 +203,17 @@ inline Vec3 center(const Aabb& b) { return 0.5 * (b.min + b.max); }
 inline double radius(const Aabb& b) { return b.half().norm(); }
 inline Aabb merge(const Aabb& a, const Aabb& b) { return {a.min.cwiseMin(b.min), a.max.cwiseMax(b.max)}; }
 
-inline bool overlap(const Aabb& a, const Aabb& b, const RelativeFrame& f, double padding) {
+BVH_HOT bool overlap(const Aabb& a, const Aabb& b, const RelativeFrame& f, double padding) {
   if (f.pure_translation) {
     const Vec3 bmin = b.min + f.t, bmax = b.max + f.t;
     const double slack = padding + kVolumeMargin * (a.max - a.min + bmax - bmin + a.min.cwiseAbs()).sum();
     return (a.min.array() <= bmax.array() + slack).all() && (bmin.array() <= a.max.array() + slack).all();
   }
-  return detail::boxes_overlap(center(a), a.half(), f.R, f.abs_R, f.apply(center(b)), b.half(), padding);
+  return detail::boxes_overlap(f.apply(center(b)) - center(a), a.half(), f.R, f.abs_R, b.half(), padding);
 }
 
 inline double distance_lower_bound(const Aabb& a, const Aabb& b, const RelativeFrame& f) {
-  return detail::boxes_distance_lower_bound(center(a), a.half(), f.R, f.abs_R, f.apply(center(b)), b.half());
+  return detail::boxes_distance_lower_bound(f.apply(center(b)) - center(a), a.half(), f.R, f.abs_R, b.half());
 }
 
 inline bool ray_hits(const Aabb& b, const Ray& ray) { return detail::ray_hits_box(ray, b.min, b.max); }
@@ -163,26 +224,43 @@ struct Obb {
   Mat3 axes = Mat3::Identity();  // columns: the box's axes in the mesh frame
   Vec3 center = Vec3::Zero();
   Vec3 half = Vec3::Zero();
+  double radius = 0.0;  // half.norm(): the circumscribed sphere, a cheap first test
 };
 
 inline Vec3 center(const Obb& b) { return b.center; }
-inline double radius(const Obb& b) { return b.half.norm(); }
+inline double radius(const Obb& b) { return b.radius; }
 Obb merge(const Obb& a, const Obb& b);
 
-inline bool overlap(const Obb& a, const Obb& b, const RelativeFrame& f, double padding) {
-  // b's axes expressed in a's box frame.
-  const Mat3 B = a.axes.transpose() * (f.R * b.axes);
-  const Mat3 abs_B = (B.cwiseAbs().array() + 1e-12).matrix();
-  const Vec3 cb = a.axes.transpose() * (f.apply(b.center) - a.center);
-  return detail::boxes_overlap(Vec3::Zero(), a.half, B, abs_B, cb, b.half, padding);
+// b carried into a's mesh frame (the seed's "volume update"): done once per node and query.
+BVH_HOT Obb carry(const Obb& b, const RelativeFrame& f) {
+  return {detail::times(f.R, b.axes), f.apply(b.center), b.half, b.radius};
+}
+
+// Both boxes in the same (a's mesh) frame.
+BVH_HOT bool overlap_carried(const Obb& a, const Obb& b, double padding) {
+  const Vec3 d = b.center - a.center;
+  const double reach = a.radius + b.radius + padding;
+  if (d.squaredNorm() > reach * reach * (1 + 4 * kVolumeMargin) + kVolumeMargin) return false;
+  const Mat3 B = detail::transpose_times(a.axes, b.axes);
+  return detail::boxes_overlap(detail::transpose_times(a.axes, d), a.half, B, detail::abs_plus_epsilon(B), b.half, padding);
+}
+
+BVH_HOT bool overlap(const Obb& a, const Obb& b, const RelativeFrame& f, double padding) {
+  return overlap_carried(a, carry(b, f), padding);
 }
 
 inline double distance_lower_bound(const Obb& a, const Obb& b, const RelativeFrame& f) {
-  const Mat3 B = a.axes.transpose() * (f.R * b.axes);
-  const Mat3 abs_B = (B.cwiseAbs().array() + 1e-12).matrix();
-  const Vec3 cb = a.axes.transpose() * (f.apply(b.center) - a.center);
-  return detail::boxes_distance_lower_bound(Vec3::Zero(), a.half, B, abs_B, cb, b.half);
+  const Obb c = carry(b, f);
+  const Mat3 B = detail::transpose_times(a.axes, c.axes);
+  return detail::boxes_distance_lower_bound(detail::transpose_times(a.axes, Vec3(c.center - a.center)), a.half, B,
+                                            detail::abs_plus_epsilon(B), b.half);
 }
+
+// Volume types whose nodes the collision traversal carries into the other frame once per query.
+template <class BV>
+struct CarriesVolumes : std::false_type {};
+template <>
+struct CarriesVolumes<Obb> : std::true_type {};
 
 inline bool ray_hits(const Obb& b, const Ray& ray) {
   const Ray local(b.axes.transpose() * (ray.origin - b.center), b.axes.transpose() * ray.direction, ray.max_t);
@@ -332,7 +410,7 @@ double distance_lower_bound(const Kdop<K>& a, const Kdop<K>& b, const RelativeFr
   const auto& n = KdopDirections<K>::get();
   const Vec3 cb = f.apply(b.box_center());
   const Vec3 hb = b.box_half();
-  double gap = detail::boxes_distance_lower_bound(a.box_center(), a.box_half(), f.R, f.abs_R, cb, hb);
+  double gap = detail::boxes_distance_lower_bound(cb - a.box_center(), a.box_half(), f.R, f.abs_R, hb);
   for (int i = 3; i < Kdop<K>::kSlabs; ++i) {
     const double p = n[i].dot(cb);
     const double r = (f.R.transpose() * n[i]).cwiseAbs().dot(hb);
@@ -382,27 +460,29 @@ inline double radius(const Rss& r) { return std::hypot(r.half[0], r.half[1]) + r
 Rss merge(const Rss& a, const Rss& b);
 
 namespace detail {
-// Lower bound on the distance between the two rectangles (flat boxes) of a and b.
-inline double rectangles_distance_lower_bound(const Rss& a, const Rss& b, const RelativeFrame& f) {
-  const Mat3 B = a.axes.transpose() * (f.R * b.axes);
-  const Mat3 abs_B = (B.cwiseAbs().array() + 1e-12).matrix();
-  const Vec3 cb = a.axes.transpose() * (f.apply(b.center) - a.center);
-  return boxes_distance_lower_bound(Vec3::Zero(), Vec3(a.half[0], a.half[1], 0.0), B, abs_B, cb,
-                                    Vec3(b.half[0], b.half[1], 0.0));
+// b's rectangle frame in a's rectangle frame.
+BVH_HOT void rect_in_rect(const Rss& a, const Rss& b, const RelativeFrame& f, Mat3& B, Mat3& abs_B, Vec3& T) {
+  B = transpose_times(a.axes, times(f.R, b.axes));
+  abs_B = abs_plus_epsilon(B);
+  T = transpose_times(a.axes, Vec3(f.apply(b.center) - a.center));
 }
 }  // namespace detail
 
-inline bool overlap(const Rss& a, const Rss& b, const RelativeFrame& f, double padding) {
+BVH_HOT bool overlap(const Rss& a, const Rss& b, const RelativeFrame& f, double padding) {
   // The rectangles as flat boxes: separated by more than both radii plus padding along an axis.
-  const Mat3 B = a.axes.transpose() * (f.R * b.axes);
-  const Mat3 abs_B = (B.cwiseAbs().array() + 1e-12).matrix();
-  const Vec3 cb = a.axes.transpose() * (f.apply(b.center) - a.center);
-  return detail::boxes_overlap(Vec3::Zero(), Vec3(a.half[0], a.half[1], 0.0), B, abs_B, cb,
-                               Vec3(b.half[0], b.half[1], 0.0), padding + a.radius + b.radius);
+  Mat3 B, abs_B;
+  Vec3 T;
+  detail::rect_in_rect(a, b, f, B, abs_B, T);
+  return detail::boxes_overlap(T, Vec3(a.half[0], a.half[1], 0.0), B, abs_B, Vec3(b.half[0], b.half[1], 0.0),
+                               padding + a.radius + b.radius);
 }
 
 inline double distance_lower_bound(const Rss& a, const Rss& b, const RelativeFrame& f) {
-  const double rect = detail::rectangles_distance_lower_bound(a, b, f);
+  Mat3 B, abs_B;
+  Vec3 T;
+  detail::rect_in_rect(a, b, f, B, abs_B, T);
+  const double rect = detail::boxes_distance_lower_bound(T, Vec3(a.half[0], a.half[1], 0.0), B, abs_B,
+                                                         Vec3(b.half[0], b.half[1], 0.0));
   return rect - a.radius - b.radius - kVolumeMargin * (a.radius + b.radius);
 }
 

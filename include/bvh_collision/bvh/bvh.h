@@ -2,11 +2,13 @@
 // leaves indexing a triangle array stored in leaf order (so a leaf's triangles are contiguous).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
 #include "bvh_collision/bvh/bounding_volumes.h"
 #include "bvh_collision/geometry/mesh.h"
+#include "bvh_collision/geometry/predicates.h"
 
 namespace bvh_collision {
 
@@ -20,7 +22,7 @@ const char* build_method_name(BuildMethod m);
 
 struct BuildOptions {
   BuildMethod method = BuildMethod::kTopDownMedian;
-  int max_leaf_triangles = 4;
+  int max_leaf_triangles = 1;
   int max_depth = 64;  // top-down builders: a node this deep becomes a leaf
 };
 
@@ -34,6 +36,18 @@ struct BvhNode {
   bool is_leaf() const { return left < 0; }
 };
 
+// A triangle's bounding sphere (centroid, largest vertex distance): a cheap distance bound.
+struct TriangleSphere {
+  Vec3 center = Vec3::Zero();
+  double radius = 0.0;
+  static TriangleSphere of(const Triangle& t) {
+    TriangleSphere s;
+    s.center = (t[0] + t[1] + t[2]) / 3.0;
+    s.radius = std::max({(t[0] - s.center).norm(), (t[1] - s.center).norm(), (t[2] - s.center).norm()});
+    return s;
+  }
+};
+
 template <class BV>
 class Bvh {
  public:
@@ -45,6 +59,9 @@ class Bvh {
   // Triangles in leaf order, and each one's index in the mesh it was built from.
   const std::vector<Triangle>& triangles() const { return triangles_; }
   std::int32_t triangle_id(std::size_t leaf_order_index) const { return triangle_ids_[leaf_order_index]; }
+  // Per triangle (leaf order): its plane for certified side tests, and its bounding sphere.
+  const std::vector<TrianglePlane>& planes() const { return planes_; }
+  const std::vector<TriangleSphere>& spheres() const { return spheres_; }
   // A closed, consistently oriented mesh: the hierarchy stands for the solid it bounds.
   bool closed() const { return closed_; }
   // One vertex of each connected component (see component_representatives()).
@@ -57,6 +74,8 @@ class Bvh {
   std::vector<BvhNode<BV>> nodes_;
   std::vector<Triangle> triangles_;
   std::vector<std::int32_t> triangle_ids_;
+  std::vector<TrianglePlane> planes_;
+  std::vector<TriangleSphere> spheres_;
   std::vector<Vec3> component_points_;
   bool closed_ = false;
 

@@ -60,3 +60,43 @@ inline int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int drop) {
 int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace bvh_collision
+
+namespace bvh_collision {
+
+// A triangle's plane prepared for many side tests: the sign of det[t1-t0, t2-t0, v-t0] is
+// certified in floating point with Shewchuk's orient3d bound, the 2x2 minors of the edge vectors
+// computed once. Used to reject triangle pairs quickly; undecided cases go to the exact test.
+struct TrianglePlane {
+  Vec3 origin = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();  // (t1 - t0) x (t2 - t0), not normalised
+  Vec3 minors = Vec3::Zero();  // per component, |a*b| + |c*d| of the two products in `normal`
+
+  static TrianglePlane of(const Vec3& t0, const Vec3& t1, const Vec3& t2) {
+    const Vec3 e1 = t1 - t0, e2 = t2 - t0;
+    TrianglePlane p;
+    p.origin = t0;
+    p.normal = Vec3(e1.y() * e2.z() - e1.z() * e2.y(), e1.z() * e2.x() - e1.x() * e2.z(),
+                    e1.x() * e2.y() - e1.y() * e2.x());
+    p.minors = Vec3(std::abs(e1.y() * e2.z()) + std::abs(e1.z() * e2.y()),
+                    std::abs(e1.z() * e2.x()) + std::abs(e1.x() * e2.z()),
+                    std::abs(e1.x() * e2.y()) + std::abs(e1.y() * e2.x()));
+    return p;
+  }
+  // +1 / -1 when the side of v is certain, 0 when it is not (on the plane, or too close to tell).
+  int side(const Vec3& v) const {
+    const Vec3 d = v - origin;
+    const double det = normal.x() * d.x() + normal.y() * d.y() + normal.z() * d.z();
+    const double permanent = minors.x() * std::abs(d.x()) + minors.y() * std::abs(d.y()) + minors.z() * std::abs(d.z());
+    constexpr double kBound = 8.0 * 1.1102230246251565e-16;  // >= (7 + 56 eps) eps
+    if (det > kBound * permanent) return 1;
+    if (-det > kBound * permanent) return -1;
+    return 0;
+  }
+  // True when all three points are certainly strictly on one side: the triangles cannot meet.
+  bool separates(const Vec3& a, const Vec3& b, const Vec3& c) const {
+    const int s = side(a);
+    return s != 0 && side(b) == s && side(c) == s;
+  }
+};
+
+}  // namespace bvh_collision
