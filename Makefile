@@ -5,6 +5,7 @@
 #                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
 #                CI=true: both
 #   make demo    start the node on the demo robot and report what it does
+#   make bench   build and run the benchmarks (Release); tables on stdout and in build/bench/
 SHELL := /bin/bash
 # catkin needs Debian's own python3 (with catkin_pkg) ahead of any other interpreter.
 export PATH := /usr/bin:$(PATH)
@@ -20,7 +21,7 @@ DEB_PACKAGES := \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev
 
-.PHONY: all deps build test demo clean
+.PHONY: all deps build test demo bench clean
 all: build
 
 deps:
@@ -36,6 +37,13 @@ test: deps build
 
 demo: deps build
 	@bash scripts/demo.sh
+
+bench: deps build
+	$(MAKE) -C $(BUILD) -j$(JOBS) benchmarks
+	@mkdir -p $(BUILD)/bench
+	@for b in devel/lib/bvh_collision/bench_*; do \
+	  echo "== $$b"; $$b $(BUILD)/bench | tee $(BUILD)/bench/$$(basename $$b).md || exit 1; \
+	done
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel

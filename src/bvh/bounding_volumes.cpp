@@ -66,10 +66,72 @@ Aabb fit_volume<Aabb>(const Vec3* points, std::size_t n) {
   return b;
 }
 
+namespace {
+
+// Volume of the box with these axes around the points (padded so flat boxes still compare).
+double box_volume(const Vec3* points, std::size_t n, const Mat3& axes, double pad) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 q = axes.transpose() * points[i];
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  const Vec3 e = hi - lo + Vec3::Constant(pad);
+  return e.x() * e.y() * e.z();
+}
+
+Mat3 rotated_about(const Mat3& axes, int k, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  const int i = (k + 1) % 3, j = (k + 2) % 3;
+  Mat3 r = axes;
+  r.col(i) = c * axes.col(i) + s * axes.col(j);
+  r.col(j) = -s * axes.col(i) + c * axes.col(j);
+  return r;
+}
+
+// The orientation of a tight box: the better of the principal axes and the mesh axes, refined
+// by a coarse-to-fine search over rotations about each axis. Tighter boxes mean fewer overlap
+// tests in every query, which repays the build-time search.
+Mat3 tight_box_axes(const Vec3* points, std::size_t n) {
+  Vec3 lo = points[0], hi = points[0];
+  for (std::size_t i = 1; i < n; ++i) {
+    lo = lo.cwiseMin(points[i]);
+    hi = hi.cwiseMax(points[i]);
+  }
+  const double pad = 1e-3 * (hi - lo).norm() + 1e-300;
+  Mat3 best = detail::principal_axes(points, n);
+  double best_volume = box_volume(points, n, best, pad);
+  if (const double v = box_volume(points, n, Mat3::Identity(), pad); v < best_volume) {
+    best = Mat3::Identity();
+    best_volume = v;
+  }
+  for (double step = 0.2; step > 0.005; step *= 0.5) {
+    bool improved = true;
+    while (improved) {
+      improved = false;
+      for (int k = 0; k < 3; ++k) {
+        for (double angle : {step, -step}) {
+          const Mat3 candidate = rotated_about(best, k, angle);
+          const double v = box_volume(points, n, candidate, pad);
+          if (v < best_volume * (1 - 1e-9)) {
+            best = candidate;
+            best_volume = v;
+            improved = true;
+          }
+        }
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 template <>
 Obb fit_volume<Obb>(const Vec3* points, std::size_t n) {
   Obb b;
-  b.axes = detail::principal_axes(points, n);
+  if (n == 0) return b;
+  b.axes = tight_box_axes(points, n);
   Vec3 lo, hi;
   project_extents(points, n, b.axes, lo, hi);
   b.center = b.axes * (0.5 * (lo + hi));

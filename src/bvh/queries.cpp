@@ -373,7 +373,7 @@ DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>
   if (a.empty() || b.empty()) return result;
   const Transform b_in_a = relative_transform(pose_a, pose_b);
   DistanceTraversal<BV>(a, b, b_in_a, request.tolerance, result).run();
-  if (result.distance > 0.0) {
+  if (result.distance > 0.0 && request.solids) {
     // Solids: a component wholly inside the other mesh is at distance 0.
     Vec3 where;  // in a's frame
     bool inside = component_inside(a, b, b_in_a, result.stats, &where);

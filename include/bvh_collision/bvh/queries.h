@@ -51,6 +51,7 @@ struct CollisionResult {
 
 struct DistanceRequest {
   double tolerance = 0.0;  // the reported distance may exceed the true one by this much
+  bool solids = true;      // closed meshes bound solids: one inside the other is at distance 0
 };
 
 struct DistanceResult {
