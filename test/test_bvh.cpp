@@ -239,6 +239,53 @@ TYPED_TEST(BvhOracle, RaycastEqualsBruteForce) {
   }
 }
 
+TYPED_TEST(BvhOracle, AtMostNContactsWithGeometryOnBothMeshes) {
+  const MeshPair& mp = mesh_pairs()[0];
+  const auto a = Bvh<TypeParam>::build(mp.a), b = Bvh<TypeParam>::build(mp.b);
+  int checked = 0;
+  for (std::size_t p = 0; p < mp.poses.size() && checked < 20; ++p) {
+    const std::size_t total = mp.pairs[p].size();
+    if (total < 2) continue;
+    ++checked;
+    const Transform world = test::random_rotation(rng(), Vec3(1, 2, 3));
+    CollisionRequest request;
+    request.solids = false;
+    request.max_contacts = total - 1;
+    const CollisionResult r = collide(a, world, b, world * mp.poses[p], request);
+    ASSERT_TRUE(r.collision);
+    ASSERT_EQ(r.contacts.size(), total - 1) << "stops at max_contacts";
+    for (const MeshContact& contact : r.contacts) {
+      // The contact point lies on both triangles (world frame), the normal is a unit vector.
+      const Triangle ta = mp.a.triangle(contact.triangle_a), tb = mp.b.triangle(contact.triangle_b);
+      const Vec3 pa = world.inverse() * contact.position, pb = (world * mp.poses[p]).inverse() * contact.position;
+      EXPECT_LT((closest_point_on_triangle(pa, ta[0], ta[1], ta[2]) - pa).norm(), 1e-9);
+      EXPECT_LT((closest_point_on_triangle(pb, tb[0], tb[1], tb[2]) - pb).norm(), 1e-9);
+      EXPECT_NEAR(contact.normal.norm(), 1.0, 1e-12);
+      EXPECT_GE(contact.depth, 0.0);
+    }
+  }
+  EXPECT_GT(checked, 5);
+}
+
+TYPED_TEST(BvhOracle, AnyHitRayAgreesWithFirstHit) {
+  const TriangleMesh mesh = test::bumpy_sphere(rng(), 0.2, 10, 16, 0.2);
+  const auto bvh = Bvh<TypeParam>::build(mesh);
+  std::normal_distribution<double> n(0.0, 1.0);
+  int hits = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Vec3 origin = Vec3(n(rng()), n(rng()), n(rng())) * 0.3, dir(n(rng()), n(rng()), n(rng()));
+    const RayHit first = raycast(bvh, Transform(), origin, dir, 0.5);
+    const RayHit any = raycast(bvh, Transform(), origin, dir, 0.5, true);
+    ASSERT_EQ(any.hit, first.hit);
+    if (any.hit) {
+      EXPECT_GE(any.distance, first.distance - 1e-12);
+      EXPECT_LE(any.distance, 0.5);
+    }
+    hits += first.hit;
+  }
+  EXPECT_GT(hits, 30);
+}
+
 TEST(BoundingVolumes, SphereBoxTestIsTheExactOne) {
   // The seed's test -- "distance between the centres <= radius" -- against the exact one.
   // A sphere of radius 1 touching the face of a cube of side 10: centres are 6 apart.
