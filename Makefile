@@ -19,7 +19,8 @@ DEB_PACKAGES := \
   python3-rosnode python3-rosservice python3-rosparam \
   libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev \
-  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev
+  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
+  libkdl-parser-dev liborocos-kdl-dev
 
 .PHONY: all deps build test demo bench clean
 all: build

@@ -1,0 +1,100 @@
+// A robot's kinematic tree and collision geometry, loaded from a URDF model: the robot layer's
+// core data, indexed by integers so that kinematics and queries never touch strings or maps.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <urdf_model/model.h>
+
+#include "bvh_collision/geometry/mesh.h"
+#include "bvh_collision/robot/package_resolver.h"
+
+namespace bvh_collision {
+
+// A URDF whose geometry cannot be loaded; the message names the link, the element and the file.
+class RobotLoadError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic, kFloating, kPlanar };
+
+// One <collision> element.
+struct CollisionElement {
+  enum class Shape { kMesh, kBox, kSphere, kCylinder };
+  Shape shape = Shape::kMesh;
+  Transform origin;  // the element's frame in its link's frame
+  // Triangles for meshes, boxes (exact, 12 triangles) and cylinders (a prism that contains the
+  // true cylinder; see kCylinderMaxError). Shared between elements that use the same file and scale.
+  std::shared_ptr<const TriangleMesh> mesh;
+  double radius = 0.0;       // sphere (kept analytic) and cylinder
+  double length = 0.0;       // cylinder
+  Vec3 size = Vec3::Zero();  // box
+  std::string source;        // what it came from, for messages: "mesh 'package://...'", "box"
+};
+
+// A cylinder becomes a regular prism circumscribing it, with enough sides that no point of the
+// prism is farther than this from the true cylinder (it only ever makes the link larger).
+constexpr double kCylinderMaxError = 0.0005;  // metres
+
+struct RobotLink {
+  std::string name;
+  int parent_joint = -1;  // -1 for the root
+  std::vector<CollisionElement> collision;
+};
+
+struct RobotJoint {
+  std::string name;
+  JointType type = JointType::kFixed;
+  int parent_link = -1, child_link = -1;
+  Transform origin;           // child frame at zero motion, in the parent link's frame
+  Vec3 axis = Vec3::UnitX();  // unit axis in the joint frame
+  double lower = 0.0, upper = 0.0;
+  bool bounded = false;  // revolute and prismatic joints have limits
+  int variable = -1;     // index in the state vector (-1: fixed, mimic, floating, planar)
+  int mimic = -1;        // the joint this one follows, value = multiplier * q + offset
+  double multiplier = 1.0, offset = 0.0;
+};
+
+class RobotModel {
+ public:
+  // Throws RobotLoadError when a mesh cannot be resolved or read, or the tree is malformed.
+  static RobotModel from_urdf(const urdf::ModelInterface& urdf, const PackageResolver& resolver);
+
+  const std::string& name() const { return name_; }
+  const std::vector<RobotLink>& links() const { return links_; }
+  const std::vector<RobotJoint>& joints() const { return joints_; }
+  // Joints in an order where every joint comes after the joint of its parent link.
+  const std::vector<int>& joint_order() const { return joint_order_; }
+  int root_link() const { return root_; }
+  int link_index(const std::string& name) const;
+  int joint_index(const std::string& name) const;
+  // Names of the state vector's entries: every revolute, continuous and prismatic joint that
+  // does not mimic another, in URDF order.
+  const std::vector<std::string>& variable_names() const { return variable_names_; }
+  std::size_t variable_count() const { return variable_names_.size(); }
+  // Distinct mesh files read (a file used by several links is read once).
+  std::size_t mesh_files_read() const { return mesh_files_read_; }
+
+ private:
+  std::string name_;
+  std::vector<RobotLink> links_;
+  std::vector<RobotJoint> joints_;
+  std::vector<int> joint_order_;
+  std::vector<std::string> variable_names_;
+  int root_ = -1;
+  std::size_t mesh_files_read_ = 0;
+
+  friend class RobotModelBuilder;
+};
+
+// Link poses in the root link's frame for a state vector (RobotModel::variable_names order).
+// Floating and planar joints take the pose given in `free_joint_poses` (indexed by joint; empty
+// or a missing entry means identity). Writes model.links().size() poses.
+void forward_kinematics(const RobotModel& model, const double* state, std::vector<Transform>& link_poses,
+                        const std::vector<Transform>* free_joint_poses = nullptr);
+
+}  // namespace bvh_collision

@@ -1,0 +1,274 @@
+#include "bvh_collision/robot/robot_model.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "bvh_collision/robot/mesh_loader.h"
+
+namespace bvh_collision {
+namespace {
+
+Transform to_transform(const urdf::Pose& p) {
+  const Eigen::Quaterniond q(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z);
+  return {q.normalized().toRotationMatrix(), Vec3(p.position.x, p.position.y, p.position.z)};
+}
+
+JointType joint_type(int t) {
+  switch (t) {
+    case urdf::Joint::REVOLUTE: return JointType::kRevolute;
+    case urdf::Joint::CONTINUOUS: return JointType::kContinuous;
+    case urdf::Joint::PRISMATIC: return JointType::kPrismatic;
+    case urdf::Joint::FLOATING: return JointType::kFloating;
+    case urdf::Joint::PLANAR: return JointType::kPlanar;
+    default: return JointType::kFixed;
+  }
+}
+
+// A prism circumscribing the cylinder (radius r, length l, axis z, centred), with the fewest
+// sides that keep the prism within kCylinderMaxError of the cylinder.
+TriangleMesh cylinder_prism(double r, double l) {
+  int sides = 16;
+  while (sides < 512 && r * (1.0 / std::cos(M_PI / sides) - 1.0) > kCylinderMaxError) sides *= 2;
+  const double R = r / std::cos(M_PI / sides);  // the polygon's edges touch the circle
+  TriangleMesh m;
+  for (int i = 0; i < sides; ++i) {
+    const double a = 2 * M_PI * i / sides;
+    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), -l / 2);
+    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), l / 2);
+  }
+  const int bottom = static_cast<int>(m.vertices.size()), top = bottom + 1;
+  m.vertices.emplace_back(0, 0, -l / 2);
+  m.vertices.emplace_back(0, 0, l / 2);
+  for (int i = 0; i < sides; ++i) {
+    const int b0 = 2 * i, t0 = 2 * i + 1, b1 = 2 * ((i + 1) % sides), t1 = b1 + 1;
+    m.triangles.push_back({b0, b1, t1});
+    m.triangles.push_back({b0, t1, t0});
+    m.triangles.push_back({bottom, b1, b0});
+    m.triangles.push_back({top, t0, t1});
+  }
+  return m;
+}
+
+}  // namespace
+
+class RobotModelBuilder {
+ public:
+  RobotModelBuilder(const urdf::ModelInterface& urdf, const PackageResolver& resolver)
+      : urdf_(urdf), resolver_(resolver) {}
+
+  RobotModel build() {
+    model_.name_ = urdf_.getName();
+    if (!urdf_.getRoot()) throw RobotLoadError("robot '" + model_.name_ + "' has no root link");
+    add_link(*urdf_.getRoot(), -1);
+    model_.root_ = 0;
+    assign_variables_and_mimics();
+    return std::move(model_);
+  }
+
+ private:
+  // Depth-first from the root: links and joints get indices in tree order, so the joint order
+  // (parents first) is simply the order of creation.
+  void add_link(const urdf::Link& link, int parent_joint) {
+    const int index = static_cast<int>(model_.links_.size());
+    model_.links_.push_back({link.name, parent_joint, {}});
+    link_index_[link.name] = index;
+    for (std::size_t e = 0; e < link.collision_array.size(); ++e) {
+      if (link.collision_array[e] && link.collision_array[e]->geometry) {
+        model_.links_[index].collision.push_back(load_element(link.name, e, *link.collision_array[e]));
+      }
+    }
+    for (const auto& joint : link.child_joints) {
+      const urdf::LinkConstSharedPtr child = urdf_.getLink(joint->child_link_name);
+      if (!child) throw RobotLoadError("joint '" + joint->name + "' names a missing child link '" + joint->child_link_name + "'");
+      const int j = static_cast<int>(model_.joints_.size());
+      RobotJoint rj;
+      rj.name = joint->name;
+      rj.type = joint_type(joint->type);
+      rj.parent_link = index;
+      rj.origin = to_transform(joint->parent_to_joint_origin_transform);
+      const Vec3 axis(joint->axis.x, joint->axis.y, joint->axis.z);
+      rj.axis = axis.norm() > 0 ? Vec3(axis.normalized()) : Vec3(Vec3::UnitX());
+      if (joint->limits && (rj.type == JointType::kRevolute || rj.type == JointType::kPrismatic)) {
+        rj.lower = joint->limits->lower;
+        rj.upper = joint->limits->upper;
+        rj.bounded = true;
+      }
+      model_.joints_.push_back(rj);
+      model_.joint_order_.push_back(j);
+      mimic_source_[j] = joint->mimic;
+      add_link(*child, j);
+      model_.joints_[j].child_link = link_index_.at(child->name);
+    }
+  }
+
+  void assign_variables_and_mimics() {
+    for (std::size_t j = 0; j < model_.joints_.size(); ++j) {
+      RobotJoint& joint = model_.joints_[j];
+      const auto& mimic = mimic_source_[static_cast<int>(j)];
+      const bool moves = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous ||
+                         joint.type == JointType::kPrismatic;
+      if (!moves) continue;
+      if (mimic) {
+        joint.mimic = model_.joint_index(mimic->joint_name);
+        if (joint.mimic < 0) throw RobotLoadError("joint '" + joint.name + "' mimics unknown joint '" + mimic->joint_name + "'");
+        joint.multiplier = mimic->multiplier;
+        joint.offset = mimic->offset;
+        continue;
+      }
+      joint.variable = static_cast<int>(model_.variable_names_.size());
+      model_.variable_names_.push_back(joint.name);
+    }
+    // A chain of mimics resolves to a joint with a variable.
+    for (RobotJoint& joint : model_.joints_) {
+      for (int hops = 0; joint.mimic >= 0 && model_.joints_[joint.mimic].mimic >= 0; ++hops) {
+        if (hops > 64) throw RobotLoadError("joint '" + joint.name + "': mimic cycle");
+        const RobotJoint& via = model_.joints_[joint.mimic];
+        joint.offset = joint.multiplier * via.offset + joint.offset;
+        joint.multiplier *= via.multiplier;
+        joint.mimic = via.mimic;
+      }
+      if (joint.mimic >= 0 && model_.joints_[joint.mimic].variable < 0) {
+        throw RobotLoadError("joint '" + joint.name + "' mimics joint '" + model_.joints_[joint.mimic].name +
+                             "', which does not move");
+      }
+    }
+  }
+
+  CollisionElement load_element(const std::string& link, std::size_t element, const urdf::Collision& c) {
+    CollisionElement out;
+    out.origin = to_transform(c.origin);
+    const urdf::Geometry& g = *c.geometry;
+    std::ostringstream where;
+    where << "link '" << link << "', collision element " << element + 1;
+    switch (g.type) {
+      case urdf::Geometry::BOX: {
+        const auto& b = static_cast<const urdf::Box&>(g);
+        out.shape = CollisionElement::Shape::kBox;
+        out.size = Vec3(b.dim.x, b.dim.y, b.dim.z);
+        if (!(out.size.array() > 0).all()) throw RobotLoadError(where.str() + ": box size must be positive");
+        out.mesh = std::make_shared<TriangleMesh>(box_mesh(out.size));
+        out.source = "box";
+        break;
+      }
+      case urdf::Geometry::SPHERE: {
+        out.shape = CollisionElement::Shape::kSphere;
+        out.radius = static_cast<const urdf::Sphere&>(g).radius;
+        if (!(out.radius > 0)) throw RobotLoadError(where.str() + ": sphere radius must be positive");
+        out.source = "sphere";
+        break;
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto& cy = static_cast<const urdf::Cylinder&>(g);
+        out.shape = CollisionElement::Shape::kCylinder;
+        out.radius = cy.radius;
+        out.length = cy.length;
+        if (!(out.radius > 0 && out.length > 0)) throw RobotLoadError(where.str() + ": cylinder radius and length must be positive");
+        out.mesh = std::make_shared<TriangleMesh>(cylinder_prism(out.radius, out.length));
+        out.source = "cylinder";
+        break;
+      }
+      case urdf::Geometry::MESH: {
+        const auto& m = static_cast<const urdf::Mesh&>(g);
+        out.shape = CollisionElement::Shape::kMesh;
+        out.source = "mesh '" + m.filename + "'";
+        out.mesh = load_mesh_once(where.str(), m.filename, Vec3(m.scale.x, m.scale.y, m.scale.z));
+        break;
+      }
+    }
+    return out;
+  }
+
+  std::shared_ptr<const TriangleMesh> load_mesh_once(const std::string& where, const std::string& uri, const Vec3& scale) {
+    std::string path;
+    try {
+      path = resolver_.resolve(uri);
+    } catch (const std::invalid_argument& e) {
+      throw RobotLoadError(where + ": mesh '" + uri + "': " + e.what());
+    }
+    const auto key = std::make_tuple(path, scale.x(), scale.y(), scale.z());
+    if (const auto it = scaled_.find(key); it != scaled_.end()) return it->second;
+    auto& unscaled = files_[path];
+    try {
+      if (!unscaled) {
+        unscaled = std::make_shared<TriangleMesh>(load_mesh(path));
+        ++model_.mesh_files_read_;
+      }
+    } catch (const MeshLoadError& e) {
+      throw RobotLoadError(where + ": mesh '" + uri + "': " + e.what());
+    }
+    if (!scale.allFinite() || (scale.array() == 0.0).any()) {
+      throw RobotLoadError(where + ": mesh '" + uri + "': scale must be finite and non-zero");
+    }
+    auto mesh = std::make_shared<TriangleMesh>(*unscaled);
+    for (Vec3& v : mesh->vertices) v = v.cwiseProduct(scale);
+    if (scale.x() * scale.y() * scale.z() < 0.0) {
+      for (auto& t : mesh->triangles) std::swap(t[1], t[2]);  // mirrored: keep outward winding
+    }
+    return scaled_[key] = mesh;
+  }
+
+  const urdf::ModelInterface& urdf_;
+  const PackageResolver& resolver_;
+  RobotModel model_;
+  std::map<std::string, int> link_index_;
+  std::map<int, urdf::JointMimicSharedPtr> mimic_source_;
+  std::map<std::string, std::shared_ptr<TriangleMesh>> files_;
+  std::map<std::tuple<std::string, double, double, double>, std::shared_ptr<const TriangleMesh>> scaled_;
+};
+
+RobotModel RobotModel::from_urdf(const urdf::ModelInterface& urdf, const PackageResolver& resolver) {
+  return RobotModelBuilder(urdf, resolver).build();
+}
+
+int RobotModel::link_index(const std::string& name) const {
+  for (std::size_t i = 0; i < links_.size(); ++i) {
+    if (links_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+int RobotModel::joint_index(const std::string& name) const {
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    if (joints_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void forward_kinematics(const RobotModel& model, const double* state, std::vector<Transform>& poses,
+                        const std::vector<Transform>* free_joint_poses) {
+  poses.resize(model.links().size());
+  poses[model.root_link()] = Transform();
+  for (const int j : model.joint_order()) {
+    const RobotJoint& joint = model.joints()[j];
+    Transform motion;
+    double q = 0.0;
+    if (joint.variable >= 0) {
+      q = state[joint.variable];
+    } else if (joint.mimic >= 0) {
+      q = joint.multiplier * state[model.joints()[joint.mimic].variable] + joint.offset;
+    }
+    switch (joint.type) {
+      case JointType::kRevolute:
+      case JointType::kContinuous:
+        motion.R = Eigen::AngleAxisd(q, joint.axis).toRotationMatrix();
+        break;
+      case JointType::kPrismatic:
+        motion.t = q * joint.axis;
+        break;
+      case JointType::kFloating:
+      case JointType::kPlanar:
+        if (free_joint_poses != nullptr && static_cast<std::size_t>(j) < free_joint_poses->size()) {
+          motion = (*free_joint_poses)[j];
+        }
+        break;
+      case JointType::kFixed:
+        break;
+    }
+    poses[joint.child_link] = poses[joint.parent_link] * joint.origin * motion;
+  }
+}
+
+}  // namespace bvh_collision

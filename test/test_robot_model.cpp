@@ -1,0 +1,278 @@
+// The robot layer's loader and kinematics: every robot of ../shared/robots loads with the
+// manifest's meshes (triangle counts, bounding boxes, files read once); forward kinematics
+// equals KDL's on random configurations; a project-written URDF exercises the loader's edge cases.
+#include <gtest/gtest.h>
+
+#include <kdl/treefksolverpos_recursive.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/bvh/bounding_volumes.h"
+#include "bvh_collision/robot/robot_model.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+RobotModel load_robot(const std::string& robot) {
+  const std::string dir = test::robots_dir() + "/" + robot;
+  return RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+}
+
+TEST(RobotModel, EveryRealRobotLoadsTheManifestMeshes) {
+  BVH_REQUIRE_ROBOTS();
+  std::ifstream in(test::robots_dir() + "/MANIFEST.json");
+  const json manifest = json::parse(in);
+  for (const auto& [robot, expected] : manifest.items()) {
+    SCOPED_TRACE(robot);
+    const RobotModel model = load_robot(robot);
+    EXPECT_EQ(model.links().size(), expected["links"].get<std::size_t>());
+    EXPECT_EQ(model.joints().size(), expected["joints"].get<std::size_t>());
+    EXPECT_EQ(model.mesh_files_read(), expected["collision_meshes"].size()) << "each file read once";
+    std::size_t elements = 0, instanced = 0;
+    std::map<std::string, const CollisionElement*> by_uri;
+    for (const RobotLink& link : model.links()) {
+      elements += link.collision.size();
+      for (const CollisionElement& e : link.collision) {
+        if (e.shape != CollisionElement::Shape::kMesh) continue;
+        instanced += e.mesh->triangles.size();
+        by_uri[e.source.substr(6, e.source.size() - 7)] = &e;  // strip "mesh '" and "'"
+      }
+    }
+    EXPECT_EQ(elements, expected["collision_elements"].get<std::size_t>());
+    EXPECT_EQ(instanced, expected["collision_triangles_instanced"].get<std::size_t>());
+    for (const auto& mesh : expected["collision_meshes"]) {
+      const std::string uri = mesh["uri"];
+      ASSERT_TRUE(by_uri.count(uri)) << uri;
+      const TriangleMesh& m = *by_uri.at(uri)->mesh;
+      EXPECT_EQ(m.triangles.size(), mesh["triangles"].get<std::size_t>()) << uri;
+      Aabb box;
+      for (const auto& t : m.triangles) {
+        for (int k = 0; k < 3; ++k) box.extend(m.vertices[t[k]]);
+      }
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(box.min[k], mesh["bbox_min"][k].get<double>(), 1e-6) << uri;
+        EXPECT_NEAR(box.max[k], mesh["bbox_max"][k].get<double>(), 1e-6) << uri;
+      }
+    }
+  }
+}
+
+TEST(RobotModel, ForwardKinematicsEqualsKdlOnEveryRobot) {
+  BVH_REQUIRE_ROBOTS();
+  std::mt19937_64 rng(3);
+  for (const char* robot : {"panda", "ur5e", "pr2", "abb_irb2400", "panda_capsules", "solo"}) {
+    SCOPED_TRACE(robot);
+    const auto urdf = load_robot_description_file(test::robots_dir() + "/" + robot + "/robot.urdf");
+    const RobotModel model = RobotModel::from_urdf(*urdf, PackageResolver({test::robots_dir() + "/" + robot}));
+    KDL::Tree tree;
+    ASSERT_TRUE(kdl_parser::treeFromUrdfModel(*urdf, tree));
+    KDL::TreeFkSolverPos_recursive solver(tree);
+    std::vector<Transform> poses;
+    for (int sample = 0; sample < 200; ++sample) {
+      std::vector<double> state(model.variable_count());
+      for (std::size_t v = 0; v < state.size(); ++v) {
+        const RobotJoint& j = model.joints()[model.joint_index(model.variable_names()[v])];
+        const double lo = j.bounded ? j.lower : -M_PI, hi = j.bounded ? j.upper : M_PI;
+        state[v] = std::uniform_real_distribution<double>(lo, hi)(rng);
+      }
+      forward_kinematics(model, state.data(), poses);
+      // KDL knows nothing of mimic joints: give each KDL joint the value our model derives.
+      KDL::JntArray q(tree.getNrOfJoints());
+      for (const auto& [name, element] : tree.getSegments()) {
+        const KDL::Segment& seg = GetTreeElementSegment(element);
+        if (seg.getJoint().getType() == KDL::Joint::None) continue;
+        const RobotJoint& j = model.joints()[model.joint_index(seg.getJoint().getName())];
+        const double value = j.variable >= 0 ? state[j.variable]
+                                             : j.multiplier * state[model.joints()[j.mimic].variable] + j.offset;
+        q(GetTreeElementQNr(element)) = value;
+      }
+      for (std::size_t l = 0; l < model.links().size(); ++l) {
+        KDL::Frame frame;
+        ASSERT_GE(solver.JntToCart(q, frame, model.links()[l].name), 0) << model.links()[l].name;
+        for (int r = 0; r < 3; ++r) {
+          EXPECT_NEAR(poses[l].t[r], frame.p(r), 1e-9) << model.links()[l].name;
+          for (int c = 0; c < 3; ++c) EXPECT_NEAR(poses[l].R(r, c), frame.M(r, c), 1e-9) << model.links()[l].name;
+        }
+      }
+      if (HasFailure()) return;
+    }
+  }
+}
+
+// ---------------------------------------------------------------- a project-written URDF
+
+// A binary STL of a unit box with corner (0, 0, 0) and (1, 2, 3) (outward winding).
+void write_stl(const fs::path& path) {
+  const TriangleMesh box = box_mesh(Vec3(1, 2, 3));
+  std::ofstream out(path, std::ios::binary);
+  char header[80] = "bvh_collision test box";
+  out.write(header, 80);
+  const std::uint32_t n = static_cast<std::uint32_t>(box.triangles.size());
+  out.write(reinterpret_cast<const char*>(&n), 4);
+  for (std::size_t t = 0; t < n; ++t) {
+    const float normal[3] = {0, 0, 0};
+    out.write(reinterpret_cast<const char*>(normal), 12);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 v = box.vertices[box.triangles[t][k]] + Vec3(0.5, 1.0, 1.5);
+      const float f[3] = {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+      out.write(reinterpret_cast<const char*>(f), 12);
+    }
+    const std::uint16_t attributes = 0;
+    out.write(reinterpret_cast<const char*>(&attributes), 2);
+  }
+}
+
+// A Collada triangle (0,0,0) (1,0,0) (0,1,0) with up_axis Z_UP and a child node translation of
+// (0, 0, 5): under the ROS convention the result is the triangle moved 5 along z, not rotated.
+void write_collada(const fs::path& path) {
+  std::ofstream out(path);
+  out << R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="tri" name="tri"><mesh>
+    <source id="tri-pos"><float_array id="tri-pos-array" count="9">0 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#tri-pos-array" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="tri-vtx"><input semantic="POSITION" source="#tri-pos"/></vertices>
+    <triangles count="1"><input semantic="VERTEX" source="#tri-vtx" offset="0"/><p>0 1 2</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="scene">
+    <node id="child" name="child"><translate>0 0 5</translate><instance_geometry url="#tri"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)";
+}
+
+struct ScratchPackage {
+  fs::path root;
+  ScratchPackage() {
+    root = fs::temp_directory_path() / ("bvh_collision_test_" + std::to_string(::getpid()));
+    fs::create_directories(root / "test-meshes" / "meshes");
+    std::ofstream(root / "test-meshes" / "package.xml") << "<package format=\"3\"><name>test-meshes</name></package>";
+    write_stl(root / "test-meshes" / "meshes" / "box.stl");
+    write_stl(root / "test-meshes" / "meshes" / "BOX_UPPER.STL");
+    write_collada(root / "test-meshes" / "meshes" / "tri.dae");
+    std::ofstream(root / "test-meshes" / "meshes" / "garbage.stl") << "solid nonsense\n this is not an stl\n";
+  }
+  ~ScratchPackage() { fs::remove_all(root); }
+  RobotModel load(const std::string& links) const {
+    const std::string xml = "<robot name=\"t\">" + links + "</robot>";
+    return RobotModel::from_urdf(*parse_robot_description(xml), PackageResolver({root.string()}));
+  }
+  std::string load_error(const std::string& links) const {
+    try {
+      load(links);
+    } catch (const RobotLoadError& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "loading succeeded: " << links;
+    return "";
+  }
+};
+
+std::string mesh_link(const std::string& name, const std::string& uri, const std::string& scale = "1 1 1") {
+  return "<link name=\"" + name + "\"><collision><geometry><mesh filename=\"" + uri + "\" scale=\"" + scale +
+         "\"/></geometry></collision></link>";
+}
+
+TEST(RobotModel, ProjectUrdfEdgeCases) {
+  const ScratchPackage pkg;
+  // Several collision elements, upper-case extension, hyphenated package name, shared file.
+  const RobotModel m = pkg.load(
+      "<link name=\"a\"><collision><geometry><mesh filename=\"package://test-meshes/meshes/box.stl\"/></geometry></collision>"
+      "<collision><origin xyz=\"0 0 1\"/><geometry><sphere radius=\"0.2\"/></geometry></collision>"
+      "<collision><geometry><cylinder radius=\"0.1\" length=\"0.5\"/></geometry></collision></link>"
+      "<joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>" +
+      mesh_link("b", "package://test-meshes/meshes/BOX_UPPER.STL") +
+      "<joint name=\"k\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>" +
+      mesh_link("c", "file://" + (pkg.root / "test-meshes/meshes/box.stl").string()));
+  ASSERT_EQ(m.links()[m.link_index("a")].collision.size(), 3u);
+  EXPECT_EQ(m.links()[m.link_index("b")].collision[0].mesh->triangles.size(), 12u);
+  EXPECT_EQ(m.mesh_files_read(), 2u) << "box.stl is read once for links a and c";
+  // The cylinder prism contains the true cylinder and stays within the documented error.
+  const CollisionElement& cyl = m.links()[m.link_index("a")].collision[2];
+  for (const Vec3& v : cyl.mesh->vertices) {
+    const double r = std::hypot(v.x(), v.y());
+    if (r > 0) {
+      EXPECT_GE(r, 0.1);
+      EXPECT_LE(r, 0.1 + kCylinderMaxError + 1e-12);
+    }
+  }
+  EXPECT_TRUE(is_closed(*cyl.mesh));
+}
+
+TEST(RobotModel, NegativeScaleMirrorsAndKeepsOutwardWinding) {
+  const ScratchPackage pkg;
+  const RobotModel m = pkg.load(mesh_link("a", "package://test-meshes/meshes/box.stl", "-1 1 1"));
+  const TriangleMesh& mesh = *m.links()[0].collision[0].mesh;
+  Aabb box;
+  for (const Vec3& v : mesh.vertices) box.extend(v);
+  EXPECT_NEAR(box.min.x(), -1.0, 1e-6);
+  EXPECT_NEAR(box.max.x(), 0.0, 1e-6);
+  EXPECT_TRUE(is_closed(mesh));
+  // Outward winding: the signed volume (divergence theorem) is positive.
+  double volume = 0.0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle tri = mesh.triangle(t);
+    volume += tri[0].dot(tri[1].cross(tri[2])) / 6.0;
+  }
+  EXPECT_NEAR(volume, 6.0, 1e-5);
+}
+
+TEST(RobotModel, ColladaZUpFollowsTheRosConvention) {
+  const ScratchPackage pkg;
+  const RobotModel m = pkg.load(mesh_link("a", "package://test-meshes/meshes/tri.dae"));
+  const TriangleMesh& mesh = *m.links()[0].collision[0].mesh;
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  for (const Vec3& v : mesh.vertices) EXPECT_NEAR(v.z(), 5.0, 1e-9) << "root transform reset, child kept";
+}
+
+TEST(RobotModel, LoadErrorsNameLinkElementAndFile) {
+  const ScratchPackage pkg;
+  std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/missing.stl"));
+  EXPECT_NE(msg.find("link 'arm'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("collision element 1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("missing.stl"), std::string::npos) << msg;
+  msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/garbage.stl"));
+  EXPECT_NE(msg.find("garbage.stl"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cannot be read"), std::string::npos) << msg;
+  msg = pkg.load_error(mesh_link("arm", "http://example.com/box.stl"));
+  EXPECT_NE(msg.find("unsupported URI scheme 'http://'"), std::string::npos) << msg;
+  msg = pkg.load_error(mesh_link("arm", "package://no_such_package/box.stl"));
+  EXPECT_NE(msg.find("package 'no_such_package' not found"), std::string::npos) << msg;
+}
+
+TEST(RobotModel, MimicAndFreeJoints) {
+  const RobotModel m = [] {
+    const std::string xml = std::string("<robot name=\"m\"><link name=\"base\"/><link name=\"a\"/><link name=\"b\"/><link name=\"f\"/>") +
+        "<joint name=\"ja\" type=\"prismatic\"><parent link=\"base\"/><child link=\"a\"/><axis xyz=\"1 0 0\"/>"
+        "<limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+        "<joint name=\"jb\" type=\"prismatic\"><parent link=\"base\"/><child link=\"b\"/><axis xyz=\"0 1 0\"/>"
+        "<limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/><mimic joint=\"ja\" multiplier=\"-2\" offset=\"0.5\"/></joint>"
+        "<joint name=\"jf\" type=\"floating\"><parent link=\"base\"/><child link=\"f\"/></joint></robot>";
+    return RobotModel::from_urdf(*parse_robot_description(xml), PackageResolver({}));
+  }();
+  ASSERT_EQ(m.variable_names(), std::vector<std::string>{"ja"});
+  const double q = 0.25;
+  std::vector<Transform> poses;
+  std::vector<Transform> free(m.joints().size());
+  free[m.joint_index("jf")] = Transform::Translation(Vec3(1, 2, 3));
+  forward_kinematics(m, &q, poses, &free);
+  EXPECT_NEAR(poses[m.link_index("a")].t.x(), 0.25, 1e-15);
+  EXPECT_NEAR(poses[m.link_index("b")].t.y(), -2 * 0.25 + 0.5, 1e-15);
+  EXPECT_EQ(poses[m.link_index("f")].t, Vec3(1, 2, 3));
+  forward_kinematics(m, &q, poses);  // no free poses: identity
+  EXPECT_EQ(poses[m.link_index("f")].t, Vec3::Zero());
+}
+
+}  // namespace
+}  // namespace bvh_collision
