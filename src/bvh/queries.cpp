@@ -208,8 +208,8 @@ template <class BV>
 class DistanceTraversal {
  public:
   DistanceTraversal(const Bvh<BV>& a, const Bvh<BV>& b, const Transform& b_in_a, double tolerance,
-                    DistanceResult& result)
-      : a_(a), b_(b), frame_(RelativeFrame::from(b_in_a)), tolerance_(tolerance), result_(result) {}
+                    double upper_bound, DistanceResult& result)
+      : a_(a), b_(b), frame_(RelativeFrame::from(b_in_a)), tolerance_(tolerance), result_(result), best_(upper_bound) {}
 
   void run() {
     struct Entry {
@@ -240,7 +240,7 @@ class DistanceTraversal {
       if (c1.bound < best_ - tolerance_) stack.push(c1);
       if (c2.bound < best_ - tolerance_) stack.push(c2);
     }
-    result_.distance = best_;
+    result_.distance = result_.triangle_a >= 0 ? best_ : std::numeric_limits<double>::infinity();
   }
 
  private:
@@ -372,7 +372,7 @@ DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>
   DistanceResult result;
   if (a.empty() || b.empty()) return result;
   const Transform b_in_a = relative_transform(pose_a, pose_b);
-  DistanceTraversal<BV>(a, b, b_in_a, request.tolerance, result).run();
+  DistanceTraversal<BV>(a, b, b_in_a, request.tolerance, request.upper_bound, result).run();
   if (result.distance > 0.0 && request.solids) {
     // Solids: a component wholly inside the other mesh is at distance 0.
     Vec3 where;  // in a's frame
@@ -389,6 +389,51 @@ DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>
   }
   result.point_a = pose_a * result.point_a;
   result.point_b = pose_a * result.point_b;
+  return result;
+}
+
+template <class BV>
+DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p, double upper_bound) {
+  DistanceResult result;
+  result.point_a = p;
+  if (bvh.empty()) return result;
+  const Vec3 q = pose.R.transpose() * (p - pose.t);  // the point in the mesh frame
+  double best = upper_bound;
+  auto bound = [&](std::int32_t n) {
+    ++result.stats.volume_tests;
+    const BvhNode<BV>& node = bvh.nodes()[n];
+    return (q - center(node.volume)).norm() - node.size;  // node.size circumscribes the volume
+  };
+  struct Entry {
+    std::int32_t node;
+    double bound;
+  };
+  TraversalStack<Entry> stack;
+  stack.push({0, bound(0)});
+  while (!stack.empty()) {
+    const Entry e = stack.pop();
+    if (e.bound >= best) continue;
+    const BvhNode<BV>& n = bvh.nodes()[e.node];
+    if (n.is_leaf()) {
+      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+        ++result.stats.primitive_tests;
+        const Triangle& t = bvh.triangles()[i];
+        const Vec3 c = closest_point_on_triangle(q, t[0], t[1], t[2]);
+        const double d = (c - q).norm();
+        if (d < best) {
+          best = d;
+          result.distance = d;
+          result.point_b = pose * c;
+          result.triangle_b = bvh.triangle_id(i);
+        }
+      }
+      continue;
+    }
+    Entry l{n.left, bound(n.left)}, r{n.right, bound(n.right)};
+    if (l.bound < r.bound) std::swap(l, r);  // nearer child next
+    if (l.bound < best) stack.push(l);
+    if (r.bound < best) stack.push(r);
+  }
   return result;
 }
 
@@ -444,7 +489,8 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
                                        const DistanceRequest&);                                        \
   template RayHit raycast<BV>(const Bvh<BV>&, const Transform&, const Vec3&, const Vec3&, double, bool,   \
                               QueryStats*);                                                            \
-  template bool contains_point<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);
+  template bool contains_point<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);                         \
+  template DistanceResult point_distance<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double);
 
 BVH_COLLISION_INSTANTIATE_QUERIES(Aabb)
 BVH_COLLISION_INSTANTIATE_QUERIES(Obb)

@@ -52,6 +52,9 @@ struct CollisionResult {
 struct DistanceRequest {
   double tolerance = 0.0;  // the reported distance may exceed the true one by this much
   bool solids = true;      // closed meshes bound solids: one inside the other is at distance 0
+  // Only distances below this matter: the search prunes everything at or beyond it and reports
+  // infinity when nothing is closer (a robot query passes its best pair so far).
+  double upper_bound = std::numeric_limits<double>::infinity();
 };
 
 struct DistanceResult {
@@ -75,6 +78,12 @@ CollisionResult collide(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>
 template <class BV>
 DistanceResult distance(const Bvh<BV>& a, const Transform& pose_a, const Bvh<BV>& b,
                         const Transform& pose_b, const DistanceRequest& request = {});
+
+// The point of the mesh (pose in world) closest to p (world), if closer than `upper_bound`:
+// distance, the closest point in `point_b`, its triangle in `triangle_b` (point_a = p).
+template <class BV>
+DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p,
+                              double upper_bound = std::numeric_limits<double>::infinity());
 
 // First hit (or, with any_hit, some hit) of the ray origin + s * direction, 0 <= s <= max_range
 // (direction need not be unit; distances are along the unit direction), in world frame.

@@ -1,0 +1,95 @@
+// CollisionChecker: the queries of DESIGN.md on plain C++ types. This part: self-collision of
+// one configuration or a batch, boolean, all pairs, contacts, and minimum distance.
+#pragma once
+
+#include <limits>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/robot/allowed_collision_matrix.h"
+#include "bvh_collision/robot/robot_model.h"
+
+namespace bvh_collision {
+
+struct CheckerOptions {
+  double padding = 0.0;                        // every link's padding (m)...
+  std::map<std::string, double> link_padding;  // ...unless named here
+  BuildOptions bvh;                            // how link BVHs are built
+};
+
+struct SelfCollisionRequest {
+  double tolerance = 0.0;        // DESIGN.md section 2
+  bool all_pairs = false;        // false: stop at the first colliding pair
+  std::size_t max_contacts = 0;  // contacts per colliding pair (0: none)
+  bool distance = false;         // also the minimum distance over checked pairs
+  bool solids = true;            // closed meshes bound solids
+};
+
+struct LinkContact {
+  int link_a = -1, link_b = -1;
+  MeshContact contact;
+};
+
+struct SelfCollisionResult {
+  bool collision = false;
+  std::vector<std::pair<int, int>> colliding_pairs;  // link indices, a < b, in checking order
+  std::vector<LinkContact> contacts;
+  double min_distance = std::numeric_limits<double>::quiet_NaN();  // only when asked
+  int closest_a = -1, closest_b = -1;
+  Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();  // witnesses in the root link's frame
+  QueryStats stats;
+};
+
+class CollisionChecker {
+ public:
+  CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
+
+  const RobotModel& model() const { return model_; }
+  const AllowedCollisionMatrix& acm() const { return acm_; }
+  // The link pairs a self-collision query examines: both have geometry and the matrix allows
+  // neither.
+  const std::vector<std::pair<int, int>>& checked_pairs() const { return checked_pairs_; }
+  double link_padding(int link) const { return padding_[link]; }
+
+  // `state` holds model().variable_count() values (variable_names() order).
+  SelfCollisionResult check_self(const double* state, const SelfCollisionRequest& request = {}) const;
+
+  // Boolean self-collision for `count` states stored row by row; uses every core.
+  std::vector<bool> check_self_batch(const double* states, std::size_t count, double tolerance = 0.0) const;
+
+  // Link BVHs built (only for links some checked pair needs), for reports.
+  std::size_t built_meshes() const { return meshes_.size(); }
+
+ private:
+  struct Shape {
+    Transform origin;   // in the link frame
+    int mesh = -1;      // index into meshes_, or -1 for an analytic sphere
+    double radius = 0;  // sphere
+  };
+  struct LinkBound {
+    Vec3 center = Vec3::Zero();  // link frame
+    double radius = -1.0;        // < 0: no geometry
+  };
+
+  bool pair_collides(int a, int b, const std::vector<Transform>& poses, const SelfCollisionRequest& request,
+                     SelfCollisionResult& result) const;
+  double pair_distance(int a, int b, const std::vector<Transform>& poses, double best, bool solids,
+                       SelfCollisionResult& result) const;
+  bool shapes_collide(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double padding,
+                      const SelfCollisionRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) const;
+  double shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double best,
+                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
+
+  RobotModel model_;
+  AllowedCollisionMatrix acm_;
+  std::vector<Bvh<Obb>> meshes_;
+  std::vector<std::vector<Shape>> shapes_;  // per link
+  std::vector<LinkBound> bounds_;
+  std::vector<double> padding_;
+  std::vector<std::pair<int, int>> checked_pairs_;
+};
+
+}  // namespace bvh_collision

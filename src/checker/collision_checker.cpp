@@ -1,0 +1,243 @@
+#include "bvh_collision/checker/collision_checker.h"
+
+#include <algorithm>
+#include <map>
+#include <thread>
+
+namespace bvh_collision {
+namespace {
+
+// A sphere in the link frame that holds every shape of the link.
+template <class ShapeList, class MeshList>
+std::pair<Vec3, double> bounding_sphere(const ShapeList& shapes, const MeshList& meshes) {
+  Aabb box;
+  for (const auto& s : shapes) {
+    if (s.mesh < 0) {
+      box.extend(s.origin.t - Vec3::Constant(s.radius));
+      box.extend(s.origin.t + Vec3::Constant(s.radius));
+      continue;
+    }
+    for (const Triangle& t : meshes[s.mesh].triangles()) {
+      for (int k = 0; k < 3; ++k) box.extend(s.origin * t[k]);
+    }
+  }
+  const Vec3 c = center(box);
+  double r = 0.0;
+  for (const auto& s : shapes) {
+    if (s.mesh < 0) {
+      r = std::max(r, (s.origin.t - c).norm() + s.radius);
+      continue;
+    }
+    for (const Triangle& t : meshes[s.mesh].triangles()) {
+      for (int k = 0; k < 3; ++k) r = std::max(r, (s.origin * t[k] - c).norm());
+    }
+  }
+  return {c, r * (1 + 1e-12) + 1e-12};
+}
+
+thread_local std::vector<Transform> tl_poses;
+
+}  // namespace
+
+CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options)
+    : model_(std::move(model)), acm_(std::move(acm)) {
+  const std::size_t n = model_.links().size();
+  if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
+  padding_.resize(n, options.padding);
+  for (std::size_t l = 0; l < n; ++l) {
+    if (const auto it = options.link_padding.find(model_.links()[l].name); it != options.link_padding.end()) {
+      padding_[l] = it->second;
+    }
+  }
+  // The pairs to check, then BVHs only for the links they name ("model only what a scene needs").
+  std::vector<bool> needed(n, false);
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if (model_.links()[a].collision.empty() || model_.links()[b].collision.empty() || acm_.allowed(a, b)) continue;
+      checked_pairs_.emplace_back(static_cast<int>(a), static_cast<int>(b));
+      needed[a] = needed[b] = true;
+    }
+  }
+  shapes_.resize(n);
+  bounds_.resize(n);
+  std::map<const TriangleMesh*, int> built;
+  for (std::size_t l = 0; l < n; ++l) {
+    if (!needed[l]) continue;
+    for (const CollisionElement& e : model_.links()[l].collision) {
+      Shape s;
+      s.origin = e.origin;
+      if (e.shape == CollisionElement::Shape::kSphere) {
+        s.radius = e.radius;
+      } else {
+        auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
+        if (fresh) meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
+        s.mesh = it->second;
+      }
+      shapes_[l].push_back(s);
+    }
+    const auto [c, r] = bounding_sphere(shapes_[l], meshes_);
+    bounds_[l] = {c, r};
+  }
+}
+
+bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
+                                      double padding, const SelfCollisionRequest& request,
+                                      std::vector<MeshContact>* contacts, QueryStats& stats) const {
+  if (sa.mesh >= 0 && sb.mesh >= 0) {
+    CollisionRequest r;
+    r.padding = padding;
+    r.tolerance = request.tolerance;
+    r.max_contacts = contacts ? request.max_contacts : 0;
+    r.solids = request.solids;
+    CollisionResult c = collide(meshes_[sa.mesh], pa, meshes_[sb.mesh], pb, r);
+    stats += c.stats;
+    if (contacts) contacts->insert(contacts->end(), c.contacts.begin(), c.contacts.end());
+    return c.collision;
+  }
+  if (sa.mesh < 0 && sb.mesh < 0) {
+    const Vec3 d = pa.t - pb.t;
+    const bool hit = d.norm() <= sa.radius + sb.radius + padding;
+    if (hit && contacts && request.max_contacts > 0) {
+      const Vec3 normal = d.norm() > 0 ? Vec3(d.normalized()) : Vec3(Vec3::UnitZ());
+      contacts->push_back({pb.t + normal * sb.radius, normal, std::max(0.0, sa.radius + sb.radius - d.norm()), -1, -1});
+    }
+    return hit;
+  }
+  // A sphere against a mesh: the mesh's closest point to the centre, or the centre inside it.
+  const bool a_is_sphere = sa.mesh < 0;
+  const Shape& sphere = a_is_sphere ? sa : sb;
+  const Shape& mesh = a_is_sphere ? sb : sa;
+  const Transform& ps = a_is_sphere ? pa : pb;
+  const Transform& pm = a_is_sphere ? pb : pa;
+  const double reach = sphere.radius + padding;
+  const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, reach * (1 + 1e-12) + 1e-15);
+  stats += d.stats;
+  bool hit = d.distance <= reach;
+  if (!hit && request.solids) hit = contains_point(meshes_[mesh.mesh], pm.inverse() * ps.t, &stats);
+  if (hit && contacts && request.max_contacts > 0) {
+    MeshContact c;
+    c.position = std::isfinite(d.distance) ? d.point_b : ps.t;
+    const Vec3 away = ps.t - c.position;  // from the mesh towards the sphere centre
+    const Vec3 n = away.norm() > 0 ? Vec3(away.normalized()) : Vec3(Vec3::UnitZ());
+    c.normal = a_is_sphere ? n : Vec3(-n);
+    c.depth = std::isfinite(d.distance) ? std::max(0.0, sphere.radius - d.distance) : sphere.radius;
+    contacts->push_back(c);
+  }
+  return hit;
+}
+
+double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
+                                         double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
+  if (sa.mesh >= 0 && sb.mesh >= 0) {
+    DistanceRequest request;
+    request.solids = solids;
+    request.upper_bound = best;
+    const DistanceResult d = distance(meshes_[sa.mesh], pa, meshes_[sb.mesh], pb, request);
+    stats += d.stats;
+    wa = d.point_a;
+    wb = d.point_b;
+    return d.distance;
+  }
+  if (sa.mesh < 0 && sb.mesh < 0) {
+    const Vec3 dir = (pb.t - pa.t).norm() > 0 ? Vec3((pb.t - pa.t).normalized()) : Vec3(Vec3::UnitZ());
+    const double d = std::max(0.0, (pb.t - pa.t).norm() - sa.radius - sb.radius);
+    wa = pa.t + dir * sa.radius;
+    wb = pb.t - dir * sb.radius;
+    return d;
+  }
+  const bool a_is_sphere = sa.mesh < 0;
+  const Shape& sphere = a_is_sphere ? sa : sb;
+  const Shape& mesh = a_is_sphere ? sb : sa;
+  const Transform& ps = a_is_sphere ? pa : pb;
+  const Transform& pm = a_is_sphere ? pb : pa;
+  const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, best + sphere.radius);
+  stats += d.stats;
+  double dist = std::max(0.0, d.distance - sphere.radius);
+  Vec3 on_mesh = d.point_b, on_sphere = ps.t;
+  if (std::isfinite(d.distance) && d.distance > 0) on_sphere = ps.t + (d.point_b - ps.t) * (sphere.radius / d.distance);
+  if (solids && contains_point(meshes_[mesh.mesh], pm.inverse() * ps.t, &stats)) {
+    dist = 0.0;
+    on_mesh = on_sphere = ps.t;
+  }
+  wa = a_is_sphere ? on_sphere : on_mesh;
+  wb = a_is_sphere ? on_mesh : on_sphere;
+  return dist;
+}
+
+bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,
+                                     const SelfCollisionRequest& request, SelfCollisionResult& result) const {
+  const double padding = padding_[a] + padding_[b];
+  bool hit = false;
+  std::vector<MeshContact> contacts;
+  for (const Shape& sa : shapes_[a]) {
+    for (const Shape& sb : shapes_[b]) {
+      const bool want_contacts = request.max_contacts > 0 && contacts.size() < request.max_contacts;
+      if (shapes_collide(sa, poses[a] * sa.origin, sb, poses[b] * sb.origin, padding, request,
+                         want_contacts ? &contacts : nullptr, result.stats)) {
+        hit = true;
+        if (request.max_contacts == 0) return true;
+      }
+    }
+  }
+  contacts.resize(std::min(contacts.size(), request.max_contacts));
+  for (const MeshContact& c : contacts) result.contacts.push_back({a, b, c});
+  return hit;
+}
+
+double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform>& poses, double best, bool solids,
+                                       SelfCollisionResult& result) const {
+  for (const Shape& sa : shapes_[a]) {
+    for (const Shape& sb : shapes_[b]) {
+      Vec3 wa, wb;
+      const double d =
+          shapes_distance(sa, poses[a] * sa.origin, sb, poses[b] * sb.origin, best, solids, wa, wb, result.stats);
+      if (d < best) {
+        best = d;
+        result.min_distance = d;
+        result.closest_a = a;
+        result.closest_b = b;
+        result.point_a = wa;
+        result.point_b = wb;
+      }
+    }
+  }
+  return best;
+}
+
+SelfCollisionResult CollisionChecker::check_self(const double* state, const SelfCollisionRequest& request) const {
+  SelfCollisionResult result;
+  std::vector<Transform>& poses = tl_poses;
+  forward_kinematics(model_, state, poses);
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [a, b] : checked_pairs_) {
+    const Vec3 ca = poses[a] * bounds_[a].center, cb = poses[b] * bounds_[b].center;
+    const double gap = (ca - cb).norm() - bounds_[a].radius - bounds_[b].radius;  // broad phase
+    const bool may_collide = gap <= padding_[a] + padding_[b] + request.tolerance;
+    if (may_collide && (request.all_pairs || !result.collision) && pair_collides(a, b, poses, request, result)) {
+      result.collision = true;
+      result.colliding_pairs.emplace_back(a, b);
+    }
+    if (request.distance && gap < best) best = pair_distance(a, b, poses, best, request.solids, result);
+    if (result.collision && !request.all_pairs && !request.distance) break;
+  }
+  if (request.distance && !std::isfinite(best)) result.min_distance = std::numeric_limits<double>::infinity();
+  return result;
+}
+
+std::vector<bool> CollisionChecker::check_self_batch(const double* states, std::size_t count, double tolerance) const {
+  std::vector<char> out(count, 0);
+  SelfCollisionRequest request;
+  request.tolerance = tolerance;
+  const std::size_t stride = model_.variable_count();
+  const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), static_cast<unsigned>(count)));
+  auto work = [&](unsigned w) {
+    for (std::size_t i = w; i < count; i += workers) out[i] = check_self(states + i * stride, request).collision;
+  };
+  std::vector<std::thread> threads;
+  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work, w);
+  work(0);
+  for (std::thread& t : threads) t.join();
+  return std::vector<bool>(out.begin(), out.end());
+}
+
+}  // namespace bvh_collision
