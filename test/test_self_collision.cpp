@@ -143,8 +143,106 @@ TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
             << f.checker->checked_pairs().size() << " checked pairs\n";
 }
 
+// The SRDF's rest states (home, ready, ...) are collision-free, solids included; every named
+// state (with unnamed joints at 0, clamped into their limits) is answered as FCL answers it.
+TEST_P(SelfCollision, SrdfNamedStates) {
+  BVH_REQUIRE_ROBOTS();
+  const Fixture f = make_fixture(GetParam());
+  const RobotModel& m = f.checker->model();
+  const std::set<std::string> rest = {"home", "ready", "all-zeros", "default", "up", "extended", "tuck_left_arm", "tuck_right_arm"};
+  int rest_states = 0;
+  std::vector<Transform> poses;
+  for (const auto& [name, values] : f.srdf.group_states) {
+    std::vector<double> state(m.variable_count(), 0.0);
+    for (std::size_t v = 0; v < state.size(); ++v) {
+      const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
+      if (j.bounded) state[v] = std::clamp(0.0, j.lower, j.upper);
+    }
+    for (const auto& [joint, value] : values) {
+      const int j = m.joint_index(joint);
+      if (j >= 0 && m.joints()[j].variable >= 0) state[m.joints()[j].variable] = value;
+    }
+    SelfCollisionRequest request;
+    request.all_pairs = true;
+    const SelfCollisionResult r = f.checker->check_self(state.data(), request);
+    std::string pairs;
+    for (const auto& [a, b] : r.colliding_pairs) pairs += m.links()[a].name + ":" + m.links()[b].name + " ";
+    if (rest.count(name)) {
+      ++rest_states;
+      EXPECT_FALSE(r.collision) << GetParam() << " state '" << name << "' collides: " << pairs;
+    }
+    forward_kinematics(m, state.data(), poses);
+    const auto fcl = fcl_pairs(f, poses, false, nullptr);
+    const std::set<std::pair<int, int>> ours(r.colliding_pairs.begin(), r.colliding_pairs.end());
+    EXPECT_EQ(ours, fcl)
+        << GetParam() << " state '" << name << "': ours " << pairs;
+  }
+  if (!f.srdf.group_states.empty()) EXPECT_GT(rest_states, 0) << "no rest state found among the SRDF's states";
+}
+
+// Batch answers equal single answers (and the batch uses every core).
+TEST_P(SelfCollision, BatchEqualsSingle) {
+  BVH_REQUIRE_ROBOTS();
+  const Fixture f = make_fixture(GetParam());
+  const RobotModel& m = f.checker->model();
+  std::mt19937_64 rng(23);
+  std::vector<double> states;
+  for (int i = 0; i < 300; ++i) {
+    const auto s = random_state(m, rng);
+    states.insert(states.end(), s.begin(), s.end());
+  }
+  const std::vector<bool> batch = f.checker->check_self_batch(states.data(), 300);
+  ASSERT_EQ(batch.size(), 300u);
+  for (int i = 0; i < 300; ++i) {
+    ASSERT_EQ(batch[i], f.checker->check_self(states.data() + i * m.variable_count()).collision) << i;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Robots, SelfCollision,
                          ::testing::Values("panda", "ur5e", "pr2", "abb_irb2400", "solo", "panda_capsules"));
+
+// The demo robot folded onto itself: the reported pair is the one that meets; padding and
+// tolerance behave as DESIGN.md section 2 says.
+TEST(SelfCollisionDemo, FoldedArmReportsTheRightPairAndPaddingWorks) {
+  const std::string urdf_path = test::source_dir() + "/urdf/demo_arm.urdf";
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(urdf_path), PackageResolver({}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  const CollisionChecker checker(std::move(model), std::move(acm));
+  const RobotModel& m = checker.model();
+  std::vector<double> state(m.variable_count(), 0.0);
+  SelfCollisionRequest all;
+  all.all_pairs = true;
+  all.distance = true;
+  const SelfCollisionResult home = checker.check_self(state.data(), all);
+  EXPECT_FALSE(home.collision);
+  EXPECT_GT(home.min_distance, 0.0);
+  // Elbow (joint3) folded fully back: the forearm swings down into the upper arm's base.
+  state[m.joints()[m.joint_index("joint3")].variable] = 2.6;
+  state[m.joints()[m.joint_index("joint2")].variable] = 1.2;
+  const SelfCollisionResult folded = checker.check_self(state.data(), all);
+  ASSERT_TRUE(folded.collision);
+  bool hand_or_wrist_hits_base_side = false;
+  for (const auto& [a, b] : folded.colliding_pairs) {
+    const std::string pair = m.links()[a].name + ":" + m.links()[b].name;
+    hand_or_wrist_hits_base_side |= pair.find("link1") != std::string::npos || pair.find("base_link") != std::string::npos ||
+                                    pair.find("link2") != std::string::npos;
+  }
+  EXPECT_TRUE(hand_or_wrist_hits_base_side);
+  EXPECT_EQ(folded.min_distance, 0.0);
+  // Padding: a free state whose distance d is known collides with padding just over d/2 per link.
+  const double d = home.min_distance;
+  CheckerOptions padded;
+  padded.padding = 0.5 * d * 1.01;
+  RobotModel model2 = RobotModel::from_urdf(*load_robot_description_file(urdf_path), PackageResolver({}));
+  AllowedCollisionMatrix acm2 = AllowedCollisionMatrix::adjacent_links(model2);
+  const CollisionChecker padded_checker(std::move(model2), std::move(acm2), padded);
+  std::vector<double> zero(m.variable_count(), 0.0);
+  EXPECT_TRUE(padded_checker.check_self(zero.data()).collision);
+  // Tolerance: at most d may be reported, never a miss; below d it must stay free.
+  SelfCollisionRequest tight;
+  tight.tolerance = 0.9 * d;
+  EXPECT_FALSE(checker.check_self(zero.data(), tight).collision);
+}
 
 }  // namespace
 }  // namespace bvh_collision
