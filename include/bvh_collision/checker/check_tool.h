@@ -1,0 +1,23 @@
+// The bvh_collision_check command-line tool, as a function: parses arguments, loads the robot,
+// checks every configuration of a states file and prints one line per configuration.
+//
+//   bvh_collision_check --urdf FILE [--srdf FILE] [--package-path DIRS] --states FILE
+//                       [--distance] [--tolerance M] [--padding M] [--print-acm]
+//
+// States file: first line `joints: NAME NAME ...`, then one configuration per line, values in
+// that order (blank lines and lines starting with '#' ignored). Joints not named sit at 0,
+// clamped into their limits. Output: `INDEX free` or `INDEX collision A:B,C:D` (0-based index,
+// names sorted within and across pairs), followed with --distance by ` distance=D pair=A:B`.
+// --print-acm first prints `check A:B` or `skip A:B REASON` for every pair of links with
+// geometry. Errors go to `err`; the return value is the process exit code.
+#pragma once
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace bvh_collision {
+
+int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
+}  // namespace bvh_collision

@@ -1,0 +1,200 @@
+#include "bvh_collision/checker/check_tool.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/robot_description.h"
+
+namespace bvh_collision {
+namespace {
+
+struct Options {
+  std::string urdf, srdf, states, package_path;
+  bool distance = false, print_acm = false;
+  double tolerance = 0.0, padding = 0.0;
+};
+
+double parse_number(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v) || v < 0) throw std::invalid_argument(flag + " needs a number >= 0, got '" + text + "'");
+  return v;
+}
+
+Options parse_args(const std::vector<std::string>& args) {
+  Options o;
+  auto value = [&](std::size_t& i) {
+    if (i + 1 >= args.size()) throw std::invalid_argument(args[i] + " needs a value");
+    return args[++i];
+  };
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--urdf") o.urdf = value(i);
+    else if (a == "--srdf") o.srdf = value(i);
+    else if (a == "--states") o.states = value(i);
+    else if (a == "--package-path") o.package_path = value(i);
+    else if (a == "--distance") o.distance = true;
+    else if (a == "--print-acm") o.print_acm = true;
+    else if (a == "--tolerance") o.tolerance = parse_number(a, value(i));
+    else if (a == "--padding") o.padding = parse_number(a, value(i));
+    else throw std::invalid_argument("unknown argument '" + a + "'");
+  }
+  if (o.urdf.empty()) throw std::invalid_argument("--urdf FILE is required");
+  if (o.states.empty() && !o.print_acm) throw std::invalid_argument("--states FILE is required");
+  return o;
+}
+
+std::string read_file(const std::string& path, const char* what) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(std::string("cannot open ") + what + " file '" + path + "'");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string pair_name(const RobotModel& m, int a, int b) {
+  const auto [x, y] = std::minmax(m.links()[a].name, m.links()[b].name);
+  return x + ":" + y;
+}
+
+double parse_number_any(const std::string& path, int line, const std::string& word) {
+  std::size_t used = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(word, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != word.size() || !std::isfinite(v)) {
+    throw std::invalid_argument(path + ":" + std::to_string(line) + ": '" + word + "' is not a finite number");
+  }
+  return v;
+}
+
+// The states file: joint indices into the state vector, then rows of values.
+struct States {
+  std::vector<int> variables;
+  std::vector<std::vector<double>> rows;
+};
+
+States read_states(const std::string& path, const RobotModel& m) {
+  std::istringstream in(read_file(path, "states"));
+  States s;
+  std::string line;
+  bool header = false;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == '#') continue;
+    std::istringstream words(line.substr(start));
+    if (!header) {
+      std::string tag, name;
+      words >> tag;
+      if (tag != "joints:") throw std::invalid_argument(path + ":" + std::to_string(number) + ": the first line must be 'joints: NAME ...'");
+      while (words >> name) {
+        const int j = m.joint_index(name);
+        if (j < 0 || m.joints()[j].variable < 0) {
+          throw std::invalid_argument(path + ":" + std::to_string(number) + ": '" + name + "' is not a movable, non-mimic joint of the robot");
+        }
+        s.variables.push_back(m.joints()[j].variable);
+      }
+      header = true;
+      continue;
+    }
+    std::vector<double> row;
+    std::string word;
+    while (words >> word) row.push_back(parse_number_any(path, number, word));
+    if (row.size() != s.variables.size()) {
+      throw std::invalid_argument(path + ":" + std::to_string(number) + ": " + std::to_string(row.size()) + " values for " +
+                                  std::to_string(s.variables.size()) + " joints");
+    }
+    s.rows.push_back(std::move(row));
+  }
+  if (!header) throw std::invalid_argument(path + ": no 'joints:' line");
+  return s;
+}
+
+void print_acm(const CollisionChecker& checker, std::ostream& out) {
+  const RobotModel& m = checker.model();
+  std::vector<std::string> lines;
+  for (std::size_t a = 0; a < m.links().size(); ++a) {
+    for (std::size_t b = a + 1; b < m.links().size(); ++b) {
+      if (m.links()[a].collision.empty() || m.links()[b].collision.empty()) continue;
+      const std::string pair = pair_name(m, a, b);
+      lines.push_back(checker.acm().allowed(a, b) ? "skip " + pair + " " + acm_reason_name(checker.acm().reason(a, b))
+                                                  : "check " + pair);
+    }
+  }
+  std::sort(lines.begin(), lines.end(), [](const std::string& x, const std::string& y) {
+    return x.substr(x.find(' ')) < y.substr(y.find(' '));  // by pair name
+  });
+  for (const std::string& l : lines) out << l << "\n";
+}
+
+}  // namespace
+
+int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  try {
+    const Options o = parse_args(args);
+    std::vector<std::string> roots = split_path_list(o.package_path);
+    if (const char* env = std::getenv("ROS_PACKAGE_PATH")) {
+      for (const std::string& p : split_path_list(env)) roots.push_back(p);
+    }
+    const char* prefixes = std::getenv("CMAKE_PREFIX_PATH");
+    RobotModel model = RobotModel::from_urdf(*load_robot_description_file(o.urdf),
+                                             PackageResolver(roots, split_path_list(prefixes ? prefixes : "")));
+    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+    if (!o.srdf.empty()) {
+      for (const std::string& name : apply_srdf(parse_srdf(read_file(o.srdf, "SRDF")), model, acm)) {
+        err << "warning: SRDF names '" << name << "', which is not a link of the robot\n";
+      }
+    }
+    CheckerOptions options;
+    options.padding = o.padding;
+    const CollisionChecker checker(std::move(model), std::move(acm), options);
+    if (o.print_acm) print_acm(checker, out);
+    if (o.states.empty()) return 0;
+    const RobotModel& m = checker.model();
+    const States states = read_states(o.states, m);
+    std::vector<double> state(m.variable_count(), 0.0);
+    for (std::size_t v = 0; v < state.size(); ++v) {
+      const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
+      if (j.bounded) state[v] = std::clamp(0.0, j.lower, j.upper);
+    }
+    SelfCollisionRequest request;
+    request.all_pairs = true;
+    request.distance = o.distance;
+    request.tolerance = o.tolerance;
+    for (std::size_t i = 0; i < states.rows.size(); ++i) {
+      for (std::size_t k = 0; k < states.variables.size(); ++k) state[states.variables[k]] = states.rows[i][k];
+      const SelfCollisionResult r = checker.check_self(state.data(), request);
+      std::vector<std::string> pairs;
+      for (const auto& [a, b] : r.colliding_pairs) pairs.push_back(pair_name(m, a, b));
+      std::sort(pairs.begin(), pairs.end());
+      out << i << (r.collision ? " collision " : " free");
+      for (std::size_t p = 0; p < pairs.size(); ++p) out << (p ? "," : "") << pairs[p];
+      if (o.distance) {
+        out << " distance=" << std::setprecision(9) << r.min_distance
+            << " pair=" << (r.closest_a >= 0 ? pair_name(m, r.closest_a, r.closest_b) : "-");
+      }
+      out << "\n";
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    err << "bvh_collision_check: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,91 @@
+// The bvh_collision_check tool: output format, ACM printing and errors, on the demo robot.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bvh_collision/checker/check_tool.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToolRun {
+  int code;
+  std::string out, err;
+};
+
+ToolRun run(const std::vector<std::string>& args) {
+  std::ostringstream out, err;
+  const int code = run_check_tool(args, out, err);
+  return {code, out.str(), err.str()};
+}
+
+std::string write_states(const std::string& text) {
+  static int counter = 0;
+  const fs::path path = fs::temp_directory_path() /
+                        ("bvh_states_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ".txt");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+const std::string kUrdf = test::source_dir() + "/urdf/demo_arm.urdf";
+
+TEST(CheckTool, FreeAndFoldedConfigurations) {
+  const std::string states = write_states(
+      "joints: joint2 joint3\n# comment line\n\n0 0\n1.2 2.6\n");
+  const ToolRun r = run({"--urdf", kUrdf, "--states", states, "--distance"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string first, second;
+  std::getline(lines, first);
+  std::getline(lines, second);
+  EXPECT_EQ(first.rfind("0 free distance=", 0), 0u) << first;
+  EXPECT_NE(first.find(" pair="), std::string::npos) << first;
+  EXPECT_EQ(second.rfind("1 collision ", 0), 0u) << second;
+  EXPECT_NE(second.find("distance=0 "), std::string::npos) << second;
+  // Pairs are name-sorted within a pair, and the list is sorted and comma-separated.
+  const std::string pairs = second.substr(12, second.find(" distance=") - 12);
+  std::vector<std::string> split;
+  std::istringstream ps(pairs);
+  for (std::string p; std::getline(ps, p, ',');) {
+    const auto colon = p.find(':');
+    EXPECT_LT(p.substr(0, colon), p.substr(colon + 1)) << p;
+    split.push_back(p);
+  }
+  EXPECT_FALSE(split.empty());
+  EXPECT_TRUE(std::is_sorted(split.begin(), split.end()));
+}
+
+TEST(CheckTool, PrintsTheMatrix) {
+  const ToolRun r = run({"--urdf", kUrdf, "--print-acm"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("skip link1:link2 adjacent"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("check base_link:link3"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("tool_frame"), std::string::npos) << "links without geometry are not listed";
+  // 10 links with geometry: 45 pairs.
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 45);
+}
+
+TEST(CheckTool, ErrorsGoToStderrWithNonZeroExit) {
+  for (const auto& [args, message] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--urdf", kUrdf, "--states", write_states("joints: nonesuch\n0\n")}, "'nonesuch' is not a movable"},
+           {{"--urdf", kUrdf, "--states", write_states("joints: joint1 joint2\n0.1\n")}, "1 values for 2 joints"},
+           {{"--urdf", kUrdf, "--states", write_states("joints: joint1\nnan\n")}, "not a finite number"},
+           {{"--urdf", kUrdf, "--states", write_states("0 0\n")}, "first line must be 'joints:"},
+           {{"--urdf", "/missing.urdf", "--states", write_states("joints: joint1\n0\n")}, "/missing.urdf"},
+           {{"--states", "x"}, "--urdf FILE is required"},
+           {{"--urdf", kUrdf, "--tolerance", "-1", "--states", "x"}, "--tolerance needs a number"},
+           {{"--bogus"}, "unknown argument '--bogus'"}}) {
+    const ToolRun r = run(args);
+    EXPECT_NE(r.code, 0) << message;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace bvh_collision
