@@ -70,6 +70,17 @@ TEST(CheckTool, PrintsTheMatrix) {
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 45);
 }
 
+TEST(CheckTool, SampledPairsAndTheirCache) {
+  const std::string cache = (fs::temp_directory_path() / ("bvh_tool_cache_" + std::to_string(::getpid()))).string();
+  const ToolRun first = run({"--urdf", kUrdf, "--print-acm", "--sample-acm", "300", "--acm-cache", cache});
+  ASSERT_EQ(first.code, 0) << first.err;
+  EXPECT_NE(first.out.find(" never-collide"), std::string::npos) << first.out;
+  ASSERT_TRUE(fs::exists(cache));
+  const ToolRun second = run({"--urdf", kUrdf, "--print-acm", "--sample-acm", "300", "--acm-cache", cache});
+  EXPECT_EQ(second.out, first.out) << "the cached matrix is the sampled one";
+  fs::remove(cache);
+}
+
 TEST(CheckTool, ErrorsGoToStderrWithNonZeroExit) {
   for (const auto& [args, message] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{"--urdf", kUrdf, "--states", write_states("joints: nonesuch\n0\n")}, "'nonesuch' is not a movable"},

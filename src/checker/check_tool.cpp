@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bvh_collision/checker/acm_sampling.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 
@@ -16,7 +17,8 @@ namespace bvh_collision {
 namespace {
 
 struct Options {
-  std::string urdf, srdf, states, package_path;
+  std::string urdf, srdf, states, package_path, acm_cache;
+  std::size_t sample_acm = 0;
   bool distance = false, print_acm = false;
   double tolerance = 0.0, padding = 0.0;
 };
@@ -49,6 +51,8 @@ Options parse_args(const std::vector<std::string>& args) {
     else if (a == "--print-acm") o.print_acm = true;
     else if (a == "--tolerance") o.tolerance = parse_number(a, value(i));
     else if (a == "--padding") o.padding = parse_number(a, value(i));
+    else if (a == "--sample-acm") o.sample_acm = static_cast<std::size_t>(parse_number(a, value(i)));
+    else if (a == "--acm-cache") o.acm_cache = value(i);
     else throw std::invalid_argument("unknown argument '" + a + "'");
   }
   if (o.urdf.empty()) throw std::invalid_argument("--urdf FILE is required");
@@ -142,6 +146,24 @@ void print_acm(const CollisionChecker& checker, std::ostream& out) {
   for (const std::string& l : lines) out << l << "\n";
 }
 
+// Adds pairs that --sample-acm N random configurations show never or always colliding, from the
+// --acm-cache file when it holds them for this URDF, SRDF and N.
+AllowedCollisionMatrix with_sampled_pairs(const Options& o, const std::string& srdf_xml, const RobotModel& model,
+                                          AllowedCollisionMatrix acm, const CheckerOptions& options, std::ostream& err) {
+  SamplingOptions sampling;
+  sampling.samples = o.sample_acm;
+  const std::string key = sampling_cache_key(read_file(o.urdf, "URDF"), srdf_xml, sampling);
+  SampledPairs pairs;
+  if (o.acm_cache.empty() || !read_sampling_cache(o.acm_cache, key, model, pairs)) {
+    pairs = sample_collision_pairs(CollisionChecker(model, acm, options), sampling);
+    if (!o.acm_cache.empty() && !write_sampling_cache(o.acm_cache, key, model, pairs)) {
+      err << "warning: cannot write the ACM cache '" << o.acm_cache << "'\n";
+    }
+  }
+  apply_sampled_pairs(pairs, acm);
+  return acm;
+}
+
 }  // namespace
 
 int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -155,13 +177,15 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
     RobotModel model = RobotModel::from_urdf(*load_robot_description_file(o.urdf),
                                              PackageResolver(roots, split_path_list(prefixes ? prefixes : "")));
     AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+    const std::string srdf_xml = o.srdf.empty() ? "" : read_file(o.srdf, "SRDF");
     if (!o.srdf.empty()) {
-      for (const std::string& name : apply_srdf(parse_srdf(read_file(o.srdf, "SRDF")), model, acm)) {
+      for (const std::string& name : apply_srdf(parse_srdf(srdf_xml), model, acm)) {
         err << "warning: SRDF names '" << name << "', which is not a link of the robot\n";
       }
     }
     CheckerOptions options;
     options.padding = o.padding;
+    if (o.sample_acm > 0) acm = with_sampled_pairs(o, srdf_xml, model, std::move(acm), options, err);
     const CollisionChecker checker(std::move(model), std::move(acm), options);
     if (o.print_acm) print_acm(checker, out);
     if (o.states.empty()) return 0;

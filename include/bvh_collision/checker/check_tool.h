@@ -3,13 +3,16 @@
 //
 //   bvh_collision_check --urdf FILE [--srdf FILE] [--package-path DIRS] --states FILE
 //                       [--distance] [--tolerance M] [--padding M] [--print-acm]
+//                       [--sample-acm N [--acm-cache FILE]]
 //
 // States file: first line `joints: NAME NAME ...`, then one configuration per line, values in
 // that order (blank lines and lines starting with '#' ignored). Joints not named sit at 0,
 // clamped into their limits. Output: `INDEX free` or `INDEX collision A:B,C:D` (0-based index,
 // names sorted within and across pairs), followed with --distance by ` distance=D pair=A:B`.
 // --print-acm first prints `check A:B` or `skip A:B REASON` for every pair of links with
-// geometry. Errors go to `err`; the return value is the process exit code.
+// geometry. --sample-acm N also skips pairs that N random configurations show never or always
+// colliding, read from --acm-cache FILE when it holds them for this URDF, SRDF and N (and
+// written there otherwise). Errors go to `err`; the return value is the process exit code.
 #pragma once
 
 #include <ostream>
