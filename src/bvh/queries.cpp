@@ -211,16 +211,22 @@ class DistanceTraversal {
                     double upper_bound, DistanceResult& result)
       : a_(a), b_(b), frame_(RelativeFrame::from(b_in_a)), tolerance_(tolerance), result_(result), best_(upper_bound) {}
 
+  // Best-first: always expand the pair with the smallest lower bound, so the first leaf pairs
+  // reached are close to the answer and the bound prunes the most (a min-heap on the bound).
   void run() {
     struct Entry {
       std::int32_t a, b;
       double bound;
+      bool operator<(const Entry& o) const { return bound > o.bound; }  // smallest on top
     };
-    TraversalStack<Entry> stack;
-    stack.push({0, 0, bound(0, 0)});
-    while (!stack.empty()) {
-      const Entry e = stack.pop();
-      if (e.bound >= best_ - tolerance_) continue;
+    thread_local std::vector<Entry> heap;
+    heap.clear();
+    heap.push_back({0, 0, bound(0, 0)});
+    while (!heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end());
+      const Entry e = heap.back();
+      heap.pop_back();
+      if (e.bound >= best_ - tolerance_) break;  // every remaining bound is at least this
       const BvhNode<BV>& na = a_.nodes()[e.a];
       const BvhNode<BV>& nb = b_.nodes()[e.b];
       if (na.is_leaf() && nb.is_leaf()) {
@@ -228,17 +234,14 @@ class DistanceTraversal {
         if (best_ == 0.0) break;
         continue;
       }
-      Entry c1, c2;
-      if (descend_a(na, nb)) {
-        c1 = {na.left, e.b, bound(na.left, e.b)};
-        c2 = {na.right, e.b, bound(na.right, e.b)};
-      } else {
-        c1 = {e.a, nb.left, bound(e.a, nb.left)};
-        c2 = {e.a, nb.right, bound(e.a, nb.right)};
+      const bool split_a = descend_a(na, nb);
+      for (const std::int32_t child : {split_a ? na.left : nb.left, split_a ? na.right : nb.right}) {
+        const Entry c = split_a ? Entry{child, e.b, bound(child, e.b)} : Entry{e.a, child, bound(e.a, child)};
+        if (c.bound < best_ - tolerance_) {
+          heap.push_back(c);
+          std::push_heap(heap.begin(), heap.end());
+        }
       }
-      if (c1.bound < c2.bound) std::swap(c1, c2);  // the nearer pair is taken next
-      if (c1.bound < best_ - tolerance_) stack.push(c1);
-      if (c2.bound < best_ - tolerance_) stack.push(c2);
     }
     result_.distance = result_.triangle_a >= 0 ? best_ : std::numeric_limits<double>::infinity();
   }

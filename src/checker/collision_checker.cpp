@@ -208,10 +208,19 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
   SelfCollisionResult result;
   std::vector<Transform>& poses = tl_poses;
   forward_kinematics(model_, state, poses);
-  double best = std::numeric_limits<double>::infinity();
-  for (const auto& [a, b] : checked_pairs_) {
+  // Broad phase: the gap between the links' bounding spheres, a lower bound on their distance.
+  thread_local std::vector<std::pair<double, std::size_t>> gaps;
+  gaps.clear();
+  for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+    const auto [a, b] = checked_pairs_[p];
     const Vec3 ca = poses[a] * bounds_[a].center, cb = poses[b] * bounds_[b].center;
-    const double gap = (ca - cb).norm() - bounds_[a].radius - bounds_[b].radius;  // broad phase
+    gaps.emplace_back((ca - cb).norm() - bounds_[a].radius - bounds_[b].radius, p);
+  }
+  // Distance: nearest pairs first, so that a small bound prunes the rest early.
+  if (request.distance) std::sort(gaps.begin(), gaps.end());
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [gap, p] : gaps) {
+    const auto [a, b] = checked_pairs_[p];
     const bool may_collide = gap <= padding_[a] + padding_[b] + request.tolerance;
     if (may_collide && (request.all_pairs || !result.collision) && pair_collides(a, b, poses, request, result)) {
       result.collision = true;
