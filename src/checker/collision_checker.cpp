@@ -209,12 +209,16 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
   std::vector<Transform>& poses = tl_poses;
   forward_kinematics(model_, state, poses);
   // Broad phase: the gap between the links' bounding spheres, a lower bound on their distance.
+  thread_local std::vector<Vec3> centers;
+  centers.resize(poses.size());
+  for (std::size_t l = 0; l < poses.size(); ++l) {
+    if (bounds_[l].radius >= 0) centers[l] = poses[l].R * bounds_[l].center + poses[l].t;
+  }
   thread_local std::vector<std::pair<double, std::size_t>> gaps;
   gaps.clear();
   for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
     const auto [a, b] = checked_pairs_[p];
-    const Vec3 ca = poses[a] * bounds_[a].center, cb = poses[b] * bounds_[b].center;
-    gaps.emplace_back((ca - cb).norm() - bounds_[a].radius - bounds_[b].radius, p);
+    gaps.emplace_back((centers[a] - centers[b]).norm() - bounds_[a].radius - bounds_[b].radius, p);
   }
   // Distance: nearest pairs first, so that a small bound prunes the rest early.
   if (request.distance) std::sort(gaps.begin(), gaps.end());

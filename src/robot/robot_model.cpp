@@ -237,37 +237,65 @@ int RobotModel::joint_index(const std::string& name) const {
   return -1;
 }
 
+namespace {
+
+// parent * origin * motion, written out: at -O2 GCC leaves Eigen's small products as calls.
+inline Transform compose(const Transform& a, const Transform& b) {
+  Transform out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.R(i, j) = a.R(i, 0) * b.R(0, j) + a.R(i, 1) * b.R(1, j) + a.R(i, 2) * b.R(2, j);
+    out.t[i] = a.R(i, 0) * b.t[0] + a.R(i, 1) * b.t[1] + a.R(i, 2) * b.t[2] + a.t[i];
+  }
+  return out;
+}
+
+// Rotation by angle q about unit axis k (Rodrigues).
+inline Mat3 axis_rotation(const Vec3& k, double q) {
+  const double c = std::cos(q), s = std::sin(q), v = 1.0 - c;
+  Mat3 r;
+  r << c + k.x() * k.x() * v, k.x() * k.y() * v - k.z() * s, k.x() * k.z() * v + k.y() * s,
+       k.y() * k.x() * v + k.z() * s, c + k.y() * k.y() * v, k.y() * k.z() * v - k.x() * s,
+       k.z() * k.x() * v - k.y() * s, k.z() * k.y() * v + k.x() * s, c + k.z() * k.z() * v;
+  return r;
+}
+
+}  // namespace
+
 void forward_kinematics(const RobotModel& model, const double* state, std::vector<Transform>& poses,
                         const std::vector<Transform>* free_joint_poses) {
   poses.resize(model.links().size());
   poses[model.root_link()] = Transform();
   for (const int j : model.joint_order()) {
     const RobotJoint& joint = model.joints()[j];
-    Transform motion;
+    const Transform base = compose(poses[joint.parent_link], joint.origin);
     double q = 0.0;
     if (joint.variable >= 0) {
       q = state[joint.variable];
     } else if (joint.mimic >= 0) {
       q = joint.multiplier * state[model.joints()[joint.mimic].variable] + joint.offset;
     }
+    Transform& child = poses[joint.child_link];
     switch (joint.type) {
       case JointType::kRevolute:
       case JointType::kContinuous:
-        motion.R = Eigen::AngleAxisd(q, joint.axis).toRotationMatrix();
+        child = compose(base, Transform{axis_rotation(joint.axis, q), Vec3::Zero()});
         break;
-      case JointType::kPrismatic:
-        motion.t = q * joint.axis;
+      case JointType::kPrismatic: {
+        const Vec3 d = q * joint.axis;
+        child = base;
+        for (int i = 0; i < 3; ++i) child.t[i] += base.R(i, 0) * d[0] + base.R(i, 1) * d[1] + base.R(i, 2) * d[2];
         break;
+      }
       case JointType::kFloating:
       case JointType::kPlanar:
-        if (free_joint_poses != nullptr && static_cast<std::size_t>(j) < free_joint_poses->size()) {
-          motion = (*free_joint_poses)[j];
-        }
+        child = (free_joint_poses != nullptr && static_cast<std::size_t>(j) < free_joint_poses->size())
+                    ? compose(base, (*free_joint_poses)[j])
+                    : base;
         break;
       case JointType::kFixed:
+        child = base;
         break;
     }
-    poses[joint.child_link] = poses[joint.parent_link] * joint.origin * motion;
   }
 }
 
