@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,16 +24,21 @@ struct Options {
   double tolerance = 0.0, padding = 0.0;
 };
 
-double parse_number(const std::string& flag, const std::string& text) {
+// The whole text as a finite number, or nothing.
+std::optional<double> to_number(const std::string& text) {
   std::size_t used = 0;
-  double v = 0.0;
   try {
-    v = std::stod(text, &used);
+    const double v = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(v)) return v;
   } catch (const std::exception&) {
-    used = 0;
   }
-  if (used != text.size() || !std::isfinite(v) || v < 0) throw std::invalid_argument(flag + " needs a number >= 0, got '" + text + "'");
-  return v;
+  return std::nullopt;
+}
+
+double parse_number(const std::string& flag, const std::string& text) {
+  const auto v = to_number(text);
+  if (!v || *v < 0) throw std::invalid_argument(flag + " needs a number >= 0, got '" + text + "'");
+  return *v;
 }
 
 Options parse_args(const std::vector<std::string>& args) {
@@ -73,18 +79,10 @@ std::string pair_name(const RobotModel& m, int a, int b) {
   return x + ":" + y;
 }
 
-double parse_number_any(const std::string& path, int line, const std::string& word) {
-  std::size_t used = 0;
-  double v = 0.0;
-  try {
-    v = std::stod(word, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != word.size() || !std::isfinite(v)) {
-    throw std::invalid_argument(path + ":" + std::to_string(line) + ": '" + word + "' is not a finite number");
-  }
-  return v;
+double parse_value(const std::string& path, int line, const std::string& word) {
+  const auto v = to_number(word);
+  if (!v) throw std::invalid_argument(path + ":" + std::to_string(line) + ": '" + word + "' is not a finite number");
+  return *v;
 }
 
 // The states file: joint indices into the state vector, then rows of values.
@@ -118,7 +116,7 @@ States read_states(const std::string& path, const RobotModel& m) {
     }
     std::vector<double> row;
     std::string word;
-    while (words >> word) row.push_back(parse_number_any(path, number, word));
+    while (words >> word) row.push_back(parse_value(path, number, word));
     if (row.size() != s.variables.size()) {
       throw std::invalid_argument(path + ":" + std::to_string(number) + ": " + std::to_string(row.size()) + " values for " +
                                   std::to_string(s.variables.size()) + " joints");
