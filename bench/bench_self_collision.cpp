@@ -97,14 +97,7 @@ void move_pipeline(FclPipeline& p, const std::vector<Transform>& poses) {
 
 std::vector<std::vector<double>> random_states(const RobotModel& m, int n, std::mt19937_64& rng) {
   std::vector<std::vector<double>> out;
-  for (int i = 0; i < n; ++i) {
-    std::vector<double> s(m.variable_count());
-    for (std::size_t v = 0; v < s.size(); ++v) {
-      const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
-      s[v] = std::uniform_real_distribution<double>(j.bounded ? j.lower : -M_PI, j.bounded ? j.upper : M_PI)(rng);
-    }
-    out.push_back(std::move(s));
-  }
+  for (int i = 0; i < n; ++i) out.push_back(random_configuration(m, rng));
   return out;
 }
 

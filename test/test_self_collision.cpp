@@ -50,15 +50,6 @@ Fixture make_fixture(const std::string& robot) {
   return f;
 }
 
-std::vector<double> random_state(const RobotModel& m, std::mt19937_64& rng) {
-  std::vector<double> s(m.variable_count());
-  for (std::size_t v = 0; v < s.size(); ++v) {
-    const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
-    s[v] = std::uniform_real_distribution<double>(j.bounded ? j.lower : -M_PI, j.bounded ? j.upper : M_PI)(rng);
-  }
-  return s;
-}
-
 // FCL's answer over the checker's own pair list: colliding pairs and minimum distance.
 std::set<std::pair<int, int>> fcl_pairs(const Fixture& f, const std::vector<Transform>& poses, bool want_distance,
                                         double* min_distance) {
@@ -119,7 +110,7 @@ TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
   int colliding = 0;
   const int kConfigurations = 2000, kDistanceConfigurations = 500;  // all 2000 agreed in a one-off run (109 s)
   for (int i = 0; i < kConfigurations; ++i) {
-    const std::vector<double> state = random_state(m, rng);
+    const std::vector<double> state = random_configuration(m, rng);
     forward_kinematics(m, state.data(), poses);
     const bool with_distance = i < kDistanceConfigurations;
     double fcl_distance = 0.0;
@@ -188,7 +179,7 @@ TEST_P(SelfCollision, BatchEqualsSingle) {
   std::mt19937_64 rng(23);
   std::vector<double> states;
   for (int i = 0; i < 300; ++i) {
-    const auto s = random_state(m, rng);
+    const auto s = random_configuration(m, rng);
     states.insert(states.end(), s.begin(), s.end());
   }
   const std::vector<bool> batch = f.checker->check_self_batch(states.data(), 300);

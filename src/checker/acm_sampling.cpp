@@ -10,18 +10,6 @@
 #include <thread>
 
 namespace bvh_collision {
-namespace {
-
-std::vector<double> random_state(const RobotModel& m, std::mt19937_64& rng) {
-  std::vector<double> s(m.variable_count());
-  for (std::size_t v = 0; v < s.size(); ++v) {
-    const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
-    s[v] = std::uniform_real_distribution<double>(j.bounded ? j.lower : -M_PI, j.bounded ? j.upper : M_PI)(rng);
-  }
-  return s;
-}
-
-}  // namespace
 
 SampledPairs sample_collision_pairs(const CollisionChecker& checker, const SamplingOptions& options) {
   const auto& pairs = checker.checked_pairs();
@@ -34,7 +22,7 @@ SampledPairs sample_collision_pairs(const CollisionChecker& checker, const Sampl
     SelfCollisionRequest request;
     request.all_pairs = true;
     for (std::size_t s = w; s < options.samples; s += workers) {
-      const std::vector<double> state = random_state(checker.model(), rng);
+      const std::vector<double> state = random_configuration(checker.model(), rng);
       for (const auto& pair : checker.check_self(state.data(), request).colliding_pairs) ++counts[w][index.at(pair)];
     }
   };

@@ -261,6 +261,15 @@ inline Mat3 axis_rotation(const Vec3& k, double q) {
 
 }  // namespace
 
+std::vector<double> random_configuration(const RobotModel& model, std::mt19937_64& rng) {
+  std::vector<double> q(model.variable_count());
+  for (std::size_t v = 0; v < q.size(); ++v) {
+    const RobotJoint& j = model.joints()[model.joint_index(model.variable_names()[v])];
+    q[v] = std::uniform_real_distribution<double>(j.bounded ? j.lower : -M_PI, j.bounded ? j.upper : M_PI)(rng);
+  }
+  return q;
+}
+
 void forward_kinematics(const RobotModel& model, const double* state, std::vector<Transform>& poses,
                         const std::vector<Transform>* free_joint_poses) {
   poses.resize(model.links().size());

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -90,6 +91,9 @@ class RobotModel {
 
   friend class RobotModelBuilder;
 };
+
+// A configuration drawn uniformly within joint limits (continuous joints over [-pi, pi]).
+std::vector<double> random_configuration(const RobotModel& model, std::mt19937_64& rng);
 
 // Link poses in the root link's frame for a state vector (RobotModel::variable_names order).
 // Floating and planar joints take the pose given in `free_joint_poses` (indexed by joint; empty
