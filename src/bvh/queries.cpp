@@ -82,6 +82,7 @@ class CollisionTraversal {
         request_(request), result_(result) {}
 
   void run() {
+    ++query_;  // a new stamp: volumes carried by earlier queries are stale
     TraversalStack<NodePair> stack;
     stack.push({0, 0});
     while (!stack.empty() && !done()) {
@@ -113,15 +114,13 @@ class CollisionTraversal {
     if constexpr (CarriesVolumes<BV>::value) {
       thread_local std::vector<BV> carried;
       thread_local std::vector<std::uint64_t> stamp;
-      thread_local std::uint64_t query = 0;
-      if (b == 0) ++query;  // the root is visited first, once per query
       if (carried.size() < b_.nodes().size()) {
         carried.resize(b_.nodes().size());
         stamp.resize(b_.nodes().size(), 0);
       }
-      if (stamp[b] != query) {
+      if (stamp[b] != query_) {
         carried[b] = carry(b_.nodes()[b].volume, frame_);
-        stamp[b] = query;
+        stamp[b] = query_;
         ++result_.stats.volume_updates;
       }
       return overlap_carried(va, carried[b], request_.padding);
@@ -176,6 +175,8 @@ class CollisionTraversal {
     result_.contacts.push_back(c);
   }
 
+  // Per-thread query counter stamping the carried-volume cache (see overlaps()).
+  static thread_local std::uint64_t query_;
   const Bvh<BV>& a_;
   const Bvh<BV>& b_;
   const Transform& pose_a_;
@@ -183,6 +184,9 @@ class CollisionTraversal {
   const CollisionRequest& request_;
   CollisionResult& result_;
 };
+
+template <class BV>
+thread_local std::uint64_t CollisionTraversal<BV>::query_ = 0;
 
 // Is some component of `inner` (pose relative to `outer`'s frame: inner_in_outer) inside the
 // closed mesh `outer`? Returns the contained point in outer's frame.

@@ -104,11 +104,12 @@ bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, cons
     return hit;
   }
   // A sphere against a mesh: the mesh's closest point to the centre, or the centre inside it.
-  const bool a_is_sphere = sa.mesh < 0;
-  const Shape& sphere = a_is_sphere ? sa : sb;
-  const Shape& mesh = a_is_sphere ? sb : sa;
-  const Transform& ps = a_is_sphere ? pa : pb;
-  const Transform& pm = a_is_sphere ? pb : pa;
+  const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
+  const bool a_is_sphere = sm.sphere_first;
+  const Shape& sphere = sm.sphere;
+  const Shape& mesh = sm.mesh;
+  const Transform& ps = sm.sphere_pose;
+  const Transform& pm = sm.mesh_pose;
   const double reach = sphere.radius + padding;
   const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, reach * (1 + 1e-12) + 1e-15);
   stats += d.stats;
@@ -145,11 +146,12 @@ double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, c
     wb = pb.t - dir * sb.radius;
     return d;
   }
-  const bool a_is_sphere = sa.mesh < 0;
-  const Shape& sphere = a_is_sphere ? sa : sb;
-  const Shape& mesh = a_is_sphere ? sb : sa;
-  const Transform& ps = a_is_sphere ? pa : pb;
-  const Transform& pm = a_is_sphere ? pb : pa;
+  const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
+  const bool a_is_sphere = sm.sphere_first;
+  const Shape& sphere = sm.sphere;
+  const Shape& mesh = sm.mesh;
+  const Transform& ps = sm.sphere_pose;
+  const Transform& pm = sm.mesh_pose;
   const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, best + sphere.radius);
   stats += d.stats;
   double dist = std::max(0.0, d.distance - sphere.radius);

@@ -83,6 +83,18 @@ class CollisionChecker {
   double shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double best,
                          bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
 
+  // A sphere shape and a mesh shape with their poses, whichever order they came in.
+  struct SphereAndMesh {
+    const Shape& sphere;
+    const Transform& sphere_pose;
+    const Shape& mesh;
+    const Transform& mesh_pose;
+    bool sphere_first;
+  };
+  static SphereAndMesh sphere_and_mesh(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb) {
+    return sa.mesh < 0 ? SphereAndMesh{sa, pa, sb, pb, true} : SphereAndMesh{sb, pb, sa, pa, false};
+  }
+
   RobotModel model_;
   AllowedCollisionMatrix acm_;
   std::vector<Bvh<Obb>> meshes_;
