@@ -127,6 +127,12 @@ TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
     ASSERT_EQ(f.checker->check_self(state.data(), boolean).collision, !found.empty()) << "boolean agrees";
     if (with_distance) {
       ASSERT_NEAR(r.min_distance, fcl_distance, 1e-6) << GetParam() << " configuration " << i;
+      // The witnesses are the reported distance apart (whether the convex hulls or the BVH
+      // traversal settled it) and belong to a checked pair.
+      if (std::isfinite(r.min_distance)) {
+        ASSERT_NEAR((r.point_a - r.point_b).norm(), r.min_distance, 1e-9) << GetParam() << " configuration " << i;
+        ASSERT_FALSE(f.checker->acm().allowed(r.closest_a, r.closest_b));
+      }
     }
     colliding += !expected.empty();
   }
@@ -168,7 +174,9 @@ TEST_P(SelfCollision, SrdfNamedStates) {
     EXPECT_EQ(ours, fcl)
         << GetParam() << " state '" << name << "': ours " << pairs;
   }
-  if (!f.srdf.group_states.empty()) EXPECT_GT(rest_states, 0) << "no rest state found among the SRDF's states";
+  if (!f.srdf.group_states.empty()) {
+    EXPECT_GT(rest_states, 0) << "no rest state found among the SRDF's states";
+  }
 }
 
 // Batch answers equal single answers (and the batch uses every core).

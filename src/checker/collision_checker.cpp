@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 #include <thread>
 
 namespace bvh_collision {
@@ -70,7 +71,10 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
         s.radius = e.radius;
       } else {
         auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
-        if (fresh) meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
+        if (fresh) {
+          meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
+          hulls_.push_back(convex_hull(e.mesh->vertices));
+        }
         s.mesh = it->second;
       }
       shapes_[l].push_back(s);
@@ -129,21 +133,17 @@ bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, cons
 
 double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
                                          double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
-  if (sa.mesh >= 0 && sb.mesh >= 0) {
-    DistanceRequest request;
-    request.solids = solids;
-    request.upper_bound = best;
-    const DistanceResult d = distance(meshes_[sa.mesh], pa, meshes_[sb.mesh], pb, request);
-    stats += d.stats;
-    wa = d.point_a;
-    wb = d.point_b;
-    return d.distance;
-  }
+  if (sa.mesh >= 0 && sb.mesh >= 0) return meshes_distance(sa.mesh, pa, sb.mesh, pb, best, solids, wa, wb, stats);
   if (sa.mesh < 0 && sb.mesh < 0) {
     const Vec3 dir = (pb.t - pa.t).norm() > 0 ? Vec3((pb.t - pa.t).normalized()) : Vec3(Vec3::UnitZ());
     const double d = std::max(0.0, (pb.t - pa.t).norm() - sa.radius - sb.radius);
     wa = pa.t + dir * sa.radius;
     wb = pb.t - dir * sb.radius;
+    if (d == 0.0) {  // overlapping: the middle of the centre line's stretch inside both
+      const double gap = (pb.t - pa.t).norm();
+      const double lo = std::max(-sa.radius, gap - sb.radius), hi = std::min(sa.radius, gap + sb.radius);
+      wa = wb = pa.t + dir * (0.5 * (lo + hi));
+    }
     return d;
   }
   const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
@@ -157,6 +157,7 @@ double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, c
   double dist = std::max(0.0, d.distance - sphere.radius);
   Vec3 on_mesh = d.point_b, on_sphere = ps.t;
   if (std::isfinite(d.distance) && d.distance > 0) on_sphere = ps.t + (d.point_b - ps.t) * (sphere.radius / d.distance);
+  if (dist == 0.0) on_sphere = on_mesh;  // the mesh point is inside the sphere: common to both
   if (solids && contains_point(meshes_[mesh.mesh], pm.inverse() * ps.t, &stats)) {
     dist = 0.0;
     on_mesh = on_sphere = ps.t;
@@ -164,6 +165,45 @@ double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, c
   wa = a_is_sphere ? on_sphere : on_mesh;
   wb = a_is_sphere ? on_mesh : on_sphere;
   return dist;
+}
+
+// The distance between two link meshes, settled by their convex hulls when it can be: the hulls'
+// distance is a certified lower bound on the meshes' (each mesh lies in its hull), and when the
+// hulls' closest points lie on the meshes' surfaces, the meshes are no further apart than those
+// points, so the two agree and no BVH traversal is needed. Robot links are mostly convex where
+// they face each other, so this settles most pairs; the rest take the exact BVH query.
+double CollisionChecker::meshes_distance(int ma, const Transform& pa, int mb, const Transform& pb, double best,
+                                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
+  const Transform b_in_a = relative_transform(pa, pb);
+  const ConvexDistance hull = convex_distance(hulls_[ma], hulls_[mb], b_in_a);
+  if (hull.lower_bound >= best) return hull.lower_bound;  // cannot improve on `best`
+  if (hull.lower_bound > 0.0) {
+    // Disjoint hulls: neither solid holds the other, so surface and solid distances agree.
+    const double scale = hulls_[ma].extent + hulls_[mb].extent + b_in_a.t.norm();
+    const double on_surface = 1e-12 * scale;
+    auto surface_point = [&](int mesh, const Transform& pose, const Vec3& p, int vertex) -> std::optional<Vec3> {
+      if (vertex >= 0) return p;  // hull vertices are mesh vertices
+      const DistanceResult d = point_distance(meshes_[mesh], pose, p, on_surface);
+      stats += d.stats;
+      if (d.distance <= on_surface) return d.point_b;
+      return std::nullopt;
+    };
+    const auto qa = surface_point(ma, Transform::Identity(), hull.on_a, hull.vertex_a);
+    const auto qb = qa ? surface_point(mb, b_in_a, hull.on_b, hull.vertex_b) : std::nullopt;
+    if (qa && qb && (*qa - *qb).norm() - hull.lower_bound <= 1e-10 * scale) {
+      wa = pa * *qa;
+      wb = pa * *qb;
+      return (*qa - *qb).norm();
+    }
+  }
+  DistanceRequest request;
+  request.solids = solids;
+  request.upper_bound = best;
+  const DistanceResult d = distance(meshes_[ma], pa, meshes_[mb], pb, request);
+  stats += d.stats;
+  wa = d.point_a;
+  wb = d.point_b;
+  return d.distance;
 }
 
 bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,

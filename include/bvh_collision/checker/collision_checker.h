@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
 
@@ -82,6 +83,8 @@ class CollisionChecker {
                       const SelfCollisionRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) const;
   double shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double best,
                          bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
+  double meshes_distance(int ma, const Transform& pa, int mb, const Transform& pb, double best, bool solids, Vec3& wa,
+                         Vec3& wb, QueryStats& stats) const;
 
   // A sphere shape and a mesh shape with their poses, whichever order they came in.
   struct SphereAndMesh {
@@ -98,6 +101,7 @@ class CollisionChecker {
   RobotModel model_;
   AllowedCollisionMatrix acm_;
   std::vector<Bvh<Obb>> meshes_;
+  std::vector<ConvexHull> hulls_;  // per mesh: bounds and often settles distances (see .cpp)
   std::vector<std::vector<Shape>> shapes_;  // per link
   std::vector<LinkBound> bounds_;
   std::vector<double> padding_;

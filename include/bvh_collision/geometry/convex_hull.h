@@ -1,0 +1,44 @@
+// Convex hulls of point sets, and certified distances between convex hulls.
+//
+// The hull is built incrementally with the exact orient3d predicate, so it is the exact hull of
+// the given doubles: every input point lies in it, and its vertices are input points. That makes
+// the hull's support function (the furthest vertex along a direction) exactly the support function
+// of the input, which is what the certified distance bound below relies on.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+struct ConvexHull {
+  std::vector<Vec3> vertices;                // input points that are hull vertices
+  std::vector<std::array<int, 3>> faces;     // outward (counter-clockwise seen from outside);
+                                             // empty when the points are coplanar or fewer than 4
+  double extent = 0.0;                       // the largest vertex norm (for rounding margins)
+  bool empty() const { return vertices.empty(); }
+};
+
+// The hull of `points`. When the points span no volume (all coplanar), `vertices` holds every
+// distinct point (still a superset of the hull's vertices) and `faces` is empty.
+ConvexHull convex_hull(const std::vector<Vec3>& points);
+
+// Closest points between two convex hulls, a in its own frame and b placed by `b_in_a`.
+struct ConvexDistance {
+  bool intersecting = false;  // the hulls may touch or overlap (lower_bound is then 0)
+  double lower_bound = 0.0;   // certified: the hulls' distance is at least this
+  double distance = 0.0;      // the distance found (>= lower_bound, equal up to rounding)
+  Vec3 on_a = Vec3::Zero();   // witness on a's hull, in a's frame
+  Vec3 on_b = Vec3::Zero();   // witness on b's hull, in a's frame
+  int vertex_a = -1;          // when on_a is a vertex of a's hull: its index, else -1
+  int vertex_b = -1;          // when on_b is a vertex of b's hull: its index, else -1
+};
+
+// GJK on the two vertex sets. The lower bound does not trust GJK's arithmetic: it is the gap
+// between the two hulls along the final search direction, from exact support values with a
+// rounding margin, so it is a valid bound even when GJK stops early.
+ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a);
+
+}  // namespace bvh_collision

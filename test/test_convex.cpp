@@ -1,0 +1,228 @@
+// Convex hulls and the certified GJK distance, against CGAL: extreme points (convex_hull_3) and
+// the exact distance between two polytopes (Polytope_distance_d with an exact number type).
+#include <CGAL/Gmpzf.h>
+#include <CGAL/Polytope_distance_d.h>
+#include <CGAL/Polytope_distance_d_traits_3.h>
+#include <CGAL/convex_hull_3.h>
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <set>
+
+#include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/predicates.h"
+#include "cgal_oracle.h"
+#include "mesh_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+using test::Epick;
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(7);
+  return r;
+}
+
+std::vector<Vec3> random_cloud(int n, double size) {
+  std::uniform_real_distribution<double> u(-size, size);
+  std::vector<Vec3> p;
+  for (int i = 0; i < n; ++i) p.emplace_back(u(rng()), u(rng()), u(rng()));
+  return p;
+}
+
+// Points on a small integer grid: many coplanar and collinear hull points.
+std::vector<Vec3> grid_cloud(int n, int cells, double scale) {
+  std::uniform_int_distribution<int> u(0, cells);
+  std::vector<Vec3> p;
+  for (int i = 0; i < n; ++i) p.push_back(Vec3(u(rng()), u(rng()), u(rng())) * scale);
+  return p;
+}
+
+Transform random_pose(double reach) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Eigen::Quaterniond q(Eigen::Vector4d(u(rng()), u(rng()), u(rng()), u(rng())).normalized());
+  return {q.toRotationMatrix(), Vec3(u(rng()), u(rng()), u(rng())) * reach};
+}
+
+// The properties the distance bound relies on, each checked exactly or by brute force.
+void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, const std::string& what) {
+  SCOPED_TRACE(what);
+  ASSERT_FALSE(hull.faces.empty());
+  const std::set<std::array<double, 3>> input = [&] {
+    std::set<std::array<double, 3>> s;
+    for (const Vec3& p : points) s.insert({p.x(), p.y(), p.z()});
+    return s;
+  }();
+  for (const Vec3& v : hull.vertices) EXPECT_TRUE(input.count({v.x(), v.y(), v.z()})) << "vertex not an input point";
+  // Closed and consistently oriented: every directed edge's reverse appears exactly once.
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& f : hull.faces) {
+    for (int k = 0; k < 3; ++k) ++edges[{f[k], f[(k + 1) % 3]}];
+  }
+  for (const auto& [e, count] : edges) {
+    EXPECT_EQ(count, 1);
+    EXPECT_EQ(edges.count({e.second, e.first}), 1u);
+  }
+  // Every input point on the inner side of (or on) every face, exactly.
+  int outside = 0;
+  for (const auto& f : hull.faces) {
+    for (const Vec3& p : points) outside += orient3d(hull.vertices[f[0]], hull.vertices[f[1]], hull.vertices[f[2]], p) < 0;
+  }
+  EXPECT_EQ(outside, 0);
+  // Every extreme point CGAL finds is one of ours.
+  std::vector<Epick::Point_3> cgal_points, extreme;
+  for (const Vec3& p : points) cgal_points.push_back(test::to_cgal<Epick>(p));
+  CGAL::extreme_points_3(cgal_points, std::back_inserter(extreme));
+  std::set<std::array<double, 3>> ours;
+  for (const Vec3& v : hull.vertices) ours.insert({v.x(), v.y(), v.z()});
+  for (const auto& e : extreme) EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
+  // The support function along random directions equals the input's, to the last bit.
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 d = random_cloud(1, 1.0)[0];
+    double best_in = -1e300, best_hull = -1e300;
+    for (const Vec3& p : points) best_in = std::max(best_in, d.dot(p));
+    for (const Vec3& p : hull.vertices) best_hull = std::max(best_hull, d.dot(p));
+    EXPECT_EQ(best_in, best_hull);
+  }
+}
+
+TEST(ConvexHull, RandomClouds) {
+  for (const int n : {4, 5, 10, 100, 2000}) {
+    const auto p = random_cloud(n, 1.0);
+    expect_valid_hull(p, convex_hull(p), "random " + std::to_string(n));
+  }
+}
+
+TEST(ConvexHull, GridCloudsWithCoplanarAndCollinearPoints) {
+  for (const int cells : {1, 2, 3, 8}) {
+    for (const double scale : {1.0, 1.0 / 1024, 1024.0}) {
+      const auto p = grid_cloud(400, cells, scale);
+      expect_valid_hull(p, convex_hull(p), "grid " + std::to_string(cells));
+    }
+  }
+}
+
+TEST(ConvexHull, SpherePointsAndFarOffsets) {
+  std::vector<Vec3> p;
+  for (const Vec3& x : random_cloud(500, 1.0)) p.push_back(x.normalized() + Vec3(1e4, -1e4, 3e3));
+  expect_valid_hull(p, convex_hull(p), "sphere at 1e4");
+}
+
+TEST(ConvexHull, RobotMeshes) {
+  BVH_REQUIRE_ROBOTS();
+  for (const char* file : {"panda/moveit_resources_panda_description/meshes/collision/link1.stl", "panda/moveit_resources_panda_description/meshes/collision/hand.stl",
+                           "ur5e/ur_description/meshes/ur5e/collision/shoulder.stl", "ur5e/ur_description/meshes/ur5e/collision/forearm.stl"}) {
+    const TriangleMesh m = test::robot_mesh(file);
+    const ConvexHull h = convex_hull(m.vertices);
+    expect_valid_hull(m.vertices, h, file);
+    EXPECT_LT(h.vertices.size(), m.vertices.size());
+  }
+}
+
+TEST(ConvexHull, DegenerateInputsKeepEveryDistinctPoint) {
+  EXPECT_TRUE(convex_hull({}).empty());
+  const ConvexHull two = convex_hull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 0)});
+  EXPECT_EQ(two.vertices.size(), 2u);
+  EXPECT_TRUE(two.faces.empty());
+  std::vector<Vec3> flat;
+  for (int i = 0; i < 50; ++i) flat.push_back(Vec3(i % 7, i / 7, 0) * 0.1);
+  const ConvexHull f = convex_hull(flat);
+  EXPECT_TRUE(f.faces.empty());
+  EXPECT_EQ(f.vertices.size(), 50u);
+  const ConvexHull nan = convex_hull({Vec3(NAN, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
+  EXPECT_EQ(nan.vertices.size(), 4u);
+  EXPECT_EQ(nan.faces.size(), 4u);
+}
+
+// --------------------------------------------------------------------------------- distance
+
+using PolytopeTraits = CGAL::Polytope_distance_d_traits_3<Epick, CGAL::Gmpzf, double>;
+
+double exact_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  std::vector<Epick::Point_3> pa, pb;
+  for (const Vec3& p : a) pa.push_back(test::to_cgal<Epick>(p));
+  for (const Vec3& p : b) pb.push_back(test::to_cgal<Epick>(p));
+  CGAL::Polytope_distance_d<PolytopeTraits> d(pa.begin(), pa.end(), pb.begin(), pb.end());
+  return std::sqrt(CGAL::to_double(d.squared_distance_numerator()) / CGAL::to_double(d.squared_distance_denominator()));
+}
+
+struct DistanceCase {
+  std::vector<Vec3> a, b;
+  Transform b_in_a;
+};
+
+// `slack`: how far below the exact distance the bound may be and still count as tight.
+void expect_certified(const DistanceCase& c, int& tight, int& total, double slack = 0.0) {
+  const ConvexHull ha = convex_hull(c.a), hb = convex_hull(c.b);
+  std::vector<Vec3> b_placed;
+  for (const Vec3& p : hb.vertices) b_placed.push_back(c.b_in_a * p);
+  const double truth = exact_distance(ha.vertices, b_placed);
+  const ConvexDistance d = convex_distance(ha, hb, c.b_in_a);
+  const double scale = 1e-12 * (ha.extent + hb.extent + c.b_in_a.t.norm());
+  // Never above the truth (up to the rounding of the oracle's square root)...
+  EXPECT_LE(d.lower_bound, truth * (1 + 1e-15)) << "bound above the exact distance";
+  // ...the witnesses are points of the hulls at the distance reported...
+  EXPECT_NEAR((d.on_a - d.on_b).norm(), d.distance, 1e-15 * (1 + d.distance));
+  EXPECT_GE(d.distance, truth - scale);
+  // ...and when the hulls are apart, the distance and the bound are the exact one.
+  if (truth > scale) {
+    ++total;
+    EXPECT_FALSE(d.intersecting);
+    EXPECT_NEAR(d.distance, truth, scale + 1e-9 * truth);
+    tight += d.lower_bound >= truth - scale - slack;
+    if (d.lower_bound < truth - scale - slack) {
+      ADD_FAILURE() << "loose bound " << d.lower_bound << " for distance " << truth << " (GJK found " << d.distance
+                    << ")";
+    }
+  }
+}
+
+TEST(ConvexDistance, RandomPolytopesAgainstCgalExact) {
+  int tight = 0, total = 0;
+  for (int i = 0; i < 1500; ++i) {
+    const int n = 4 + static_cast<int>(rng()() % 60);
+    DistanceCase c{random_cloud(n, 0.2), random_cloud(4 + static_cast<int>(rng()() % 60), 0.3), random_pose(0.9)};
+    expect_certified(c, tight, total);
+  }
+  EXPECT_GT(total, 500);
+  EXPECT_EQ(tight, total) << "the certified bound should equal the distance when GJK converges";
+}
+
+TEST(ConvexDistance, FlatAndParallelFaces) {
+  int tight = 0, total = 0;
+  // Two boxes with parallel faces (the degenerate case of GJK), shifted along a face normal and
+  // slid sideways; and two coplanar point sets. When edges line up exactly at a gap far below
+  // the boxes' size, the witnesses' rounding tilts the direction of the bound: it stays within
+  // 1e-9 of the size (a checker then falls back to the exact mesh query).
+  const std::vector<Vec3> box = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+  for (const double gap : {0.0, 1e-12, 1e-6, 0.25, 3.0}) {
+    for (const double slide : {0.0, 0.5, 0.999, 1.0, 1.5}) {
+      expect_certified({box, box, Transform::Translation(Vec3(slide, 0.3 * slide, 1.0 + gap))}, tight, total, 1e-9);
+    }
+  }
+  std::vector<Vec3> square = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0.5, 0.5, 0}};
+  expect_certified({square, square, Transform::Translation(Vec3(0.2, 0.2, 0.5))}, tight, total);
+  expect_certified({square, box, Transform::Translation(Vec3(2.0, 0.2, 0.0))}, tight, total);
+  EXPECT_EQ(tight, total);
+}
+
+TEST(ConvexDistance, RobotMeshesAtRandomPoses) {
+  BVH_REQUIRE_ROBOTS();
+  const TriangleMesh a = test::robot_mesh("ur5e/ur_description/meshes/ur5e/collision/shoulder.stl");
+  const TriangleMesh b = test::robot_mesh("panda/moveit_resources_panda_description/meshes/collision/hand.stl");
+  int tight = 0, total = 0;
+  for (int i = 0; i < 200; ++i) expect_certified({a.vertices, b.vertices, random_pose(0.3)}, tight, total);
+  EXPECT_GT(total, 50);
+  EXPECT_EQ(tight, total);
+}
+
+TEST(ConvexDistance, EmptyHullsAreInfinitelyFar) {
+  const ConvexDistance d = convex_distance(ConvexHull{}, convex_hull(random_cloud(10, 1.0)), Transform::Identity());
+  EXPECT_TRUE(std::isinf(d.lower_bound));
+}
+
+}  // namespace
+}  // namespace bvh_collision
