@@ -64,7 +64,9 @@ TEST(AllowedCollisionMatrix, RealSrdfs) {
     const std::string dir = test::robots_dir() + "/" + robot;
     const RobotModel m = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
     const Srdf srdf = parse_srdf(read_file(dir + "/robot.srdf"));
-    if (disabled > 0) EXPECT_EQ(srdf.disabled_pairs.size(), disabled);
+    if (disabled > 0) {
+      EXPECT_EQ(srdf.disabled_pairs.size(), disabled);
+    }
     AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
     const auto unknown = apply_srdf(srdf, m, acm);
     for (const auto& [l1, l2] : srdf.disabled_pairs) {

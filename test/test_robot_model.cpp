@@ -74,7 +74,14 @@ TEST(RobotModel, ForwardKinematicsEqualsKdlOnEveryRobot) {
     KDL::Tree tree;
     ASSERT_TRUE(kdl_parser::treeFromUrdfModel(*urdf, tree));
     KDL::TreeFkSolverPos_recursive solver(tree);
-    std::vector<Transform> poses;
+    std::vector<Transform> poses, planned;
+    // The precomputed plan, for every link and for the links with geometry only (fixed joints
+    // folded away, axis-aligned rotations special-cased): the same poses as KDL's.
+    std::vector<bool> with_geometry(model.links().size());
+    for (std::size_t l = 0; l < with_geometry.size(); ++l) with_geometry[l] = !model.links()[l].collision.empty();
+    const KinematicsPlan all_links(model, std::vector<bool>(model.links().size(), true));
+    const KinematicsPlan geometry_links(model, with_geometry);
+    EXPECT_LE(geometry_links.steps(), all_links.steps());
     for (int sample = 0; sample < 200; ++sample) {
       std::vector<double> state(model.variable_count());
       for (std::size_t v = 0; v < state.size(); ++v) {
@@ -93,12 +100,24 @@ TEST(RobotModel, ForwardKinematicsEqualsKdlOnEveryRobot) {
                                              : j.multiplier * state[model.joints()[j.mimic].variable] + j.offset;
         q(GetTreeElementQNr(element)) = value;
       }
+      const KinematicsPlan& plan = sample % 2 ? all_links : geometry_links;
+      planned.assign(model.links().size(), Transform::Translation(Vec3::Constant(NAN)));
+      plan.compute(state.data(), planned);
       for (std::size_t l = 0; l < model.links().size(); ++l) {
         KDL::Frame frame;
         ASSERT_GE(solver.JntToCart(q, frame, model.links()[l].name), 0) << model.links()[l].name;
+        const bool check_plan = sample % 2 || with_geometry[l];
         for (int r = 0; r < 3; ++r) {
           EXPECT_NEAR(poses[l].t[r], frame.p(r), 1e-9) << model.links()[l].name;
-          for (int c = 0; c < 3; ++c) EXPECT_NEAR(poses[l].R(r, c), frame.M(r, c), 1e-9) << model.links()[l].name;
+          if (check_plan) {
+            EXPECT_NEAR(planned[l].t[r], frame.p(r), 1e-9) << "plan " << model.links()[l].name;
+          }
+          for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(poses[l].R(r, c), frame.M(r, c), 1e-9) << model.links()[l].name;
+            if (check_plan) {
+              EXPECT_NEAR(planned[l].R(r, c), frame.M(r, c), 1e-9) << "plan " << model.links()[l].name;
+            }
+          }
         }
       }
       if (HasFailure()) return;
@@ -272,6 +291,14 @@ TEST(RobotModel, MimicAndFreeJoints) {
   EXPECT_EQ(poses[m.link_index("f")].t, Vec3(1, 2, 3));
   forward_kinematics(m, &q, poses);  // no free poses: identity
   EXPECT_EQ(poses[m.link_index("f")].t, Vec3::Zero());
+  // The plan: the same, for a chosen link.
+  std::vector<bool> wanted(m.links().size(), false);
+  wanted[m.link_index("b")] = wanted[m.link_index("f")] = true;
+  const KinematicsPlan plan(m, wanted);
+  EXPECT_EQ(plan.steps(), 2u);
+  plan.compute(&q, poses, &free);
+  EXPECT_NEAR(poses[m.link_index("b")].t.y(), -2 * 0.25 + 0.5, 1e-15);
+  EXPECT_EQ(poses[m.link_index("f")].t, Vec3(1, 2, 3));
 }
 
 }  // namespace

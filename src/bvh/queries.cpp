@@ -82,7 +82,16 @@ class CollisionTraversal {
         request_(request), result_(result) {}
 
   void run() {
-    ++query_;  // a new stamp: volumes carried by earlier queries are stale
+    if constexpr (CarriesVolumes<BV>::value) {
+      // Looked up once per query: thread_local access costs a call in a shared library.
+      thread_local CarryCache cache;
+      cache_ = &cache;
+      ++cache.query;  // a new stamp: volumes carried by earlier queries are stale
+      if (cache.carried.size() < b_.nodes().size()) {
+        cache.carried.resize(b_.nodes().size());
+        cache.stamp.resize(b_.nodes().size(), 0);
+      }
+    }
     TraversalStack<NodePair> stack;
     stack.push({0, 0});
     while (!stack.empty() && !done()) {
@@ -112,18 +121,13 @@ class CollisionTraversal {
   // b's volumes carried into a's frame, once per node and query, for types where that pays.
   bool overlaps(const BV& va, std::int32_t b) {
     if constexpr (CarriesVolumes<BV>::value) {
-      thread_local std::vector<BV> carried;
-      thread_local std::vector<std::uint64_t> stamp;
-      if (carried.size() < b_.nodes().size()) {
-        carried.resize(b_.nodes().size());
-        stamp.resize(b_.nodes().size(), 0);
-      }
-      if (stamp[b] != query_) {
-        carried[b] = carry(b_.nodes()[b].volume, frame_);
-        stamp[b] = query_;
+      CarryCache& cache = *cache_;
+      if (cache.stamp[b] != cache.query) {
+        cache.carried[b] = carry(b_.nodes()[b].volume, frame_);
+        cache.stamp[b] = cache.query;
         ++result_.stats.volume_updates;
       }
-      return overlap_carried(va, carried[b], request_.padding);
+      return overlap_carried(va, cache.carried[b], request_.padding);
     } else {
       return overlap(va, b_.nodes()[b].volume, frame_, request_.padding);
     }
@@ -175,8 +179,13 @@ class CollisionTraversal {
     result_.contacts.push_back(c);
   }
 
-  // Per-thread query counter stamping the carried-volume cache (see overlaps()).
-  static thread_local std::uint64_t query_;
+  // b's volumes in a's frame, per thread, valid where stamp equals the query counter.
+  struct CarryCache {
+    std::vector<BV> carried;
+    std::vector<std::uint64_t> stamp;
+    std::uint64_t query = 0;
+  };
+  CarryCache* cache_ = nullptr;
   const Bvh<BV>& a_;
   const Bvh<BV>& b_;
   const Transform& pose_a_;
@@ -184,9 +193,6 @@ class CollisionTraversal {
   const CollisionRequest& request_;
   CollisionResult& result_;
 };
-
-template <class BV>
-thread_local std::uint64_t CollisionTraversal<BV>::query_ = 0;
 
 // Is some component of `inner` (pose relative to `outer`'s frame: inner_in_outer) inside the
 // closed mesh `outer`? Returns the contained point in outer's frame.

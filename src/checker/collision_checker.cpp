@@ -82,6 +82,7 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
     const auto [c, r] = bounding_sphere(shapes_[l], meshes_);
     bounds_[l] = {c, r};
   }
+  kinematics_ = KinematicsPlan(model_, needed);
 }
 
 bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
@@ -177,33 +178,55 @@ double CollisionChecker::meshes_distance(int ma, const Transform& pa, int mb, co
   const Transform b_in_a = relative_transform(pa, pb);
   const ConvexDistance hull = convex_distance(hulls_[ma], hulls_[mb], b_in_a);
   if (hull.lower_bound >= best) return hull.lower_bound;  // cannot improve on `best`
+  // Surface points near the hulls' witnesses: their distance bounds the meshes' from above.
+  double upper = best;
+  Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
   if (hull.lower_bound > 0.0) {
     // Disjoint hulls: neither solid holds the other, so surface and solid distances agree.
-    const double scale = hulls_[ma].extent + hulls_[mb].extent + b_in_a.t.norm();
-    const double on_surface = 1e-12 * scale;
-    auto surface_point = [&](int mesh, const Transform& pose, const Vec3& p, int vertex) -> std::optional<Vec3> {
+    auto nearest_on_mesh = [&](int mesh, const Transform& pose, const Vec3& p, int vertex) {
       if (vertex >= 0) return p;  // hull vertices are mesh vertices
-      const DistanceResult d = point_distance(meshes_[mesh], pose, p, on_surface);
+      const DistanceResult d = point_distance(meshes_[mesh], pose, p);
       stats += d.stats;
-      if (d.distance <= on_surface) return d.point_b;
-      return std::nullopt;
+      return d.point_b;
     };
-    const auto qa = surface_point(ma, Transform::Identity(), hull.on_a, hull.vertex_a);
-    const auto qb = qa ? surface_point(mb, b_in_a, hull.on_b, hull.vertex_b) : std::nullopt;
-    if (qa && qb && (*qa - *qb).norm() - hull.lower_bound <= 1e-10 * scale) {
-      wa = pa * *qa;
-      wb = pa * *qb;
-      return (*qa - *qb).norm();
+    const Vec3 qa = nearest_on_mesh(ma, Transform::Identity(), hull.on_a, hull.vertex_a);
+    const Vec3 qb = nearest_on_mesh(mb, b_in_a, hull.on_b, hull.vertex_b);
+    const double apart = (qa - qb).norm();
+    const double scale = hulls_[ma].extent + hulls_[mb].extent + b_in_a.t.norm();
+    if (apart - hull.lower_bound <= 1e-10 * scale) {  // certified: the hulls' distance is the meshes'
+      wa = pa * qa;
+      wb = pa * qb;
+      return apart;
+    }
+    if (apart < upper) upper = apart, upper_a = pa * qa, upper_b = pa * qb;
+  }
+  if (hull.intersecting) {
+    // Overlapping hulls often mean touching meshes: a depth-first collision query finds a
+    // contact far sooner than the distance query, whose bounds are all 0 there.
+    CollisionRequest touch;
+    touch.max_contacts = 1;
+    touch.solids = solids;
+    const CollisionResult c = collide(meshes_[ma], pa, meshes_[mb], pb, touch);
+    stats += c.stats;
+    if (c.collision) {
+      wa = wb = c.contacts.empty() ? pa.t : c.contacts.front().position;
+      return 0.0;
     }
   }
+  // The exact query, only for what beats `upper`: a close upper bound prunes most of it.
   DistanceRequest request;
   request.solids = solids;
-  request.upper_bound = best;
+  request.upper_bound = upper;
   const DistanceResult d = distance(meshes_[ma], pa, meshes_[mb], pb, request);
   stats += d.stats;
-  wa = d.point_a;
-  wb = d.point_b;
-  return d.distance;
+  if (d.distance < upper || upper >= best) {
+    wa = d.point_a;
+    wb = d.point_b;
+    return d.distance;
+  }
+  wa = upper_a;
+  wb = upper_b;
+  return upper;
 }
 
 bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,
@@ -249,33 +272,52 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
 SelfCollisionResult CollisionChecker::check_self(const double* state, const SelfCollisionRequest& request) const {
   SelfCollisionResult result;
   std::vector<Transform>& poses = tl_poses;
-  forward_kinematics(model_, state, poses);
+  kinematics_.compute(state, poses);
   // Broad phase: the gap between the links' bounding spheres, a lower bound on their distance.
   thread_local std::vector<Vec3> centers;
   centers.resize(poses.size());
   for (std::size_t l = 0; l < poses.size(); ++l) {
     if (bounds_[l].radius >= 0) centers[l] = poses[l].R * bounds_[l].center + poses[l].t;
   }
-  thread_local std::vector<std::pair<double, std::size_t>> gaps;
-  gaps.clear();
-  for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
-    const auto [a, b] = checked_pairs_[p];
-    gaps.emplace_back((centers[a] - centers[b]).norm() - bounds_[a].radius - bounds_[b].radius, p);
+  thread_local std::vector<std::pair<double, std::size_t>> order;
+  order.clear();
+  if (!request.distance) {
+    // Collision only: the pairs whose spheres come within reach, deepest overlap (relative to
+    // the reach) first, because those collide most often and a boolean query stops at the first.
+    for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+      const auto [a, b] = checked_pairs_[p];
+      const double reach = bounds_[a].radius + bounds_[b].radius + padding_[a] + padding_[b] + request.tolerance;
+      const double d2 = (centers[a] - centers[b]).squaredNorm();
+      if (d2 <= reach * reach) order.emplace_back(d2 / (reach * reach), p);
+    }
+    if (!request.all_pairs) std::sort(order.begin(), order.end());
+    for (const auto& [key, p] : order) {
+      const auto [a, b] = checked_pairs_[p];
+      if (pair_collides(a, b, poses, request, result)) {
+        result.collision = true;
+        result.colliding_pairs.emplace_back(a, b);
+        if (!request.all_pairs) break;
+      }
+    }
+    return result;
   }
   // Distance: nearest pairs first, so that a small bound prunes the rest early.
-  if (request.distance) std::sort(gaps.begin(), gaps.end());
+  for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+    const auto [a, b] = checked_pairs_[p];
+    order.emplace_back((centers[a] - centers[b]).norm() - bounds_[a].radius - bounds_[b].radius, p);
+  }
+  std::sort(order.begin(), order.end());
   double best = std::numeric_limits<double>::infinity();
-  for (const auto& [gap, p] : gaps) {
+  for (const auto& [gap, p] : order) {
     const auto [a, b] = checked_pairs_[p];
     const bool may_collide = gap <= padding_[a] + padding_[b] + request.tolerance;
     if (may_collide && (request.all_pairs || !result.collision) && pair_collides(a, b, poses, request, result)) {
       result.collision = true;
       result.colliding_pairs.emplace_back(a, b);
     }
-    if (request.distance && gap < best) best = pair_distance(a, b, poses, best, request.solids, result);
-    if (result.collision && !request.all_pairs && !request.distance) break;
+    if (gap < best) best = pair_distance(a, b, poses, best, request.solids, result);
   }
-  if (request.distance && !std::isfinite(best)) result.min_distance = std::numeric_limits<double>::infinity();
+  if (!std::isfinite(best)) result.min_distance = std::numeric_limits<double>::infinity();
   return result;
 }
 

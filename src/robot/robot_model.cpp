@@ -308,4 +308,96 @@ void forward_kinematics(const RobotModel& model, const double* state, std::vecto
   }
 }
 
+KinematicsPlan::KinematicsPlan(const RobotModel& model, const std::vector<bool>& wanted)
+    : root_(model.root_link()), links_(model.links().size()) {
+  // A link is needed if it is wanted or some needed link hangs below it.
+  std::vector<bool> needed(links_, false);
+  for (std::size_t l = 0; l < links_ && l < wanted.size(); ++l) needed[l] = wanted[l];
+  const auto& order = model.joint_order();
+  for (auto it = order.rbegin(); it != order.rend(); ++it) {
+    const RobotJoint& j = model.joints()[*it];
+    if (needed[j.child_link]) needed[j.parent_link] = true;
+  }
+  // Each link's nearest computed ancestor (anchor) and the constant transform from it.
+  std::vector<int> anchor(links_, -1);
+  std::vector<Transform> from_anchor(links_);
+  anchor[root_] = root_;
+  for (const int ji : order) {
+    const RobotJoint& j = model.joints()[ji];
+    if (!needed[j.child_link]) continue;
+    const int p = j.parent_link, c = j.child_link;
+    Step step;
+    step.link = c;
+    step.parent = anchor[p];
+    step.fixed = compose(from_anchor[p], j.origin);
+    step.type = j.type;
+    if (j.type == JointType::kFixed && !(c < static_cast<int>(wanted.size()) && wanted[c])) {
+      anchor[c] = anchor[p];  // an intermediate frame: folded into its children's steps
+      from_anchor[c] = step.fixed;
+      continue;
+    }
+    step.axis_vector = j.axis;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(j.axis[k]) == 1.0 && j.axis[(k + 1) % 3] == 0.0 && j.axis[(k + 2) % 3] == 0.0) step.axis = k;
+    }
+    step.variable = j.variable >= 0 ? j.variable : (j.mimic >= 0 ? model.joints()[j.mimic].variable : -1);
+    step.multiplier = j.variable >= 0 ? 1.0 : j.multiplier;
+    step.offset = j.variable >= 0 ? 0.0 : j.offset;
+    step.joint = ji;
+    steps_.push_back(step);
+    anchor[c] = c;
+    from_anchor[c] = Transform();
+  }
+}
+
+namespace {
+
+// parent * fixed * (rotation by q about +-unit axis k): the rotation mixes only two columns.
+void compose_axis_rotation(const Transform& parent, const Transform& fixed, int k, double sign, double q,
+                           Transform& out) {
+  out = compose(parent, fixed);
+  const double c = std::cos(q), s = sign * std::sin(q);
+  const int i = (k + 1) % 3, j = (k + 2) % 3;  // R_k(q) maps e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j
+  for (int r = 0; r < 3; ++r) {
+    const double a = out.R(r, i), b = out.R(r, j);
+    out.R(r, i) = c * a + s * b;
+    out.R(r, j) = c * b - s * a;
+  }
+}
+
+}  // namespace
+
+void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
+                             const std::vector<Transform>* free_joint_poses) const {
+  poses.resize(links_);
+  poses[root_] = Transform();
+  for (const Step& step : steps_) {
+    const double q = step.variable >= 0 ? step.multiplier * state[step.variable] + step.offset : 0.0;
+    const Transform& parent = poses[step.parent];
+    Transform& child = poses[step.link];
+    switch (step.type) {
+      case JointType::kRevolute:
+      case JointType::kContinuous:
+        if (step.axis >= 0) {
+          compose_axis_rotation(parent, step.fixed, step.axis, step.axis_vector[step.axis], q, child);
+        } else {
+          child = compose(compose(parent, step.fixed), Transform{axis_rotation(step.axis_vector, q), Vec3::Zero()});
+        }
+        break;
+      case JointType::kPrismatic:
+        child = compose(parent, compose(step.fixed, Transform::Translation(q * step.axis_vector)));
+        break;
+      case JointType::kFloating:
+      case JointType::kPlanar: {
+        const bool given = free_joint_poses != nullptr && static_cast<std::size_t>(step.joint) < free_joint_poses->size();
+        child = given ? compose(compose(parent, step.fixed), (*free_joint_poses)[step.joint]) : compose(parent, step.fixed);
+        break;
+      }
+      case JointType::kFixed:
+        child = compose(parent, step.fixed);
+        break;
+    }
+  }
+}
+
 }  // namespace bvh_collision

@@ -100,6 +100,7 @@ class CollisionChecker {
 
   RobotModel model_;
   AllowedCollisionMatrix acm_;
+  KinematicsPlan kinematics_;  // poses of the modelled links only
   std::vector<Bvh<Obb>> meshes_;
   std::vector<ConvexHull> hulls_;  // per mesh: bounds and often settles distances (see .cpp)
   std::vector<std::vector<Shape>> shapes_;  // per link

@@ -101,4 +101,36 @@ std::vector<double> random_configuration(const RobotModel& model, std::mt19937_6
 void forward_kinematics(const RobotModel& model, const double* state, std::vector<Transform>& link_poses,
                         const std::vector<Transform>* free_joint_poses = nullptr);
 
+// Forward kinematics for a subset of links, precomputed for speed: only the chosen links and the
+// moving joints above them are computed, fixed joints are folded into one constant transform, and
+// rotations about a coordinate axis (the usual URDF axis) skip the general Rodrigues formula.
+class KinematicsPlan {
+ public:
+  KinematicsPlan() = default;
+  // `wanted[l]`: link l's pose is needed. The root is always at identity.
+  KinematicsPlan(const RobotModel& model, const std::vector<bool>& wanted);
+
+  // Writes the poses of the wanted links (and of the moving-joint links above them) into
+  // `link_poses` (resized to the model's link count; other entries are left as they are).
+  // Same conventions as forward_kinematics.
+  void compute(const double* state, std::vector<Transform>& link_poses,
+               const std::vector<Transform>* free_joint_poses = nullptr) const;
+  std::size_t steps() const { return steps_.size(); }
+
+ private:
+  struct Step {
+    int link = -1, parent = -1;  // computed link and the computed link it hangs from
+    Transform fixed;             // parent link -> joint frame, fixed joints folded in
+    JointType type = JointType::kFixed;
+    int axis = -1;               // 0, 1, 2: the joint axis is +-that unit vector; -1: general
+    Vec3 axis_vector = Vec3::UnitX();
+    int variable = -1;           // state index of the value (of the mimicked joint for mimics)
+    double multiplier = 1.0, offset = 0.0;
+    int joint = -1;              // for floating and planar joints
+  };
+  std::vector<Step> steps_;
+  int root_ = 0;
+  std::size_t links_ = 0;
+};
+
 }  // namespace bvh_collision
