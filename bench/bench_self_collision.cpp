@@ -4,6 +4,7 @@
 // applied in the callbacks), on the same uniform random configurations; and FK on its own.
 // Usage: bench_self_collision [OUTPUT_DIR] [--quick]
 #include <cstring>
+#include <functional>
 #include <fstream>
 #include <iostream>
 #include <random>
@@ -21,6 +22,29 @@ namespace {
 using bench::mean;
 using bench::median;
 using bench::time_us;
+
+constexpr int kRepeats = 3;  // repetitions of the cheap (boolean) blocks
+
+using Query = std::function<void(int, const double*)>;
+
+// Per-state times of queries, each run over every state in a block, as a planner calls it (warm
+// caches for both libraries). The blocks are interleaved and repeated, so that drift in this
+// shared machine's load reaches every query alike; a state's time is its median over repeats.
+std::vector<std::vector<double>> per_state(const std::vector<std::vector<double>>& states,
+                                           const std::vector<Query>& queries, int repeats) {
+  const int n = static_cast<int>(states.size());
+  std::vector<std::vector<std::vector<double>>> t(queries.size(), std::vector<std::vector<double>>(n));
+  for (int r = 0; r < repeats; ++r) {
+    for (std::size_t q = 0; q < queries.size(); ++q) {
+      for (int i = 0; i < n; ++i) t[q][i].push_back(time_us([&] { queries[q](i, states[i].data()); }));
+    }
+  }
+  std::vector<std::vector<double>> out(queries.size());
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    for (int i = 0; i < n; ++i) out[q].push_back(median(t[q][i]));
+  }
+  return out;
+}
 
 struct FclPipeline {
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
@@ -101,6 +125,40 @@ std::vector<std::vector<double>> random_states(const RobotModel& m, int n, std::
   return out;
 }
 
+// Boolean self-collision at a tolerance (DESIGN.md section 2: "collision" may be answered for
+// states up to `tolerance` apart, never "free" for a colliding one), against the exact answers.
+void tolerance_rows(const std::string& robot, const CollisionChecker& checker,
+                    const std::vector<std::vector<double>>& states, const std::vector<SelfCollisionResult>& exact,
+                    double fcl_mean, bench::FigureFile& figures) {
+  std::cout << "\n| tolerance | ours median us | ours mean us | FCL/ours (mean, FCL exact) | false positives |"
+               " largest true distance of a false positive | false negatives |\n|---|---|---|---|---|---|---|\n";
+  for (const double tolerance : {0.0, 0.01, 0.02}) {
+    SelfCollisionRequest request;
+    request.solids = false;
+    request.tolerance = tolerance;
+    std::vector<char> hit(states.size());
+    const auto t = per_state(
+        states, {[&](int i, const double* s) { hit[i] = checker.check_self(s, request).collision; }}, kRepeats)[0];
+    int false_positive = 0, false_negative = 0;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      const bool truth = exact[i].min_distance <= 0.0;
+      false_negative += truth && !hit[i];
+      if (hit[i] && !truth) {
+        ++false_positive;
+        worst = std::max(worst, exact[i].min_distance);
+      }
+    }
+    const double rate = 100.0 * false_positive / states.size();
+    std::cout << "| " << tolerance * 1000 << " mm | " << median(t) << " | " << mean(t) << " | " << fcl_mean / mean(t)
+              << "x | " << false_positive << " (" << rate << " %) | " << worst * 1000 << " mm | " << false_negative << " |\n";
+    const std::string name = robot + " boolean tolerance " + std::to_string(static_cast<int>(tolerance * 1000)) + " mm";
+    figures.add(name + " mean", "us", mean(t), fcl_mean);
+    figures.add(name + " false positives", "%", rate);
+    figures.add(name + " false negatives", "count", false_negative);
+  }
+}
+
 void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
   const std::string dir = test::robots_dir() + "/" + robot;
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
@@ -120,30 +178,31 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
   boolean.solids = all.solids = dist.solids = false;  // FCL's semantics for the comparison
   all.all_pairs = true;
   dist.distance = true;
-  // Each query type runs over every state in a block, as a planner calls it (warm caches for
-  // both libraries), timed per call.
+  // Boolean queries are cheap: kRepeats interleaved repetitions; distance once.
   std::vector<SelfCollisionResult> ours_bool(n), ours_dist(n);
   std::vector<CallbackData> fcl_bool(n, CallbackData{&fcl_pipeline}), fcl_dist(n, CallbackData{&fcl_pipeline});
-  auto per_state = [&](auto&& query) {
-    std::vector<double> t;
-    for (int i = 0; i < n; ++i) t.push_back(time_us([&] { query(i, states[i].data()); }));
-    return t;
-  };
-  const auto t_fk = per_state([&](int, const double* s) { forward_kinematics(checker.model(), s, poses); });
-  const auto t_bool = per_state([&](int i, const double* s) { ours_bool[i] = checker.check_self(s, boolean); });
-  const auto t_bool_solids = per_state([&](int, const double* s) { checker.check_self(s); });
-  const auto t_all = per_state([&](int, const double* s) { checker.check_self(s, all); });
-  const auto t_dist = per_state([&](int i, const double* s) { ours_dist[i] = checker.check_self(s, dist); });
-  const auto f_bool = per_state([&](int i, const double* s) {
+  const Query fk = [&](int, const double* s) { forward_kinematics(checker.model(), s, poses); };
+  const Query ours_boolean = [&](int i, const double* s) { ours_bool[i] = checker.check_self(s, boolean); };
+  const Query ours_solids = [&](int, const double* s) { checker.check_self(s); };
+  const Query ours_all = [&](int, const double* s) { checker.check_self(s, all); };
+  const Query fcl_boolean = [&](int i, const double* s) {
     forward_kinematics(checker.model(), s, poses);
     move_pipeline(fcl_pipeline, poses);
+    fcl_bool[i] = CallbackData{&fcl_pipeline};
     fcl_pipeline.manager.collide(&fcl_bool[i], collision_callback);
-  });
-  const auto f_dist = per_state([&](int i, const double* s) {
-    forward_kinematics(checker.model(), s, poses);
-    move_pipeline(fcl_pipeline, poses);
-    fcl_pipeline.manager.distance(&fcl_dist[i], distance_callback);
-  });
+  };
+  const auto cheap = per_state(states, {fk, ours_boolean, fcl_boolean, ours_solids, ours_all}, kRepeats);
+  const auto& [t_fk, t_bool, f_bool, t_bool_solids, t_all] =
+      std::tie(cheap[0], cheap[1], cheap[2], cheap[3], cheap[4]);
+  const auto costly = per_state(
+      states, {[&](int i, const double* s) { ours_dist[i] = checker.check_self(s, dist); },
+       [&](int i, const double* s) {
+         forward_kinematics(checker.model(), s, poses);
+         move_pipeline(fcl_pipeline, poses);
+         fcl_pipeline.manager.distance(&fcl_dist[i], distance_callback);
+       }},
+      1);
+  const auto& [t_dist, f_dist] = std::tie(costly[0], costly[1]);
   int disagree_bool = 0, disagree_dist = 0, colliding = 0;
   for (int i = 0; i < n; ++i) {
     colliding += ours_bool[i].collision;
@@ -160,6 +219,7 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
     if (fcl) {
       std::cout << median(*fcl) << " | " << mean(*fcl) << " | " << mean(*fcl) / mean(ours) << "x | " << disagreements << " |\n";
       figures.add(robot + " " + name + " mean", "us", mean(ours), mean(*fcl));
+      figures.add(robot + " " + name + " median", "us", median(ours), median(*fcl));
     } else {
       std::cout << "- | - | - | - |\n";
       figures.add(robot + " " + name + " mean", "us", mean(ours));
@@ -170,6 +230,7 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
   row("boolean, solids", t_bool_solids, nullptr, 0);
   row("all pairs", t_all, nullptr, 0);
   row("forward kinematics", t_fk, nullptr, 0);
+  tolerance_rows(robot, checker, states, ours_dist, mean(f_bool), figures);
 }
 
 }  // namespace

@@ -18,7 +18,9 @@ namespace bvh_collision {
 struct CheckerOptions {
   double padding = 0.0;                        // every link's padding (m)...
   std::map<std::string, double> link_padding;  // ...unless named here
-  BuildOptions bvh;                            // how link BVHs are built
+  // How link BVHs are built: two triangles per leaf took 6-15% fewer instructions than one for
+  // boolean and distance self-collision on panda, ur5e and pr2 (three was worse on pr2).
+  BuildOptions bvh = {BuildMethod::kSah, 2};
 };
 
 struct SelfCollisionRequest {
