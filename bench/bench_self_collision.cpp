@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "../test/fcl_oracle.h"
@@ -55,9 +56,12 @@ struct FclPipeline {
 };
 
 struct CallbackData {
+  explicit CallbackData(const FclPipeline* p, bool every_pair = false) : pipeline(p), all_pairs(every_pair) {}
   const FclPipeline* pipeline;
   bool hit = false;
   double distance = std::numeric_limits<double>::infinity();
+  bool all_pairs = false;                      // collision: keep going, collect every pair
+  std::set<std::pair<int, int>> pairs;         // colliding link pairs (a < b) when all_pairs
 };
 
 int link_of(const FclPipeline& p, fcl::CollisionObjectd* o) { return p.link[reinterpret_cast<std::intptr_t>(o->getUserData())]; }
@@ -70,7 +74,8 @@ bool collision_callback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, vo
   fcl::CollisionResultd result;
   fcl::collide(o1, o2, request, result);
   d->hit = d->hit || result.isCollision();
-  return d->hit;  // stop at the first collision
+  if (d->all_pairs && result.isCollision()) d->pairs.insert({std::min(a, b), std::max(a, b)});
+  return d->hit && !d->all_pairs;  // boolean: stop at the first collision
 }
 
 bool distance_callback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* raw, double& dist) {
@@ -180,20 +185,29 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
   dist.distance = true;
   // Boolean queries are cheap: kRepeats interleaved repetitions; distance once.
   std::vector<SelfCollisionResult> ours_bool(n), ours_dist(n);
-  std::vector<CallbackData> fcl_bool(n, CallbackData{&fcl_pipeline}), fcl_dist(n, CallbackData{&fcl_pipeline});
+  std::vector<CallbackData> fcl_bool(n, CallbackData(&fcl_pipeline)), fcl_dist(n, CallbackData(&fcl_pipeline));
   const Query fk = [&](int, const double* s) { forward_kinematics(checker.model(), s, poses); };
   const Query ours_boolean = [&](int i, const double* s) { ours_bool[i] = checker.check_self(s, boolean); };
   const Query ours_solids = [&](int, const double* s) { checker.check_self(s); };
-  const Query ours_all = [&](int, const double* s) { checker.check_self(s, all); };
+  std::vector<SelfCollisionResult> ours_all_pairs(n);
+  std::vector<CallbackData> fcl_all(n, CallbackData(&fcl_pipeline));
+  const Query ours_all = [&](int i, const double* s) { ours_all_pairs[i] = checker.check_self(s, all); };
+  const Query fcl_all_pairs = [&](int i, const double* s) {
+    forward_kinematics(checker.model(), s, poses);
+    move_pipeline(fcl_pipeline, poses);
+    fcl_all[i] = CallbackData(&fcl_pipeline, true);
+    fcl_pipeline.manager.collide(&fcl_all[i], collision_callback);
+  };
   const Query fcl_boolean = [&](int i, const double* s) {
     forward_kinematics(checker.model(), s, poses);
     move_pipeline(fcl_pipeline, poses);
-    fcl_bool[i] = CallbackData{&fcl_pipeline};
+    fcl_bool[i] = CallbackData(&fcl_pipeline);
     fcl_pipeline.manager.collide(&fcl_bool[i], collision_callback);
   };
-  const auto cheap = per_state(states, {fk, ours_boolean, fcl_boolean, ours_solids, ours_all}, kRepeats);
-  const auto& [t_fk, t_bool, f_bool, t_bool_solids, t_all] =
-      std::tie(cheap[0], cheap[1], cheap[2], cheap[3], cheap[4]);
+  const auto cheap =
+      per_state(states, {fk, ours_boolean, fcl_boolean, ours_solids, ours_all, fcl_all_pairs}, kRepeats);
+  const auto& [t_fk, t_bool, f_bool, t_bool_solids, t_all, f_all] =
+      std::tie(cheap[0], cheap[1], cheap[2], cheap[3], cheap[4], cheap[5]);
   const auto costly = per_state(
       states, {[&](int i, const double* s) { ours_dist[i] = checker.check_self(s, dist); },
        [&](int i, const double* s) {
@@ -203,9 +217,11 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
        }},
       1);
   const auto& [t_dist, f_dist] = std::tie(costly[0], costly[1]);
-  int disagree_bool = 0, disagree_dist = 0, colliding = 0;
+  int disagree_bool = 0, disagree_dist = 0, disagree_all = 0, colliding = 0;
   for (int i = 0; i < n; ++i) {
     colliding += ours_bool[i].collision;
+    const auto& found = ours_all_pairs[i].colliding_pairs;
+    disagree_all += std::set<std::pair<int, int>>(found.begin(), found.end()) != fcl_all[i].pairs;
     disagree_bool += ours_bool[i].collision != fcl_bool[i].hit;
     disagree_dist += std::abs(ours_dist[i].min_distance - fcl_dist[i].distance) > 1e-6;
   }
@@ -228,7 +244,7 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
   row("boolean", t_bool, &f_bool, disagree_bool);
   row("distance", t_dist, &f_dist, disagree_dist);
   row("boolean, solids", t_bool_solids, nullptr, 0);
-  row("all pairs", t_all, nullptr, 0);
+  row("all pairs", t_all, &f_all, disagree_all);
   row("forward kinematics", t_fk, nullptr, 0);
   tolerance_rows(robot, checker, states, ours_dist, mean(f_bool), figures);
 }
