@@ -1,0 +1,90 @@
+// The environment octree: OctoMap's occupancy model on the seed's node scheme (octree_key.h).
+//
+// Nodes live in one vector; an inner node owns a block of eight consecutive slots (slot b holds
+// the child with seed bits b, present when bit b of `mask` is set). Only nodes that some update
+// reached exist, so memory follows what was observed, not the bounding cube. Values and their
+// evolution are OctoMap's, float for float: log-odds updates with clamping, new nodes at 0, an
+// inner node holds the maximum of its existing children, eight equal leaf children are pruned
+// into their parent, and an update inside a pruned node expands it first.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "bvh_collision/octree/octree_key.h"
+
+namespace bvh_collision {
+
+// OctoMap's log-odds of a probability, rounded to float as OctoMap stores it.
+inline float log_odds(double probability) { return static_cast<float>(std::log(probability / (1.0 - probability))); }
+
+// The sensor model (OctoMap's defaults), in log-odds.
+struct OccupancyModel {
+  float hit = log_odds(0.7);
+  float miss = log_odds(0.4);
+  float clamp_min = log_odds(0.1192);
+  float clamp_max = log_odds(0.971);
+  float occupied = log_odds(0.5);  // a node is occupied when its log-odds is >= this
+};
+
+class Octree {
+ public:
+  // Throws std::invalid_argument unless resolution is finite and > 0.
+  explicit Octree(double resolution, const OccupancyModel& model = {});
+
+  double resolution() const { return grid_.resolution(); }
+  const OctreeGrid& grid() const { return grid_; }
+  const OccupancyModel& model() const { return model_; }
+
+  // OctoMap's updateNode: add `change` to the voxel's log-odds and clamp.
+  void update(const OctreeKey& key, float change);
+  void update(const OctreeKey& key, bool occupied) { update(key, occupied ? model_.hit : model_.miss); }
+
+  // The smallest existing node containing the voxel: its depth (16 = voxel), seed index and
+  // log-odds; nullopt when the voxel was never observed.
+  struct Lookup {
+    int depth = 0;
+    std::uint64_t index = 0;
+    float log_odds = 0.0f;
+  };
+  std::optional<Lookup> find(const OctreeKey& key) const;
+  bool occupied(float value) const { return value >= model_.occupied; }
+
+  // Every leaf (a node without children, possibly a pruned one above depth 16): the key of its
+  // lowest corner voxel, its depth, its seed index and log-odds.
+  struct Leaf {
+    OctreeKey key;
+    int depth = 0;
+    std::uint64_t index = 0;
+    float log_odds = 0.0f;
+  };
+  std::vector<Leaf> leaves() const;
+
+  bool empty() const { return nodes_.empty(); }
+  std::size_t node_count() const { return node_count_; }
+  std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + free_blocks_.capacity() * sizeof(std::int32_t); }
+  void clear();
+
+ private:
+  struct Node {
+    float log_odds = 0.0f;
+    std::int32_t children = -1;  // first slot of the children's block; -1: leaf
+    std::uint8_t mask = 0;       // which of the eight slots hold a child
+  };
+
+  std::int32_t allocate_block();
+  void release_block(std::int32_t first);
+  void expand(std::int32_t node);
+  bool prune(std::int32_t node);
+  void refresh(std::int32_t node);
+  void update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change);
+
+  OctreeGrid grid_;
+  OccupancyModel model_;
+  std::vector<Node> nodes_;               // nodes_[0] is the root once anything was observed
+  std::vector<std::int32_t> free_blocks_;  // released blocks, reused first
+  std::size_t node_count_ = 0;
+};
+
+}  // namespace bvh_collision

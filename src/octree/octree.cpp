@@ -1,0 +1,165 @@
+#include "bvh_collision/octree/octree.h"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace bvh_collision {
+
+Octree::Octree(double resolution, const OccupancyModel& model) : grid_(resolution), model_(model) {
+  if (!(std::isfinite(resolution) && resolution > 0.0)) {
+    throw std::invalid_argument("octree resolution must be a positive finite number of metres, got " +
+                                std::to_string(resolution));
+  }
+}
+
+void Octree::clear() {
+  nodes_.clear();
+  nodes_.shrink_to_fit();
+  free_blocks_.clear();
+  free_blocks_.shrink_to_fit();
+  node_count_ = 0;
+}
+
+std::int32_t Octree::allocate_block() {
+  if (!free_blocks_.empty()) {
+    const std::int32_t first = free_blocks_.back();
+    free_blocks_.pop_back();
+    return first;
+  }
+  const auto first = static_cast<std::int32_t>(nodes_.size());
+  nodes_.resize(nodes_.size() + 8);
+  return first;
+}
+
+void Octree::release_block(std::int32_t first) { free_blocks_.push_back(first); }
+
+// A pruned node (a leaf above voxel depth) about to be updated inside: eight children, each
+// with the node's value, as OctoMap's expandNode.
+void Octree::expand(std::int32_t node) {
+  const std::int32_t block = allocate_block();
+  for (int b = 0; b < 8; ++b) nodes_[block + b] = Node{nodes_[node].log_odds, -1, 0};
+  nodes_[node].children = block;
+  nodes_[node].mask = 0xFF;
+  node_count_ += 8;
+}
+
+// Eight leaf children with one value collapse into their parent.
+bool Octree::prune(std::int32_t node) {
+  const Node n = nodes_[node];
+  if (n.mask != 0xFF) return false;
+  for (int b = 0; b < 8; ++b) {
+    const Node& c = nodes_[n.children + b];
+    if (c.children >= 0 || c.log_odds != nodes_[n.children].log_odds) return false;
+  }
+  nodes_[node] = Node{nodes_[n.children].log_odds, -1, 0};
+  release_block(n.children);
+  node_count_ -= 8;
+  return true;
+}
+
+// An inner node holds the largest value among its existing children (OctoMap's conservative rule).
+void Octree::refresh(std::int32_t node) {
+  const Node n = nodes_[node];
+  float largest = -std::numeric_limits<float>::max();
+  for (int b = 0; b < 8; ++b) {
+    if ((n.mask >> b) & 1) largest = std::max(largest, nodes_[n.children + b].log_odds);
+  }
+  nodes_[node].log_odds = largest;
+}
+
+void Octree::update(const OctreeKey& key, float change) {
+  // OctoMap's early abort: the node holding the voxel already sits at the clamp the change pushes
+  // towards, so nothing would change (and a pruned node is not expanded for nothing).
+  if (const auto found = find(key)) {
+    if ((change >= 0 && found->log_odds >= model_.clamp_max) || (change <= 0 && found->log_odds <= model_.clamp_min)) {
+      return;
+    }
+  }
+  bool created_root = false;
+  if (nodes_.empty()) {
+    nodes_.push_back(Node{});
+    node_count_ = 1;
+    created_root = true;
+  }
+  update_below(0, created_root, key, 0, change);
+}
+
+// OctoMap's updateNodeRecurs with eager evaluation: descend (creating or expanding), update the
+// voxel, then on the way up prune each node or refresh its value. Indices, not references: the
+// node vector may grow during the descent.
+void Octree::update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change) {
+  if (depth == kOctreeDepth) {
+    float value = nodes_[node].log_odds + change;
+    if (value < model_.clamp_min) {
+      value = model_.clamp_min;
+    } else if (value > model_.clamp_max) {
+      value = model_.clamp_max;
+    }
+    nodes_[node].log_odds = value;
+    return;
+  }
+  const int b = child_bits(key, depth);
+  bool created = false;
+  if (!((nodes_[node].mask >> b) & 1)) {
+    if (nodes_[node].children < 0 && !just_created) {
+      expand(node);
+    } else {
+      if (nodes_[node].children < 0) nodes_[node].children = allocate_block();
+      nodes_[nodes_[node].children + b] = Node{};
+      nodes_[node].mask = static_cast<std::uint8_t>(nodes_[node].mask | (1u << b));
+      ++node_count_;
+      created = true;
+    }
+  }
+  update_below(nodes_[node].children + b, created, key, depth + 1, change);
+  if (!prune(node)) refresh(node);
+}
+
+std::optional<Octree::Lookup> Octree::find(const OctreeKey& key) const {
+  if (nodes_.empty()) return std::nullopt;
+  std::int32_t node = 0;
+  std::uint64_t index = 0;
+  for (int depth = 0;; ++depth) {
+    const Node& n = nodes_[node];
+    if (n.children < 0) return Lookup{depth, index, n.log_odds};  // a voxel or a pruned node
+    const int b = child_bits(key, depth);
+    if (!((n.mask >> b) & 1)) return std::nullopt;
+    node = n.children + b;
+    index = child_index(index, b);
+  }
+}
+
+std::vector<Octree::Leaf> Octree::leaves() const {
+  std::vector<Leaf> out;
+  if (nodes_.empty()) return out;
+  struct Item {
+    std::int32_t node;
+    int depth;
+    OctreeKey key;
+    std::uint64_t index;
+  };
+  std::vector<Item> stack{{0, 0, OctreeKey{}, 0}};
+  while (!stack.empty()) {
+    const Item item = stack.back();
+    stack.pop_back();
+    const Node& n = nodes_[item.node];
+    if (n.children < 0) {
+      out.push_back({item.key, item.depth, item.index, n.log_odds});
+      continue;
+    }
+    const int bit = kOctreeDepth - 1 - item.depth;
+    for (int b = 0; b < 8; ++b) {
+      if (!((n.mask >> b) & 1)) continue;
+      OctreeKey key = item.key;
+      key.k[0] = static_cast<std::uint16_t>(key.k[0] | (((b >> 2) & 1) << bit));
+      key.k[1] = static_cast<std::uint16_t>(key.k[1] | (((b >> 1) & 1) << bit));
+      key.k[2] = static_cast<std::uint16_t>(key.k[2] | ((b & 1) << bit));
+      stack.push_back({n.children + b, item.depth + 1, key, child_index(item.index, b)});
+    }
+  }
+  return out;
+}
+
+}  // namespace bvh_collision

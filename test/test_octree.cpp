@@ -1,0 +1,160 @@
+// The environment octree against OctoMap itself: the same scans inserted into both give the same
+// leaves (key, depth, log-odds) bit for bit; and the seed's index scheme against a direct
+// computation from coordinates.
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "bvh_collision/octree/octree.h"
+#include "bvh_collision/octree/scan.h"
+
+namespace bvh_collision {
+namespace {
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(5);
+  return r;
+}
+
+using LeafMap = std::map<std::tuple<int, int, int, int>, float>;  // (x, y, z, depth) -> log-odds
+
+LeafMap ours(const Octree& tree) {
+  LeafMap m;
+  for (const Octree::Leaf& l : tree.leaves()) m[{l.key.k[0], l.key.k[1], l.key.k[2], l.depth}] = l.log_odds;
+  return m;
+}
+
+LeafMap theirs(const octomap::OcTree& tree) {
+  LeafMap m;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    // OctoMap's leaf key is its centre key at depth; the lowest corner voxel is what we report.
+    const int depth = static_cast<int>(it.getDepth());
+    const int shift = kOctreeDepth - depth;
+    const octomap::OcTreeKey k = it.getKey();
+    auto corner = [&](int v) { return (v >> shift) << shift; };
+    m[{corner(k[0]), corner(k[1]), corner(k[2]), depth}] = it->getLogOdds();
+  }
+  return m;
+}
+
+// A depth-camera-like scan: rays from `origin` in a cone, ending on a plane and a box, some
+// beyond `far`.
+std::vector<ScanPoint> random_scan(const ScanPoint& origin, int n, double far) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.2f, static_cast<float>(far) * 1.3f);
+  std::vector<ScanPoint> p;
+  for (int i = 0; i < n; ++i) {
+    ScanPoint d(u(rng()), u(rng()), u(rng()) * 0.5f - 0.6f);
+    d.normalize();
+    p.push_back(origin + d * r(rng()));
+  }
+  return p;
+}
+
+void expect_same_as_octomap(double resolution, double max_range, int scans, int points) {
+  SCOPED_TRACE("resolution " + std::to_string(resolution) + " max_range " + std::to_string(max_range));
+  Octree tree(resolution);
+  octomap::OcTree reference(resolution);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int s = 0; s < scans; ++s) {
+    const ScanPoint origin(u(rng()), u(rng()), 1.0f + u(rng()) * 0.5f);
+    const auto scan = random_scan(origin, points, max_range > 0 ? max_range : 2.0);
+    octomap::Pointcloud cloud;
+    for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
+    reference.insertPointCloud(cloud, octomap::point3d(origin.x(), origin.y(), origin.z()), max_range);
+    ScanOptions options;
+    options.max_range = max_range;
+    insert_scan(tree, scan, origin, options);
+    const LeafMap a = ours(tree), b = theirs(reference);
+    ASSERT_EQ(a.size(), b.size()) << "after scan " << s;
+    int different = 0;
+    for (const auto& [key, value] : b) {
+      const auto it = a.find(key);
+      different += it == a.end() || it->second != value;
+    }
+    ASSERT_EQ(different, 0) << "after scan " << s;
+    EXPECT_EQ(tree.node_count(), reference.size());
+    // Not a trivial agreement: occupied and free voxels, and pruned nodes above voxel depth.
+    int occupied = 0, pruned = 0;
+    for (const Octree::Leaf& l : tree.leaves()) {
+      occupied += tree.occupied(l.log_odds);
+      pruned += l.depth < kOctreeDepth;
+    }
+    EXPECT_GT(occupied, points / 20);
+    EXPECT_GT(a.size(), static_cast<std::size_t>(occupied));
+    if (s == scans - 1) {
+      EXPECT_GT(pruned, 0) << "no pruned node: the pruning rule was not exercised";
+    }
+  }
+}
+
+TEST(OctreeAgainstOctomap, OneScan) {
+  for (const double res : {0.01, 0.05, 0.2}) expect_same_as_octomap(res, -1.0, 1, 3000);
+}
+
+TEST(OctreeAgainstOctomap, ManyScansWithMaxRange) {
+  for (const double res : {0.02, 0.1}) expect_same_as_octomap(res, 1.5, 8, 2000);
+}
+
+TEST(OctreeKeys, SeedIndexFromCoordinates) {
+  const OctreeGrid grid(0.05);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  for (int i = 0; i < 2000; ++i) {
+    // Half the points exactly on voxel boundaries (splitting planes of every level above).
+    Vec3 p(u(rng()), u(rng()), u(rng()));
+    if (i % 2) p = (p / 0.05).array().round() * 0.05;
+    const auto key = grid.key(p);
+    ASSERT_TRUE(key);
+    std::uint64_t index = 0;
+    for (int depth = 0; depth < kOctreeDepth; ++depth) {
+      // The parent's centre at this depth, from coordinates: the cube of side
+      // resolution * 2^(16 - depth) containing p, split in half.
+      const double side = 0.05 * std::ldexp(1.0, kOctreeDepth - depth);
+      int b = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double scaled = std::floor(p[axis] * (1.0 / 0.05)) + kOctreeKeyOffset;  // OctoMap's rule
+        const double lower = std::floor(scaled / (side / 0.05)) * (side / 0.05);
+        const bool positive = scaled >= lower + side / 0.05 / 2;
+        b |= positive << (2 - axis);
+      }
+      EXPECT_EQ(child_bits(*key, depth), b);
+      const std::uint64_t child = child_index(index, b);
+      EXPECT_EQ(parent_index(child), index);
+      EXPECT_EQ(bits_of_index(child), b);
+      index = child;
+    }
+    EXPECT_EQ(node_index(*key, kOctreeDepth), index);
+  }
+  // The seed's example: node 30's parent is 3 and b = 5 (x and z positive, y negative).
+  EXPECT_EQ(parent_index(30), 3u);
+  EXPECT_EQ(bits_of_index(30), 5);
+}
+
+TEST(OctreeKeys, PointsOnSplittingPlanesGoToThePositiveSide) {
+  const OctreeGrid grid(0.25);  // exact in binary
+  const auto on_plane = grid.key(Vec3(0.0, 0.5, -0.25));
+  ASSERT_TRUE(on_plane);
+  EXPECT_EQ(on_plane->k[0], kOctreeKeyOffset);      // 0 belongs to [0, 0.25)
+  EXPECT_EQ(on_plane->k[1], kOctreeKeyOffset + 2);  // 0.5 to [0.5, 0.75)
+  EXPECT_EQ(on_plane->k[2], kOctreeKeyOffset - 1);  // -0.25 to [-0.25, 0)
+  EXPECT_EQ(child_bits(*on_plane, 0), 0b110);       // x, y on the root's positive side, z negative
+}
+
+TEST(OctreeBadInput, ResolutionAndPoints) {
+  EXPECT_THROW(Octree(0.0), std::invalid_argument);
+  EXPECT_THROW(Octree(-0.1), std::invalid_argument);
+  EXPECT_THROW(Octree(std::nan("")), std::invalid_argument);
+  Octree tree(0.05);
+  EXPECT_EQ(insert_scan(tree, {}, ScanPoint::Zero()).points, 0u);
+  EXPECT_TRUE(tree.empty());
+  const float nan = std::nanf("");
+  const ScanStats s = insert_scan(tree, {ScanPoint(nan, 0, 0), ScanPoint(1e9f, 0, 0), ScanPoint(-1e9f, 1, 1)}, ScanPoint::Zero());
+  EXPECT_EQ(s.skipped_invalid, 1u);
+  EXPECT_EQ(s.skipped_outside, 2u);
+  EXPECT_TRUE(tree.empty());
+}
+
+}  // namespace
+}  // namespace bvh_collision
