@@ -122,6 +122,18 @@ TEST(ConvexHull, RobotMeshes) {
   }
 }
 
+// A vertex no triangle uses is not on the surface: it must not become a hull vertex that the
+// checker would take for a surface point.
+TEST(ConvexHull, UsedVerticesLeaveOutUnreferencedPoints) {
+  TriangleMesh m = box_mesh(Vec3(1, 1, 1));
+  m.vertices.push_back(Vec3(5, 5, 5));
+  const std::vector<Vec3> used = used_vertices(m);
+  EXPECT_EQ(used.size(), 8u);
+  const ConvexHull h = convex_hull(used);
+  EXPECT_EQ(h.vertices.size(), 8u);
+  for (const Vec3& v : h.vertices) EXPECT_LE(v.cwiseAbs().maxCoeff(), 0.5);
+}
+
 TEST(ConvexHull, DegenerateInputsKeepEveryDistinctPoint) {
   EXPECT_TRUE(convex_hull({}).empty());
   const ConvexHull two = convex_hull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 0)});

@@ -73,7 +73,8 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
         auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
         if (fresh) {
           meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
-          hulls_.push_back(convex_hull(e.mesh->vertices));
+          // Surface vertices only: a hull vertex is taken to lie on the mesh (meshes_distance).
+          hulls_.push_back(convex_hull(used_vertices(*e.mesh)));
         }
         s.mesh = it->second;
       }

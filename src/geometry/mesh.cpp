@@ -80,4 +80,16 @@ TriangleMesh box_mesh(const Vec3& size) {
   return m;
 }
 
+std::vector<Vec3> used_vertices(const TriangleMesh& mesh) {
+  std::vector<char> used(mesh.vertices.size(), 0);
+  for (const auto& t : mesh.triangles) {
+    for (const std::int32_t v : t) used[v] = 1;
+  }
+  std::vector<Vec3> out;
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    if (used[v]) out.push_back(mesh.vertices[v]);
+  }
+  return out;
+}
+
 }  // namespace bvh_collision

@@ -28,6 +28,10 @@ bool is_closed(const TriangleMesh& mesh);
 // A mesh wholly inside a solid has all of these inside it; one outside has none.
 std::vector<std::int32_t> component_representatives(const TriangleMesh& mesh);
 
+// The vertices some triangle uses (each once, in index order): a mesh's vertex list may hold
+// points that are not on its surface.
+std::vector<Vec3> used_vertices(const TriangleMesh& mesh);
+
 // The 12 triangles of an axis-aligned box centred on the origin, outward winding.
 TriangleMesh box_mesh(const Vec3& size);
 

@@ -34,14 +34,6 @@ struct OctreeKey {
   }
 };
 
-struct OctreeKeyHash {
-  std::size_t operator()(const OctreeKey& key) const {
-    // The three 16-bit keys packed, then mixed (a multiplicative hash spreads nearby keys).
-    const std::uint64_t packed = (std::uint64_t{key.k[0]} << 32) | (std::uint64_t{key.k[1]} << 16) | key.k[2];
-    return static_cast<std::size_t>((packed * 0x9E3779B97F4A7C15ull) >> 17);
-  }
-};
-
 // The side of the parent's centre at `depth` (0 = the root's children), as the seed's b bits.
 inline int child_bits(const OctreeKey& key, int depth) {
   const int bit = kOctreeDepth - 1 - depth;
