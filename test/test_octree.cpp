@@ -5,11 +5,13 @@
 #include <octomap/OcTree.h>
 
 #include <map>
+#include <set>
 #include <random>
 #include <tuple>
 
 #include "bvh_collision/octree/octree.h"
 #include "bvh_collision/octree/scan.h"
+#include "bvh_collision/octree/voxel_set.h"
 
 namespace bvh_collision {
 namespace {
@@ -53,10 +55,19 @@ std::vector<ScanPoint> random_scan(const ScanPoint& origin, int n, double far) {
   return p;
 }
 
-void expect_same_as_octomap(double resolution, double max_range, int scans, int points) {
-  SCOPED_TRACE("resolution " + std::to_string(resolution) + " max_range " + std::to_string(max_range));
+void expect_same_as_octomap(double resolution, const ScanOptions& options, int scans, int points) {
+  const double max_range = options.max_range;
+  SCOPED_TRACE("resolution " + std::to_string(resolution) + " max_range " + std::to_string(max_range) +
+               (options.workspace ? " workspace" : "") + " threads " + std::to_string(options.threads));
   Octree tree(resolution);
   octomap::OcTree reference(resolution);
+  if (options.workspace) {
+    octomap::point3d lo(options.workspace->min.x(), options.workspace->min.y(), options.workspace->min.z());
+    octomap::point3d hi(options.workspace->max.x(), options.workspace->max.y(), options.workspace->max.z());
+    reference.setBBXMin(lo);
+    reference.setBBXMax(hi);
+    reference.useBBXLimit(true);
+  }
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (int s = 0; s < scans; ++s) {
     const ScanPoint origin(u(rng()), u(rng()), 1.0f + u(rng()) * 0.5f);
@@ -64,8 +75,6 @@ void expect_same_as_octomap(double resolution, double max_range, int scans, int 
     octomap::Pointcloud cloud;
     for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
     reference.insertPointCloud(cloud, octomap::point3d(origin.x(), origin.y(), origin.z()), max_range);
-    ScanOptions options;
-    options.max_range = max_range;
     insert_scan(tree, scan, origin, options);
     const LeafMap a = ours(tree), b = theirs(reference);
     ASSERT_EQ(a.size(), b.size()) << "after scan " << s;
@@ -90,12 +99,34 @@ void expect_same_as_octomap(double resolution, double max_range, int scans, int 
   }
 }
 
+ScanOptions with(double max_range, int threads = 1) {
+  ScanOptions options;
+  options.max_range = max_range;
+  options.threads = threads;
+  return options;
+}
+
 TEST(OctreeAgainstOctomap, OneScan) {
-  for (const double res : {0.01, 0.05, 0.2}) expect_same_as_octomap(res, -1.0, 1, 3000);
+  for (const double res : {0.01, 0.05, 0.2}) expect_same_as_octomap(res, with(-1.0), 1, 3000);
 }
 
 TEST(OctreeAgainstOctomap, ManyScansWithMaxRange) {
-  for (const double res : {0.02, 0.1}) expect_same_as_octomap(res, 1.5, 8, 2000);
+  for (const double res : {0.02, 0.1}) expect_same_as_octomap(res, with(1.5), 8, 2000);
+}
+
+// Rays cast on two threads and merged: the same tree.
+TEST(OctreeAgainstOctomap, ThreadedScans) {
+  expect_same_as_octomap(0.03, with(-1.0, 2), 3, 20000);
+  expect_same_as_octomap(0.05, with(1.2, 2), 3, 20000);
+}
+
+// The workspace box is OctoMap's bounding-box limit, set on the reference tree.
+TEST(OctreeAgainstOctomap, ScansInAWorkspace) {
+  for (const double max_range : {-1.0, 1.5}) {
+    ScanOptions options = with(max_range);
+    options.workspace = ScanWorkspace{ScanPoint(-0.8f, -0.6f, -0.5f), ScanPoint(0.7f, 0.9f, 0.8f)};
+    expect_same_as_octomap(0.04, options, 4, 3000);
+  }
 }
 
 TEST(OctreeKeys, SeedIndexFromCoordinates) {
@@ -140,6 +171,95 @@ TEST(OctreeKeys, PointsOnSplittingPlanesGoToThePositiveSide) {
   EXPECT_EQ(on_plane->k[1], kOctreeKeyOffset + 2);  // 0.5 to [0.5, 0.75)
   EXPECT_EQ(on_plane->k[2], kOctreeKeyOffset - 1);  // -0.25 to [-0.25, 0)
   EXPECT_EQ(child_bits(*on_plane, 0), 0b110);       // x, y on the root's positive side, z negative
+}
+
+// The voxel set against std::set: membership, union, difference, and the depth-first order
+// against morton_code computed bit by bit.
+TEST(VoxelSet, AgainstStdSet) {
+  std::uniform_int_distribution<int> near(32700, 32830), any(0, 65535);
+  VoxelSet a, b;
+  std::set<OctreeKey> ra, rb;
+  for (int i = 0; i < 20000; ++i) {
+    const auto coord = [&](bool wide) { return static_cast<std::uint16_t>(wide ? any(rng()) : near(rng())); };
+    const bool wide = i % 10 == 0;
+    const OctreeKey k{{coord(wide), coord(wide), coord(wide)}};
+    if (i % 3) {
+      a.insert(k);
+      ra.insert(k);
+    } else {
+      b.insert(k);
+      rb.insert(k);
+    }
+  }
+  EXPECT_EQ(a.size(), ra.size());
+  for (const OctreeKey& k : rb) EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+  VoxelSet difference = a;
+  difference.erase_all(b);
+  a.insert_all(b);
+  ra.insert(rb.begin(), rb.end());
+  const std::vector<OctreeKey> all = a.sorted_keys();
+  ASSERT_EQ(all.size(), ra.size());
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    ASSERT_LT(morton_code(all[i - 1]), morton_code(all[i]));
+    // Depth-first order: the first differing level decides, x bit above y above z.
+    int d = 0;
+    while (child_bits(all[i - 1], d) == child_bits(all[i], d)) ++d;
+    ASSERT_LT(child_bits(all[i - 1], d), child_bits(all[i], d));
+  }
+  std::size_t only_a = 0;
+  for (const OctreeKey& k : all) {
+    const bool in_b = rb.count(k) == 1;
+    only_a += !in_b;
+    EXPECT_EQ(difference.contains(k), !in_b);
+  }
+  EXPECT_EQ(difference.size(), only_a);
+}
+
+// The one-descent batch update against one update per key (itself checked against OctoMap):
+// random keys in a small region so that pruned nodes form, clamps are hit and pruned nodes are
+// expanded again.
+TEST(OctreeUpdate, SortedBatchEqualsOneByOne) {
+  std::uniform_int_distribution<int> coord(32760, 32775);
+  Octree batch(0.1), single(0.1);
+  for (int round = 0; round < 30; ++round) {
+    VoxelSet keys;
+    for (int i = 0; i < 1500; ++i) {
+      keys.insert(OctreeKey{{static_cast<std::uint16_t>(coord(rng())), static_cast<std::uint16_t>(coord(rng())),
+                             static_cast<std::uint16_t>(coord(rng()))}});
+    }
+    const std::vector<OctreeKey> sorted = keys.sorted_keys();
+    const bool hit = round % 3 != 0;
+    batch.update_sorted(sorted, hit);
+    for (const OctreeKey& k : sorted) single.update(k, hit);
+    const auto a = batch.leaves(), b = single.leaves();
+    ASSERT_EQ(a.size(), b.size()) << "round " << round;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].key, b[i].key);
+      ASSERT_EQ(a[i].depth, b[i].depth);
+      ASSERT_EQ(a[i].log_odds, b[i].log_odds);
+    }
+    ASSERT_EQ(batch.node_count(), single.node_count());
+  }
+  int pruned = 0;
+  for (const auto& l : batch.leaves()) pruned += l.depth < kOctreeDepth;
+  EXPECT_GT(pruned, 0);
+}
+
+// End points without rays: each voxel once as occupied, as octomap's updateNode per distinct voxel.
+TEST(OctreeAgainstOctomap, OccupiedOnlyInsert) {
+  Octree tree(0.05);
+  octomap::OcTree reference(0.05);
+  for (int s = 0; s < 3; ++s) {
+    const auto scan = random_scan(ScanPoint(0, 0, 1), 4000, 2.0);
+    std::set<OctreeKey> seen;
+    for (const ScanPoint& p : scan) {
+      const auto k = tree.grid().key(Vec3(p.cast<double>()));
+      if (k && seen.insert(*k).second) reference.updateNode(octomap::OcTreeKey(k->k[0], k->k[1], k->k[2]), true);
+    }
+    const ScanStats stats = insert_points(tree, scan);
+    EXPECT_EQ(stats.occupied, seen.size());
+  }
+  EXPECT_EQ(ours(tree), theirs(reference));
 }
 
 TEST(OctreeBadInput, ResolutionAndPoints) {

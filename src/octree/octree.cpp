@@ -73,9 +73,7 @@ void Octree::update(const OctreeKey& key, float change) {
   // OctoMap's early abort: the node holding the voxel already sits at the clamp the change pushes
   // towards, so nothing would change (and a pruned node is not expanded for nothing).
   if (const auto found = find(key)) {
-    if ((change >= 0 && found->log_odds >= model_.clamp_max) || (change <= 0 && found->log_odds <= model_.clamp_min)) {
-      return;
-    }
+    if (at_clamp(found->log_odds, change)) return;
   }
   bool created_root = false;
   if (nodes_.empty()) {
@@ -91,13 +89,7 @@ void Octree::update(const OctreeKey& key, float change) {
 // node vector may grow during the descent.
 void Octree::update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change) {
   if (depth == kOctreeDepth) {
-    float value = nodes_[node].log_odds + change;
-    if (value < model_.clamp_min) {
-      value = model_.clamp_min;
-    } else if (value > model_.clamp_max) {
-      value = model_.clamp_max;
-    }
-    nodes_[node].log_odds = value;
+    nodes_[node].log_odds = clamped(nodes_[node].log_odds + change);
     return;
   }
   const int b = child_bits(key, depth);
@@ -106,14 +98,57 @@ void Octree::update_below(std::int32_t node, bool just_created, const OctreeKey&
     if (nodes_[node].children < 0 && !just_created) {
       expand(node);
     } else {
-      if (nodes_[node].children < 0) nodes_[node].children = allocate_block();
-      nodes_[nodes_[node].children + b] = Node{};
-      nodes_[node].mask = static_cast<std::uint8_t>(nodes_[node].mask | (1u << b));
-      ++node_count_;
+      add_child(node, b);
       created = true;
     }
   }
   update_below(nodes_[node].children + b, created, key, depth + 1, change);
+  if (!prune(node)) refresh(node);
+}
+
+// A new child (log-odds 0) in slot b of a node that lacks it.
+std::int32_t Octree::add_child(std::int32_t node, int b) {
+  if (nodes_[node].children < 0) nodes_[node].children = allocate_block();
+  nodes_[nodes_[node].children + b] = Node{};
+  nodes_[node].mask = static_cast<std::uint8_t>(nodes_[node].mask | (1u << b));
+  ++node_count_;
+  return nodes_[node].children + b;
+}
+
+void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
+  if (keys.empty()) return;
+  bool created_root = false;
+  if (nodes_.empty()) {
+    nodes_.push_back(Node{});
+    node_count_ = 1;
+    created_root = true;
+  }
+  update_range(0, created_root, keys.data(), keys.data() + keys.size(), 0, change);
+}
+
+// update_below for a run of keys that all lie in `node`. Applying the updates one after another
+// ends in the same tree: each voxel changes once, a node's value and pruning depend only on its
+// children's final values, and OctoMap's early abort (the containing node already sits at the
+// clamp) skips exactly the keys it would skip one by one, since they all see the same node.
+void Octree::update_range(std::int32_t node, bool just_created, const OctreeKey* first, const OctreeKey* last,
+                          int depth, float change) {
+  if (depth == kOctreeDepth) {
+    nodes_[node].log_odds = clamped(nodes_[node].log_odds + change);
+    return;
+  }
+  if (nodes_[node].children < 0 && !just_created) {
+    if (at_clamp(nodes_[node].log_odds, change)) return;
+    expand(node);
+  }
+  while (first != last) {
+    const int b = child_bits(*first, depth);
+    const OctreeKey* end = first + 1;
+    while (end != last && child_bits(*end, depth) == b) ++end;
+    const bool created = !((nodes_[node].mask >> b) & 1);
+    const std::int32_t child = created ? add_child(node, b) : nodes_[node].children + b;
+    update_range(child, created, first, end, depth + 1, change);
+    first = end;
+  }
   if (!prune(node)) refresh(node);
 }
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
+
+#include "bvh_collision/octree/voxel_set.h"
 
 namespace bvh_collision {
 namespace {
@@ -15,28 +18,15 @@ double float_norm(const ScanPoint& v) {
   return std::sqrt(static_cast<double>(squared));
 }
 
-std::uint64_t packed(const OctreeKey& k) {
-  return (std::uint64_t{k.k[0]} << 32) | (std::uint64_t{k.k[1]} << 16) | k.k[2];
-}
-
-OctreeKey unpacked(std::uint64_t v) {
-  return OctreeKey{{static_cast<std::uint16_t>(v >> 32), static_cast<std::uint16_t>(v >> 16), static_cast<std::uint16_t>(v)}};
-}
-
-void sort_unique(std::vector<std::uint64_t>& v) {
-  std::sort(v.begin(), v.end());
-  v.erase(std::unique(v.begin(), v.end()), v.end());
-}
-
-}  // namespace
-
-bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys) {
-  keys.clear();
+// OctoMap's computeRayKeys: visit(key) for every voxel a ray from `origin` to `end` crosses,
+// without the end's voxel. Amanatides & Woo's traversal with OctoMap's exact mix of float and
+// double arithmetic. False when either end lies outside the key range.
+template <class Visit>
+bool walk_ray(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, Visit&& visit) {
   const auto key_origin = key_of(grid, origin), key_end = key_of(grid, end);
   if (!key_origin || !key_end) return false;
   if (*key_origin == *key_end) return true;
-  keys.push_back(*key_origin);
-  // Amanatides & Woo's traversal with OctoMap's exact mix of float and double arithmetic.
+  visit(*key_origin);
   ScanPoint direction = end - origin;
   const float length = static_cast<float>(float_norm(direction));
   direction /= length;
@@ -61,54 +51,169 @@ bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& 
     if (current == *key_end) break;
     // Rounding can carry the walk past the end voxel: stop once beyond the ray's length.
     if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) break;
-    keys.push_back(current);
+    visit(current);
   }
   return true;
 }
 
+// What one thread gathers from its share of a scan.
+struct ScanPart {
+  VoxelSet free, occupied;
+  ScanStats stats;
+  std::vector<OctreeKey> ray;  // scratch for the workspace case
+};
+
+struct KeyBox {
+  OctreeKey min, max;
+  bool contains(const OctreeKey& k) const {
+    for (int i = 0; i < 3; ++i) {
+      if (k.k[i] < min.k[i] || k.k[i] > max.k[i]) return false;
+    }
+    return true;
+  }
+};
+
+KeyBox key_box(const OctreeGrid& grid, const ScanWorkspace& w) {
+  KeyBox box;
+  for (int i = 0; i < 3; ++i) {
+    box.min.k[i] = grid.key(double(w.min[i])).value_or(w.min[i] < 0 ? 0 : 0xFFFF);
+    box.max.k[i] = grid.key(double(w.max[i])).value_or(w.max[i] < 0 ? 0 : 0xFFFF);
+  }
+  return box;
+}
+
+bool within_range(const ScanPoint& p, const ScanPoint& origin, const ScanOptions& options) {
+  return options.max_range < 0.0 || float_norm(p - origin) <= options.max_range;
+}
+
+// OctoMap's bounding-box branch: points outside the box (or beyond max_range) are dropped; a kept
+// ray frees its voxels from the end point back to where it leaves the box.
+void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, const ScanPoint& origin, const ScanOptions& options,
+                       const KeyBox& box, ScanPart& part) {
+  if (!within_range(p, origin, options) || !options.workspace->contains(p)) {
+    ++part.stats.skipped_workspace;
+    return;
+  }
+  if (const auto k = key_of(grid, p)) {
+    part.occupied.insert(*k);
+  } else {
+    ++part.stats.skipped_outside;
+  }
+  part.ray.clear();
+  if (!walk_ray(grid, origin, p, [&](const OctreeKey& k) { part.ray.push_back(k); })) return;
+  for (auto it = part.ray.rbegin(); it != part.ray.rend() && box.contains(*it); ++it) part.free.insert(*it);
+}
+
+void cast(const OctreeGrid& grid, const ScanPoint& p, const ScanPoint& origin, const ScanOptions& options,
+          ScanPart& part) {
+  const bool within = within_range(p, origin, options);
+  ScanPoint end = p;
+  if (!within) {
+    // OctoMap shortens the ray to max_range (float arithmetic) and clears along it only.
+    ScanPoint direction = p - origin;
+    direction /= static_cast<float>(float_norm(direction));
+    end = origin + direction * static_cast<float>(options.max_range);
+  }
+  const bool ray_inside = walk_ray(grid, origin, end, [&](const OctreeKey& k) { part.free.insert(k); });
+  if (!within) {
+    part.stats.skipped_outside += !ray_inside;
+    return;
+  }
+  if (const auto k = key_of(grid, p)) {
+    part.occupied.insert(*k);
+  } else {
+    ++part.stats.skipped_outside;  // the end point is outside the key range: nothing inserted
+  }
+}
+
+void cast_all(const OctreeGrid& grid, const ScanPoint* first, const ScanPoint* last, const ScanPoint& origin,
+              const ScanOptions& options, ScanPart& part) {
+  std::optional<KeyBox> box;
+  if (options.workspace) box = key_box(grid, *options.workspace);
+  for (; first != last; ++first) {
+    if (!first->allFinite()) {
+      ++part.stats.skipped_invalid;
+    } else if (box) {
+      cast_in_workspace(grid, *first, origin, options, *box, part);
+    } else {
+      cast(grid, *first, origin, options, part);
+    }
+  }
+}
+
+int thread_count(const ScanOptions& options, std::size_t points) {
+  const int wanted = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+  // A thread pays for itself only with a few thousand rays to cast.
+  return static_cast<int>(std::clamp<std::size_t>(points / 4096, 1, static_cast<std::size_t>(std::max(wanted, 1))));
+}
+
+// Cast the scan's rays on several threads, each into its own sets, then merge.
+ScanPart cast_scan(const OctreeGrid& grid, const std::vector<ScanPoint>& points, const ScanPoint& origin,
+                   const ScanOptions& options) {
+  const auto threads = static_cast<std::size_t>(thread_count(options, points.size()));
+  std::vector<ScanPart> parts(threads);
+  std::vector<std::thread> workers;
+  const std::size_t chunk = (points.size() + threads - 1) / threads;
+  for (std::size_t t = 0; t < threads; ++t) {
+    const std::size_t begin = std::min(points.size(), t * chunk), end = std::min(points.size(), begin + chunk);
+    auto work = [&, t, begin, end] { cast_all(grid, points.data() + begin, points.data() + end, origin, options, parts[t]); };
+    if (t + 1 < threads) {
+      workers.emplace_back(work);
+    } else {
+      work();
+    }
+  }
+  for (std::thread& w : workers) w.join();
+  ScanPart& all = parts.front();
+  for (std::size_t t = 1; t < parts.size(); ++t) {
+    all.free.insert_all(parts[t].free);
+    all.occupied.insert_all(parts[t].occupied);
+    all.stats.skipped_invalid += parts[t].stats.skipped_invalid;
+    all.stats.skipped_outside += parts[t].stats.skipped_outside;
+    all.stats.skipped_workspace += parts[t].stats.skipped_workspace;
+  }
+  return std::move(all);
+}
+
+}  // namespace
+
+bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys) {
+  keys.clear();
+  return walk_ray(grid, origin, end, [&](const OctreeKey& k) { keys.push_back(k); });
+}
+
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const ScanPoint& origin,
                       const ScanOptions& options) {
+  ScanPart scan = cast_scan(tree.grid(), points, origin, options);
+  scan.stats.points = points.size();
+  // A voxel that ends a ray is occupied, not also freed. Free updates go first, as in OctoMap.
+  scan.free.erase_all(scan.occupied);
+  const std::vector<OctreeKey> free = scan.free.sorted_keys(), occupied = scan.occupied.sorted_keys();
+  tree.update_sorted(free, false);
+  tree.update_sorted(occupied, true);
+  scan.stats.free = free.size();
+  scan.stats.occupied = occupied.size();
+  return scan.stats;
+}
+
+ScanStats insert_points(Octree& tree, const std::vector<ScanPoint>& points, const ScanOptions& options) {
   ScanStats stats;
   stats.points = points.size();
-  const OctreeGrid& grid = tree.grid();
-  std::vector<std::uint64_t> free, occupied;
-  std::vector<OctreeKey> ray;
+  VoxelSet occupied;
   for (const ScanPoint& p : points) {
     if (!p.allFinite()) {
       ++stats.skipped_invalid;
-      continue;
-    }
-    ScanPoint end = p;
-    const bool within = options.max_range < 0.0 || float_norm(p - origin) <= options.max_range;
-    if (!within) {
-      // OctoMap shortens the ray to max_range (float arithmetic) and clears along it only.
-      ScanPoint direction = p - origin;
-      direction /= static_cast<float>(float_norm(direction));
-      end = origin + direction * static_cast<float>(options.max_range);
-    }
-    const bool ray_inside = ray_keys(grid, origin, end, ray);
-    if (ray_inside) {
-      for (const OctreeKey& k : ray) free.push_back(packed(k));
-    }
-    if (!within) {
-      stats.skipped_outside += !ray_inside;
-      continue;
-    }
-    if (const auto k = key_of(grid, p)) {
-      occupied.push_back(packed(*k));
+    } else if (options.workspace && !options.workspace->contains(p)) {
+      ++stats.skipped_workspace;
+    } else if (const auto k = key_of(tree.grid(), p)) {
+      occupied.insert(*k);
     } else {
-      ++stats.skipped_outside;  // the end point is outside the key range: nothing inserted
+      ++stats.skipped_outside;
     }
   }
-  sort_unique(free);
-  sort_unique(occupied);
-  // A voxel that ends a ray is occupied, not also freed.
-  std::vector<std::uint64_t> only_free;
-  std::set_difference(free.begin(), free.end(), occupied.begin(), occupied.end(), std::back_inserter(only_free));
-  for (const std::uint64_t k : only_free) tree.update(unpacked(k), false);
-  for (const std::uint64_t k : occupied) tree.update(unpacked(k), true);
-  stats.free = only_free.size();
-  stats.occupied = occupied.size();
+  const std::vector<OctreeKey> keys = occupied.sorted_keys();
+  tree.update_sorted(keys, true);
+  stats.occupied = keys.size();
   return stats;
 }
 

@@ -8,6 +8,8 @@
 // into their parent, and an update inside a pruned node expands it first.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -40,6 +42,13 @@ class Octree {
   // OctoMap's updateNode: add `change` to the voxel's log-odds and clamp.
   void update(const OctreeKey& key, float change);
   void update(const OctreeKey& key, bool occupied) { update(key, occupied ? model_.hit : model_.miss); }
+
+  // The same as update(key, change) for each key in turn, in one descent: keys must be distinct
+  // and in depth-first order (VoxelSet::sorted_keys, or sorted by morton_code).
+  void update_sorted(const std::vector<OctreeKey>& keys, float change);
+  void update_sorted(const std::vector<OctreeKey>& keys, bool occupied) {
+    update_sorted(keys, occupied ? model_.hit : model_.miss);
+  }
 
   // The smallest existing node containing the voxel: its depth (16 = voxel), seed index and
   // log-odds; nullopt when the voxel was never observed.
@@ -79,6 +88,13 @@ class Octree {
   bool prune(std::int32_t node);
   void refresh(std::int32_t node);
   void update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change);
+  void update_range(std::int32_t node, bool just_created, const OctreeKey* first, const OctreeKey* last, int depth,
+                    float change);
+  bool at_clamp(float value, float change) const {
+    return (change >= 0 && value >= model_.clamp_max) || (change <= 0 && value <= model_.clamp_min);
+  }
+  float clamped(float value) const { return std::min(std::max(value, model_.clamp_min), model_.clamp_max); }
+  std::int32_t add_child(std::int32_t node, int b);
 
   OctreeGrid grid_;
   OccupancyModel model_;
