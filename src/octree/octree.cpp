@@ -184,14 +184,9 @@ std::vector<Octree::Leaf> Octree::leaves() const {
       out.push_back({item.key, item.depth, item.index, n.log_odds});
       continue;
     }
-    const int bit = kOctreeDepth - 1 - item.depth;
     for (int b = 0; b < 8; ++b) {
       if (!((n.mask >> b) & 1)) continue;
-      OctreeKey key = item.key;
-      key.k[0] = static_cast<std::uint16_t>(key.k[0] | (((b >> 2) & 1) << bit));
-      key.k[1] = static_cast<std::uint16_t>(key.k[1] | (((b >> 1) & 1) << bit));
-      key.k[2] = static_cast<std::uint16_t>(key.k[2] | ((b & 1) << bit));
-      stack.push_back({n.children + b, item.depth + 1, key, child_index(item.index, b)});
+      stack.push_back({n.children + b, item.depth + 1, child_corner(item.key, item.depth, b), child_index(item.index, b)});
     }
   }
   return out;

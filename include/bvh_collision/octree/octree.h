@@ -70,6 +70,38 @@ class Octree {
   };
   std::vector<Leaf> leaves() const;
 
+  // Walking the tree (for queries that descend it together with another hierarchy): node ids,
+  // -1 for none. A node's cube follows from the key of its lowest voxel and its depth.
+  std::int32_t root() const { return nodes_.empty() ? -1 : 0; }
+  float value(std::int32_t node) const { return nodes_[node].log_odds; }
+  bool is_leaf(std::int32_t node) const { return nodes_[node].children < 0; }
+  std::int32_t child(std::int32_t node, int b) const {
+    return ((nodes_[node].mask >> b) & 1) ? nodes_[node].children + b : -1;
+  }
+  // Lowest corner and side of the cube of the node at `depth` whose lowest voxel is `corner`.
+  Vec3 cube_min(const OctreeKey& corner) const {
+    return Vec3(double(int(corner.k[0]) - kOctreeKeyOffset), double(int(corner.k[1]) - kOctreeKeyOffset),
+                double(int(corner.k[2]) - kOctreeKeyOffset)) * grid_.resolution();
+  }
+  double cube_size(int depth) const { return grid_.resolution() * double(1 << (kOctreeDepth - depth)); }
+
+  // Queries of the seed (octree_queries.cpp). Unknown space counts as free.
+  // The smallest existing node containing p (the descent of the seed's listing 9.4).
+  std::optional<Leaf> locate(const Vec3& p) const;
+  // Occupied leaves whose cubes meet the closed box [min, max] (touching counts).
+  std::vector<Leaf> occupied_in_box(const Vec3& min, const Vec3& max) const;
+  // Occupied leaves whose cubes meet the closed ball; `any` stops at the first.
+  std::vector<Leaf> occupied_in_sphere(const Vec3& centre, double radius, bool any = false) const;
+  // The first occupied cube along origin + s * direction / |direction|, 0 <= s <= max_range.
+  struct RayHit {
+    Leaf leaf;
+    double distance = 0.0;  // 0 when the origin lies in occupied space
+    Vec3 point = Vec3::Zero();
+  };
+  std::optional<RayHit> cast_ray(const Vec3& origin, const Vec3& direction, double max_range) const;
+  // Forget every voxel whose key lies between the keys of min and max (they become unknown).
+  void clear_box(const Vec3& min, const Vec3& max);
+
   bool empty() const { return nodes_.empty(); }
   std::size_t node_count() const { return node_count_; }
   std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + free_blocks_.capacity() * sizeof(std::int32_t); }
@@ -95,6 +127,8 @@ class Octree {
   }
   float clamped(float value) const { return std::min(std::max(value, model_.clamp_min), model_.clamp_max); }
   std::int32_t add_child(std::int32_t node, int b);
+  bool clear_below(std::int32_t node, const OctreeKey& corner, int depth, const OctreeKey& lo, const OctreeKey& hi);
+  void release_subtree(std::int32_t node);
 
   OctreeGrid grid_;
   OccupancyModel model_;

@@ -51,6 +51,16 @@ inline std::uint64_t node_index(const OctreeKey& key, int depth) {
   return index;
 }
 
+// The lowest voxel of child b of the node at `depth` whose lowest voxel is `corner`.
+inline OctreeKey child_corner(const OctreeKey& corner, int depth, int b) {
+  const int bit = kOctreeDepth - 1 - depth;
+  OctreeKey key = corner;
+  key.k[0] = static_cast<std::uint16_t>(key.k[0] | (((b >> 2) & 1) << bit));
+  key.k[1] = static_cast<std::uint16_t>(key.k[1] | (((b >> 1) & 1) << bit));
+  key.k[2] = static_cast<std::uint16_t>(key.k[2] | ((b & 1) << bit));
+  return key;
+}
+
 // Coordinate <-> key along one axis for a given resolution, as OctoMap computes them.
 class OctreeGrid {
  public:
