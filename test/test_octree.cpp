@@ -4,11 +4,16 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <cstdio>
+#include <fstream>
 #include <map>
+#include <memory>
+#include <sstream>
 #include <set>
 #include <random>
 #include <tuple>
 
+#include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/octree/octree.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/octree/voxel_set.h"
@@ -437,6 +442,70 @@ TEST(OctreeUpdate, ClearBox) {
   tree.clear_box(Vec3::Constant(-1e9), Vec3::Constant(1e9));
   EXPECT_TRUE(tree.empty());
   EXPECT_EQ(tree.node_count(), 0u);
+}
+
+// The bridge: our tree and OctoMap's, node for node, both ways and through .ot and .bt files
+// written and read by OctoMap itself.
+TEST(OctomapBridge, ConversionsAndFiles) {
+  Octree tree(0.05);
+  octomap::OcTree reference(0.05);
+  for (int s = 0; s < 3; ++s) {
+    const ScanPoint origin(0.2f * s, 0.1f, 1.2f);
+    const auto scan = random_scan(origin, 3000, 1.5);
+    octomap::Pointcloud cloud;
+    for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
+    reference.insertPointCloud(cloud, octomap::point3d(origin.x(), origin.y(), origin.z()));
+    insert_scan(tree, scan, origin);
+  }
+  ASSERT_EQ(ours(tree), theirs(reference));
+  octomap::OcTree converted(0.1);
+  to_octomap(tree, converted);
+  EXPECT_EQ(theirs(converted), theirs(reference));
+  EXPECT_EQ(converted.size(), reference.size());
+  EXPECT_EQ(converted.getResolution(), 0.05);
+  EXPECT_FLOAT_EQ(converted.getClampingThresMaxLog(), reference.getClampingThresMaxLog());
+  const Octree back = from_octomap(reference);
+  EXPECT_EQ(ours(back), theirs(reference));
+  EXPECT_EQ(back.node_count(), reference.size());
+  EXPECT_EQ(back.model().hit, tree.model().hit);
+
+  const std::string dir = ::testing::TempDir();
+  save_octree(tree, dir + "ours.ot");
+  EXPECT_EQ(ours(load_octree(dir + "ours.ot")), theirs(reference));
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(dir + "ours.ot"));
+  ASSERT_NE(dynamic_cast<octomap::OcTree*>(read.get()), nullptr);
+  EXPECT_EQ(theirs(*dynamic_cast<octomap::OcTree*>(read.get())), theirs(reference));
+  // .bt keeps occupied / free only: compare with OctoMap's own .bt of the same tree.
+  save_octree(tree, dir + "ours.bt");
+  ASSERT_TRUE(reference.writeBinary(dir + "theirs.bt"));
+  octomap::OcTree theirs_bt(0.1);
+  ASSERT_TRUE(theirs_bt.readBinary(dir + "theirs.bt"));
+  EXPECT_EQ(ours(load_octree(dir + "ours.bt")), theirs(theirs_bt));
+  EXPECT_EQ(ours(load_octree(dir + "theirs.bt")), theirs(theirs_bt));
+  EXPECT_GT(theirs(theirs_bt).size(), 100u);
+
+  // Empty trees, and bad files: a clear error naming the file.
+  Octree empty(0.1);
+  octomap::OcTree none(0.2);
+  to_octomap(empty, none);
+  EXPECT_EQ(none.size(), 0u);
+  EXPECT_TRUE(from_octomap(none).empty());
+  EXPECT_THROW(load_octree(dir + "missing.ot"), std::runtime_error);
+  EXPECT_THROW(save_octree(tree, dir + "tree.txt"), std::runtime_error);
+  std::ofstream(dir + "garbage.bt") << "not an octree";
+  std::ofstream(dir + "garbage.ot") << "not an octree";
+  EXPECT_THROW(load_octree(dir + "garbage.bt"), std::runtime_error);
+  EXPECT_THROW(load_octree(dir + "garbage.ot"), std::runtime_error);
+  std::stringstream truncated;
+  tree.write_nodes(truncated);
+  std::string bytes = truncated.str();
+  std::stringstream half(bytes.substr(0, bytes.size() / 2));
+  EXPECT_THROW(Octree::read_nodes(half, 0.05), std::runtime_error);
+  try {
+    load_octree(dir + "missing.ot");
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.ot"), std::string::npos);
+  }
 }
 
 TEST(OctreeBadInput, ResolutionAndPoints) {

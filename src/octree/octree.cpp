@@ -1,7 +1,9 @@
 #include "bvh_collision/octree/octree.h"
 
 #include <algorithm>
+#include <istream>
 #include <limits>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 
@@ -190,6 +192,60 @@ std::vector<Octree::Leaf> Octree::leaves() const {
     }
   }
   return out;
+}
+
+}  // namespace bvh_collision
+
+namespace bvh_collision {
+namespace {
+
+// OctoMap numbers children x = bit 0, y = bit 1, z = bit 2; the seed's b has x = bit 2, z = bit 0.
+int octomap_child(int b) { return ((b >> 2) & 1) | (b & 2) | ((b & 1) << 2); }
+
+}  // namespace
+
+void Octree::write_nodes(std::ostream& out) const {
+  if (nodes_.empty()) return;
+  std::vector<std::int32_t> stack{0};
+  while (!stack.empty()) {
+    const Node n = nodes_[stack.back()];
+    stack.pop_back();
+    out.write(reinterpret_cast<const char*>(&n.log_odds), sizeof(float));
+    unsigned char bits = 0;
+    for (int b = 0; b < 8; ++b) {
+      if ((n.mask >> b) & 1) bits = static_cast<unsigned char>(bits | (1u << octomap_child(b)));
+    }
+    out.write(reinterpret_cast<const char*>(&bits), 1);
+    // Children in OctoMap's order, the first on top of the stack.
+    for (int i = 7; i >= 0; --i) {
+      const int b = octomap_child(i);  // the mapping is its own inverse
+      if ((n.mask >> b) & 1) stack.push_back(n.children + b);
+    }
+  }
+}
+
+void Octree::read_below(std::int32_t node, int depth, std::istream& in) {
+  float value = 0.0f;
+  unsigned char bits = 0;
+  in.read(reinterpret_cast<char*>(&value), sizeof(float));
+  in.read(reinterpret_cast<char*>(&bits), 1);
+  if (!in) throw std::runtime_error("octree node stream ends early (truncated file?)");
+  if (!std::isfinite(value)) throw std::runtime_error("octree node stream holds a non-finite log-odds");
+  if (bits != 0 && depth == kOctreeDepth) throw std::runtime_error("octree node stream is deeper than 16 levels");
+  nodes_[node].log_odds = value;
+  for (int i = 0; i < 8; ++i) {
+    if ((bits >> i) & 1) read_below(add_child(node, octomap_child(i)), depth + 1, in);
+  }
+  if (nodes_[node].children >= 0) refresh(node);
+}
+
+Octree Octree::read_nodes(std::istream& in, double resolution, const OccupancyModel& model) {
+  Octree tree(resolution, model);
+  if (in.peek() == std::char_traits<char>::eof()) return tree;
+  tree.nodes_.push_back(Node{});
+  tree.node_count_ = 1;
+  tree.read_below(0, 0, in);
+  return tree;
 }
 
 }  // namespace bvh_collision

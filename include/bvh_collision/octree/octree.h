@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iosfwd>
 #include <optional>
 #include <vector>
 
@@ -102,6 +103,13 @@ class Octree {
   // Forget every voxel whose key lies between the keys of min and max (they become unknown).
   void clear_box(const Vec3& min, const Vec3& max);
 
+  // The node stream of OctoMap's .ot data section (OcTreeBaseImpl::writeData / readData): depth
+  // first, each node's float log-odds, then a byte with a bit per existing child in OctoMap's
+  // child order (bit 0 x, bit 1 y, bit 2 z). read_nodes throws std::runtime_error on a truncated
+  // or malformed stream; inner values are recomputed as the maximum of their children.
+  void write_nodes(std::ostream& out) const;
+  static Octree read_nodes(std::istream& in, double resolution, const OccupancyModel& model = {});
+
   bool empty() const { return nodes_.empty(); }
   std::size_t node_count() const { return node_count_; }
   std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + free_blocks_.capacity() * sizeof(std::int32_t); }
@@ -129,6 +137,7 @@ class Octree {
   std::int32_t add_child(std::int32_t node, int b);
   bool clear_below(std::int32_t node, const OctreeKey& corner, int depth, const OctreeKey& lo, const OctreeKey& hi);
   void release_subtree(std::int32_t node);
+  void read_below(std::int32_t node, int depth, std::istream& in);
 
   OctreeGrid grid_;
   OccupancyModel model_;
