@@ -50,13 +50,14 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
       padding_[l] = it->second;
     }
   }
-  // The pairs to check, then BVHs only for the links they name ("model only what a scene needs").
+  // The pairs to check. Every link with geometry gets its BVH: environment queries check links
+  // that no self pair needs.
   std::vector<bool> needed(n, false);
   for (std::size_t a = 0; a < n; ++a) {
+    needed[a] = !model_.links()[a].collision.empty();
     for (std::size_t b = a + 1; b < n; ++b) {
       if (model_.links()[a].collision.empty() || model_.links()[b].collision.empty() || acm_.allowed(a, b)) continue;
       checked_pairs_.emplace_back(static_cast<int>(a), static_cast<int>(b));
-      needed[a] = needed[b] = true;
     }
   }
   shapes_.resize(n);
@@ -86,21 +87,21 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
   kinematics_ = KinematicsPlan(model_, needed);
 }
 
-bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
+bool CollisionChecker::shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,
                                       double padding, const SelfCollisionRequest& request,
                                       std::vector<MeshContact>* contacts, QueryStats& stats) const {
-  if (sa.mesh >= 0 && sb.mesh >= 0) {
+  if (sa.mesh && sb.mesh) {
     CollisionRequest r;
     r.padding = padding;
     r.tolerance = request.tolerance;
     r.max_contacts = contacts ? request.max_contacts : 0;
     r.solids = request.solids;
-    CollisionResult c = collide(meshes_[sa.mesh], pa, meshes_[sb.mesh], pb, r);
+    CollisionResult c = collide(*sa.mesh, pa, *sb.mesh, pb, r);
     stats += c.stats;
     if (contacts) contacts->insert(contacts->end(), c.contacts.begin(), c.contacts.end());
     return c.collision;
   }
-  if (sa.mesh < 0 && sb.mesh < 0) {
+  if (!sa.mesh && !sb.mesh) {
     const Vec3 d = pa.t - pb.t;
     const bool hit = d.norm() <= sa.radius + sb.radius + padding;
     if (hit && contacts && request.max_contacts > 0) {
@@ -112,15 +113,15 @@ bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, cons
   // A sphere against a mesh: the mesh's closest point to the centre, or the centre inside it.
   const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
   const bool a_is_sphere = sm.sphere_first;
-  const Shape& sphere = sm.sphere;
-  const Shape& mesh = sm.mesh;
+  const ShapeRef& sphere = sm.sphere;
+  const ShapeRef& mesh = sm.mesh;
   const Transform& ps = sm.sphere_pose;
   const Transform& pm = sm.mesh_pose;
   const double reach = sphere.radius + padding;
-  const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, reach * (1 + 1e-12) + 1e-15);
+  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, reach * (1 + 1e-12) + 1e-15);
   stats += d.stats;
   bool hit = d.distance <= reach;
-  if (!hit && request.solids) hit = contains_point(meshes_[mesh.mesh], pm.inverse() * ps.t, &stats);
+  if (!hit && request.solids) hit = contains_point(*mesh.mesh, pm.inverse() * ps.t, &stats);
   if (hit && contacts && request.max_contacts > 0) {
     MeshContact c;
     c.position = std::isfinite(d.distance) ? d.point_b : ps.t;
@@ -133,10 +134,10 @@ bool CollisionChecker::shapes_collide(const Shape& sa, const Transform& pa, cons
   return hit;
 }
 
-double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb,
+double CollisionChecker::shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,
                                          double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
-  if (sa.mesh >= 0 && sb.mesh >= 0) return meshes_distance(sa.mesh, pa, sb.mesh, pb, best, solids, wa, wb, stats);
-  if (sa.mesh < 0 && sb.mesh < 0) {
+  if (sa.mesh && sb.mesh) return meshes_distance(sa, pa, sb, pb, best, solids, wa, wb, stats);
+  if (!sa.mesh && !sb.mesh) {
     const Vec3 dir = (pb.t - pa.t).norm() > 0 ? Vec3((pb.t - pa.t).normalized()) : Vec3(Vec3::UnitZ());
     const double d = std::max(0.0, (pb.t - pa.t).norm() - sa.radius - sb.radius);
     wa = pa.t + dir * sa.radius;
@@ -150,17 +151,17 @@ double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, c
   }
   const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
   const bool a_is_sphere = sm.sphere_first;
-  const Shape& sphere = sm.sphere;
-  const Shape& mesh = sm.mesh;
+  const ShapeRef& sphere = sm.sphere;
+  const ShapeRef& mesh = sm.mesh;
   const Transform& ps = sm.sphere_pose;
   const Transform& pm = sm.mesh_pose;
-  const DistanceResult d = point_distance(meshes_[mesh.mesh], pm, ps.t, best + sphere.radius);
+  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, best + sphere.radius);
   stats += d.stats;
   double dist = std::max(0.0, d.distance - sphere.radius);
   Vec3 on_mesh = d.point_b, on_sphere = ps.t;
   if (std::isfinite(d.distance) && d.distance > 0) on_sphere = ps.t + (d.point_b - ps.t) * (sphere.radius / d.distance);
   if (dist == 0.0) on_sphere = on_mesh;  // the mesh point is inside the sphere: common to both
-  if (solids && contains_point(meshes_[mesh.mesh], pm.inverse() * ps.t, &stats)) {
+  if (solids && contains_point(*mesh.mesh, pm.inverse() * ps.t, &stats)) {
     dist = 0.0;
     on_mesh = on_sphere = ps.t;
   }
@@ -174,26 +175,26 @@ double CollisionChecker::shapes_distance(const Shape& sa, const Transform& pa, c
 // hulls' closest points lie on the meshes' surfaces, the meshes are no further apart than those
 // points, so the two agree and no BVH traversal is needed. Robot links are mostly convex where
 // they face each other, so this settles most pairs; the rest take the exact BVH query.
-double CollisionChecker::meshes_distance(int ma, const Transform& pa, int mb, const Transform& pb, double best,
+double CollisionChecker::meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
                                          bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
   const Transform b_in_a = relative_transform(pa, pb);
-  const ConvexDistance hull = convex_distance(hulls_[ma], hulls_[mb], b_in_a);
+  const ConvexDistance hull = convex_distance(*ma.hull, *mb.hull, b_in_a);
   if (hull.lower_bound >= best) return hull.lower_bound;  // cannot improve on `best`
   // Surface points near the hulls' witnesses: their distance bounds the meshes' from above.
   double upper = best;
   Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
   if (hull.lower_bound > 0.0) {
     // Disjoint hulls: neither solid holds the other, so surface and solid distances agree.
-    auto nearest_on_mesh = [&](int mesh, const Transform& pose, const Vec3& p, int vertex) {
+    auto nearest_on_mesh = [&](const ShapeRef& mesh, const Transform& pose, const Vec3& p, int vertex) {
       if (vertex >= 0) return p;  // hull vertices are mesh vertices
-      const DistanceResult d = point_distance(meshes_[mesh], pose, p);
+      const DistanceResult d = point_distance(*mesh.mesh, pose, p);
       stats += d.stats;
       return d.point_b;
     };
     const Vec3 qa = nearest_on_mesh(ma, Transform::Identity(), hull.on_a, hull.vertex_a);
     const Vec3 qb = nearest_on_mesh(mb, b_in_a, hull.on_b, hull.vertex_b);
     const double apart = (qa - qb).norm();
-    const double scale = hulls_[ma].extent + hulls_[mb].extent + b_in_a.t.norm();
+    const double scale = ma.hull->extent + mb.hull->extent + b_in_a.t.norm();
     if (apart - hull.lower_bound <= 1e-10 * scale) {  // certified: the hulls' distance is the meshes'
       wa = pa * qa;
       wb = pa * qb;
@@ -207,7 +208,7 @@ double CollisionChecker::meshes_distance(int ma, const Transform& pa, int mb, co
     CollisionRequest touch;
     touch.max_contacts = 1;
     touch.solids = solids;
-    const CollisionResult c = collide(meshes_[ma], pa, meshes_[mb], pb, touch);
+    const CollisionResult c = collide(*ma.mesh, pa, *mb.mesh, pb, touch);
     stats += c.stats;
     if (c.collision) {
       wa = wb = c.contacts.empty() ? pa.t : c.contacts.front().position;
@@ -218,7 +219,7 @@ double CollisionChecker::meshes_distance(int ma, const Transform& pa, int mb, co
   DistanceRequest request;
   request.solids = solids;
   request.upper_bound = upper;
-  const DistanceResult d = distance(meshes_[ma], pa, meshes_[mb], pb, request);
+  const DistanceResult d = distance(*ma.mesh, pa, *mb.mesh, pb, request);
   stats += d.stats;
   if (d.distance < upper || upper >= best) {
     wa = d.point_a;
@@ -238,7 +239,7 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   for (const Shape& sa : shapes_[a]) {
     for (const Shape& sb : shapes_[b]) {
       const bool want_contacts = request.max_contacts > 0 && contacts.size() < request.max_contacts;
-      if (shapes_collide(sa, poses[a] * sa.origin, sb, poses[b] * sb.origin, padding, request,
+      if (shapes_collide(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, padding, request,
                          want_contacts ? &contacts : nullptr, result.stats)) {
         hit = true;
         if (request.max_contacts == 0) return true;
@@ -256,7 +257,7 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
     for (const Shape& sb : shapes_[b]) {
       Vec3 wa, wb;
       const double d =
-          shapes_distance(sa, poses[a] * sa.origin, sb, poses[b] * sb.origin, best, solids, wa, wb, result.stats);
+          shapes_distance(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, best, solids, wa, wb, result.stats);
       if (d < best) {
         best = d;
         result.min_distance = d;

@@ -1,6 +1,7 @@
 #include "bvh_collision/geometry/mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <numeric>
 #include <tuple>
@@ -91,5 +92,29 @@ std::vector<Vec3> used_vertices(const TriangleMesh& mesh) {
   }
   return out;
 }
+
+TriangleMesh cylinder_mesh(double r, double l, double max_error) {
+  int sides = 16;
+  while (sides < 512 && r * (1.0 / std::cos(M_PI / sides) - 1.0) > max_error) sides *= 2;
+  const double R = r / std::cos(M_PI / sides);  // the polygon's edges touch the circle
+  TriangleMesh m;
+  for (int i = 0; i < sides; ++i) {
+    const double a = 2 * M_PI * i / sides;
+    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), -l / 2);
+    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), l / 2);
+  }
+  const int bottom = static_cast<int>(m.vertices.size()), top = bottom + 1;
+  m.vertices.emplace_back(0, 0, -l / 2);
+  m.vertices.emplace_back(0, 0, l / 2);
+  for (int i = 0; i < sides; ++i) {
+    const int b0 = 2 * i, t0 = 2 * i + 1, b1 = 2 * ((i + 1) % sides), t1 = b1 + 1;
+    m.triangles.push_back({b0, b1, t1});
+    m.triangles.push_back({b0, t1, t0});
+    m.triangles.push_back({bottom, b1, b0});
+    m.triangles.push_back({top, t0, t1});
+  }
+  return m;
+}
+
 
 }  // namespace bvh_collision

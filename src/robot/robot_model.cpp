@@ -27,31 +27,6 @@ JointType joint_type(int t) {
   }
 }
 
-// A prism circumscribing the cylinder (radius r, length l, axis z, centred), with the fewest
-// sides that keep the prism within kCylinderMaxError of the cylinder.
-TriangleMesh cylinder_prism(double r, double l) {
-  int sides = 16;
-  while (sides < 512 && r * (1.0 / std::cos(M_PI / sides) - 1.0) > kCylinderMaxError) sides *= 2;
-  const double R = r / std::cos(M_PI / sides);  // the polygon's edges touch the circle
-  TriangleMesh m;
-  for (int i = 0; i < sides; ++i) {
-    const double a = 2 * M_PI * i / sides;
-    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), -l / 2);
-    m.vertices.emplace_back(R * std::cos(a), R * std::sin(a), l / 2);
-  }
-  const int bottom = static_cast<int>(m.vertices.size()), top = bottom + 1;
-  m.vertices.emplace_back(0, 0, -l / 2);
-  m.vertices.emplace_back(0, 0, l / 2);
-  for (int i = 0; i < sides; ++i) {
-    const int b0 = 2 * i, t0 = 2 * i + 1, b1 = 2 * ((i + 1) % sides), t1 = b1 + 1;
-    m.triangles.push_back({b0, b1, t1});
-    m.triangles.push_back({b0, t1, t0});
-    m.triangles.push_back({bottom, b1, b0});
-    m.triangles.push_back({top, t0, t1});
-  }
-  return m;
-}
-
 }  // namespace
 
 class RobotModelBuilder {
@@ -166,7 +141,7 @@ class RobotModelBuilder {
         out.radius = cy.radius;
         out.length = cy.length;
         if (!(out.radius > 0 && out.length > 0)) throw RobotLoadError(where.str() + ": cylinder radius and length must be positive");
-        out.mesh = std::make_shared<TriangleMesh>(cylinder_prism(out.radius, out.length));
+        out.mesh = std::make_shared<TriangleMesh>(cylinder_mesh(out.radius, out.length, kCylinderMaxError));
         out.source = "cylinder";
         break;
       }

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/checker/environment.h"
+#include "bvh_collision/checker/mesh_octree.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
@@ -46,6 +48,33 @@ struct SelfCollisionResult {
   QueryStats stats;
 };
 
+struct EnvironmentRequest {
+  double tolerance = 0.0;  // DESIGN.md section 2
+  bool all_links = false;  // false: stop at the first colliding link
+  bool distance = false;   // also the minimum distance from the robot to any obstacle
+  bool solids = true;      // closed meshes bound solids; occupied space is solid
+  bool octree = true;      // check against the octree...
+  bool objects = true;     // ...and against the collision objects
+};
+
+struct EnvironmentContact {
+  int link = -1;
+  std::string object;            // the object's id; empty for the octree
+  Octree::Leaf voxel;            // the occupied cube, for the octree
+  Vec3 position = Vec3::Zero();  // world frame
+};
+
+struct EnvironmentResult {
+  bool collision = false;
+  std::vector<EnvironmentContact> contacts;  // one per colliding (link, obstacle), in checking order
+  double min_distance = std::numeric_limits<double>::quiet_NaN();  // only when asked; inf: no obstacle
+  int closest_link = -1;
+  std::string closest_object;  // empty: the octree (when closest_link >= 0)
+  Octree::Leaf closest_voxel;
+  Vec3 point_link = Vec3::Zero(), point_obstacle = Vec3::Zero();  // world frame witnesses
+  QueryStats stats;
+};
+
 class CollisionChecker {
  public:
   CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
@@ -62,6 +91,12 @@ class CollisionChecker {
 
   // Boolean self-collision for `count` states stored row by row; uses every core.
   std::vector<bool> check_self_batch(const double* states, std::size_t count, double tolerance = 0.0) const;
+
+  // The robot in `state` against the environment: every link with geometry (the allowed-collision
+  // matrix is about link pairs) against the octree's occupied cubes and the objects, with the
+  // links' padding.
+  EnvironmentResult check_environment(const double* state, const Environment& env,
+                                      const EnvironmentRequest& request = {}) const;
 
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return meshes_.size(); }
@@ -81,24 +116,43 @@ class CollisionChecker {
                      SelfCollisionResult& result) const;
   double pair_distance(int a, int b, const std::vector<Transform>& poses, double best, bool solids,
                        SelfCollisionResult& result) const;
-  bool shapes_collide(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double padding,
+  // One shape's geometry, whoever owns it (a link here, an environment object elsewhere).
+  struct ShapeRef {
+    const Bvh<Obb>* mesh = nullptr;  // null: an analytic sphere
+    const ConvexHull* hull = nullptr;
+    double radius = 0.0;
+  };
+  ShapeRef ref(const Shape& s) const {
+    return s.mesh < 0 ? ShapeRef{nullptr, nullptr, s.radius} : ShapeRef{&meshes_[s.mesh], &hulls_[s.mesh], 0.0};
+  }
+  bool shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double padding,
                       const SelfCollisionRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) const;
-  double shapes_distance(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb, double best,
+  double shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double best,
                          bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
-  double meshes_distance(int ma, const Transform& pa, int mb, const Transform& pb, double best, bool solids, Vec3& wa,
-                         Vec3& wb, QueryStats& stats) const;
+  double meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
+                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
 
   // A sphere shape and a mesh shape with their poses, whichever order they came in.
   struct SphereAndMesh {
-    const Shape& sphere;
+    const ShapeRef& sphere;
     const Transform& sphere_pose;
-    const Shape& mesh;
+    const ShapeRef& mesh;
     const Transform& mesh_pose;
     bool sphere_first;
   };
-  static SphereAndMesh sphere_and_mesh(const Shape& sa, const Transform& pa, const Shape& sb, const Transform& pb) {
-    return sa.mesh < 0 ? SphereAndMesh{sa, pa, sb, pb, true} : SphereAndMesh{sb, pb, sa, pa, false};
+  static SphereAndMesh sphere_and_mesh(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb,
+                                       const Transform& pb) {
+    return !sa.mesh ? SphereAndMesh{sa, pa, sb, pb, true} : SphereAndMesh{sb, pb, sa, pa, false};
   }
+
+  bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,
+                         EnvironmentResult& result) const;
+  bool link_meets_object(int link, const Transform& pose, const CollisionObject& object,
+                         const EnvironmentRequest& request, EnvironmentResult& result) const;
+  double link_octree_distance(int link, const Transform& pose, const Octree& tree, double best, bool solids,
+                              EnvironmentResult& result) const;
+  double link_object_distance(int link, const Transform& pose, const CollisionObject& object, double best,
+                              bool solids, EnvironmentResult& result) const;
 
   RobotModel model_;
   AllowedCollisionMatrix acm_;

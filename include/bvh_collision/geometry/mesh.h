@@ -35,4 +35,9 @@ std::vector<Vec3> used_vertices(const TriangleMesh& mesh);
 // The 12 triangles of an axis-aligned box centred on the origin, outward winding.
 TriangleMesh box_mesh(const Vec3& size);
 
+// A regular prism circumscribing the cylinder (radius r, length l, axis z, centred; closed,
+// outward winding), with the fewest sides (16 to 512) that keep every point of the prism within
+// max_error of the cylinder: it only ever makes the cylinder larger, never misses a contact.
+TriangleMesh cylinder_mesh(double r, double l, double max_error);
+
 }  // namespace bvh_collision

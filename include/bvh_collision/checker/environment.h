@@ -1,0 +1,69 @@
+// The robot's surroundings: the obstacle octree built from sensor scans, and collision objects
+// (boxes, spheres, cylinders, meshes) that a planner adds, moves and removes by id.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bvh_collision/bvh/bvh.h"
+#include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/octree/octree.h"
+
+namespace bvh_collision {
+
+struct ObjectShape {
+  enum class Kind { kBox, kSphere, kCylinder, kMesh };
+  Kind kind = Kind::kBox;
+  Vec3 size = Vec3::Zero();  // box: edge lengths
+  double radius = 0.0;       // sphere, cylinder
+  double length = 0.0;       // cylinder, along its z axis
+  std::shared_ptr<const TriangleMesh> mesh;
+
+  static ObjectShape box(const Vec3& size) { return {Kind::kBox, size, 0.0, 0.0, nullptr}; }
+  static ObjectShape sphere(double radius) { return {Kind::kSphere, Vec3::Zero(), radius, 0.0, nullptr}; }
+  static ObjectShape cylinder(double radius, double length) { return {Kind::kCylinder, Vec3::Zero(), radius, length, nullptr}; }
+  static ObjectShape triangles(TriangleMesh m) {
+    return {Kind::kMesh, Vec3::Zero(), 0.0, 0.0, std::make_shared<const TriangleMesh>(std::move(m))};
+  }
+};
+
+// A cylinder object is a circumscribing prism no more than this larger than the cylinder.
+constexpr double kObjectCylinderMaxError = 0.0005;  // metres
+
+struct CollisionObject {
+  std::string id;
+  ObjectShape shape;
+  Transform pose;  // in the world frame
+  // Geometry as the checker uses it: spheres stay analytic (no mesh), the rest are meshes.
+  std::shared_ptr<const Bvh<Obb>> mesh;
+  std::shared_ptr<const ConvexHull> hull;
+  Vec3 bound_center = Vec3::Zero();  // object frame
+  double bound_radius = 0.0;
+};
+
+class Environment {
+ public:
+  // Throws std::invalid_argument for a resolution that is not a positive finite number.
+  explicit Environment(double octree_resolution, const OccupancyModel& model = {});
+
+  Octree& octree() { return octree_; }
+  const Octree& octree() const { return octree_; }
+
+  // Adds the object, or replaces the one with the same id. Throws std::invalid_argument (and
+  // changes nothing) for an empty id, a non-finite or non-rigid pose, dimensions that are not
+  // positive and finite, or a mesh without triangles or with non-finite vertices.
+  void add_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
+  // False (and nothing changes) when no object has this id; move throws for a bad pose.
+  bool move_object(const std::string& id, const Transform& pose);
+  bool remove_object(const std::string& id);
+  void clear_objects() { objects_.clear(); }
+  const std::vector<CollisionObject>& objects() const { return objects_; }
+  const CollisionObject* find_object(const std::string& id) const;
+
+ private:
+  Octree octree_;
+  std::vector<CollisionObject> objects_;
+};
+
+}  // namespace bvh_collision

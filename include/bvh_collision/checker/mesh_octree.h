@@ -1,0 +1,43 @@
+// A link's geometry against the occupied cubes of the environment octree: the BVH and the octree
+// descended together (cube against volume), then cube against triangle, exactly. Semantics of
+// DESIGN.md section 2: touching is collision, padding p, tolerance eps, and solids: a link inside
+// occupied space, or an occupied cube inside a closed link, is in collision (distance 0).
+#pragma once
+
+#include <limits>
+
+#include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/octree/octree.h"
+
+namespace bvh_collision {
+
+struct OctreeContact {
+  Octree::Leaf voxel;            // the occupied leaf (a voxel or a pruned cube)
+  Vec3 position = Vec3::Zero();  // world frame, a point of the link within padding of the cube
+};
+
+// Does the mesh (pose in world) come within `padding` of an occupied cube? With tolerance > 0
+// it may also answer yes up to padding + tolerance, never no below padding.
+bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
+                       double tolerance, bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
+
+struct OctreeDistance {
+  double distance = std::numeric_limits<double>::infinity();  // inf: nothing below upper_bound
+  Vec3 on_link = Vec3::Zero(), on_cube = Vec3::Zero();        // world-frame witnesses
+  Octree::Leaf voxel;
+};
+
+// The distance from the mesh to the nearest occupied cube, if below `upper_bound`.
+OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, bool solids,
+                                    double upper_bound = std::numeric_limits<double>::infinity(),
+                                    QueryStats* stats = nullptr);
+
+// The same for a point (a sphere link is a point with its radius subtracted).
+OctreeDistance point_octree_distance(const Vec3& p, const Octree& tree,
+                                     double upper_bound = std::numeric_limits<double>::infinity());
+
+// Exact primitives, exposed for their tests: a closed triangle against a closed axis-aligned box.
+bool triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi);
+double triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi, Vec3& on_triangle, Vec3& on_box);
+
+}  // namespace bvh_collision

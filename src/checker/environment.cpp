@@ -1,0 +1,104 @@
+#include "bvh_collision/checker/environment.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace bvh_collision {
+namespace {
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+void require_rigid(const Transform& pose, const std::string& id) {
+  const bool finite = pose.R.allFinite() && pose.t.allFinite();
+  if (!finite || !(pose.R.transpose() * pose.R).isApprox(Mat3::Identity(), 1e-6) || pose.R.determinant() < 0) {
+    throw std::invalid_argument("object '" + id + "': the pose must be finite with a rotation matrix");
+  }
+}
+
+TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
+  const std::string what = "object '" + id + "': ";
+  switch (shape.kind) {
+    case ObjectShape::Kind::kBox:
+      if (!(positive(shape.size.x()) && positive(shape.size.y()) && positive(shape.size.z()))) {
+        throw std::invalid_argument(what + "box sizes must be positive and finite");
+      }
+      return box_mesh(shape.size);
+    case ObjectShape::Kind::kCylinder:
+      if (!(positive(shape.radius) && positive(shape.length))) {
+        throw std::invalid_argument(what + "cylinder radius and length must be positive and finite");
+      }
+      return cylinder_mesh(shape.radius, shape.length, kObjectCylinderMaxError);
+    case ObjectShape::Kind::kMesh: {
+      if (!shape.mesh || shape.mesh->empty()) throw std::invalid_argument(what + "the mesh has no triangles");
+      for (const Vec3& v : shape.mesh->vertices) {
+        if (!v.allFinite()) throw std::invalid_argument(what + "the mesh has a non-finite vertex");
+      }
+      for (const auto& t : shape.mesh->triangles) {
+        for (const std::int32_t i : t) {
+          if (i < 0 || i >= static_cast<std::int32_t>(shape.mesh->vertices.size())) {
+            throw std::invalid_argument(what + "a mesh triangle indexes a missing vertex");
+          }
+        }
+      }
+      return *shape.mesh;
+    }
+    case ObjectShape::Kind::kSphere: break;
+  }
+  return {};
+}
+
+CollisionObject make_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
+  if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
+  require_rigid(pose, id);
+  CollisionObject o{id, shape, pose, nullptr, nullptr, Vec3::Zero(), 0.0};
+  if (shape.kind == ObjectShape::Kind::kSphere) {
+    if (!positive(shape.radius)) throw std::invalid_argument("object '" + id + "': sphere radius must be positive and finite");
+    o.bound_radius = shape.radius;
+    return o;
+  }
+  const TriangleMesh mesh = object_mesh(shape, id);
+  o.mesh = std::make_shared<const Bvh<Obb>>(Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2}));
+  o.hull = std::make_shared<const ConvexHull>(convex_hull(used_vertices(mesh)));
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& v : used_vertices(mesh)) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  o.bound_center = 0.5 * (lo + hi);
+  for (const Vec3& v : used_vertices(mesh)) o.bound_radius = std::max(o.bound_radius, (v - o.bound_center).norm());
+  o.bound_radius = o.bound_radius * (1 + 1e-12) + 1e-12;
+  return o;
+}
+
+}  // namespace
+
+Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
+
+void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
+  CollisionObject o = make_object(id, shape, pose);  // throws before anything changes
+  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
+  if (it != objects_.end()) {
+    *it = std::move(o);
+  } else {
+    objects_.push_back(std::move(o));
+  }
+}
+
+bool Environment::move_object(const std::string& id, const Transform& pose) {
+  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
+  if (it == objects_.end()) return false;
+  require_rigid(pose, id);
+  it->pose = pose;
+  return true;
+}
+
+bool Environment::remove_object(const std::string& id) {
+  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
+  if (it == objects_.end()) return false;
+  objects_.erase(it);
+  return true;
+}
+
+const CollisionObject* Environment::find_object(const std::string& id) const {
+  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
+  return it == objects_.end() ? nullptr : &*it;
+}
+
+}  // namespace bvh_collision

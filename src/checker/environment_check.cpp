@@ -1,0 +1,139 @@
+// CollisionChecker against the environment: links against the octree and the collision objects.
+#include <algorithm>
+
+#include "bvh_collision/checker/collision_checker.h"
+
+namespace bvh_collision {
+namespace {
+
+thread_local std::vector<Transform> tl_env_poses;
+
+}  // namespace
+
+bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const Octree& tree,
+                                         const EnvironmentRequest& request, EnvironmentResult& result) const {
+  const double padding = padding_[link];
+  // Broad phase, exact: no occupied cube within the link's bounding sphere (plus reach).
+  const Vec3 centre = pose * bounds_[link].center;
+  if (tree.occupied_in_sphere(centre, bounds_[link].radius + padding + request.tolerance, true).empty()) return false;
+  for (const Shape& s : shapes_[link]) {
+    const Transform p = pose * s.origin;
+    OctreeContact contact;
+    bool hit = false;
+    if (s.mesh >= 0) {
+      hit = mesh_meets_octree(meshes_[s.mesh], p, tree, padding, request.tolerance, request.solids, &contact, &result.stats);
+    } else if (const auto cubes = tree.occupied_in_sphere(p.t, s.radius + padding, true); !cubes.empty()) {
+      hit = true;
+      const Vec3 lo = tree.cube_min(cubes.front().key), hi = lo + Vec3::Constant(tree.cube_size(cubes.front().depth));
+      contact = {cubes.front(), p.t.cwiseMax(lo).cwiseMin(hi)};
+    }
+    if (hit) {
+      result.contacts.push_back({link, std::string(), contact.voxel, contact.position});
+      return true;
+    }
+  }
+  return false;
+}
+
+bool CollisionChecker::link_meets_object(int link, const Transform& pose, const CollisionObject& object,
+                                         const EnvironmentRequest& request, EnvironmentResult& result) const {
+  const double padding = padding_[link];
+  const double reach = bounds_[link].radius + object.bound_radius + padding + request.tolerance;
+  if ((pose * bounds_[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
+  const ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.shape.radius};
+  SelfCollisionRequest r;
+  r.tolerance = request.tolerance;
+  r.max_contacts = 1;
+  r.solids = request.solids;
+  for (const Shape& s : shapes_[link]) {
+    std::vector<MeshContact> contacts;
+    if (shapes_collide(ref(s), pose * s.origin, obstacle, object.pose, padding, r, &contacts, result.stats)) {
+      EnvironmentContact c{link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position};
+      result.contacts.push_back(c);
+      return true;
+    }
+  }
+  return false;
+}
+
+double CollisionChecker::link_octree_distance(int link, const Transform& pose, const Octree& tree, double best,
+                                              bool solids, EnvironmentResult& result) const {
+  for (const Shape& s : shapes_[link]) {
+    const Transform p = pose * s.origin;
+    OctreeDistance d;
+    if (s.mesh >= 0) {
+      d = mesh_octree_distance(meshes_[s.mesh], p, tree, solids, best, &result.stats);
+    } else {
+      d = point_octree_distance(p.t, tree, best + s.radius);
+      if (std::isfinite(d.distance)) {
+        // The sphere's surface point towards the cube; inside the sphere the cube point itself.
+        const double gap = d.distance - s.radius;
+        d.on_link = gap > 0 ? Vec3(p.t + (d.on_cube - p.t) * (s.radius / d.distance)) : d.on_cube;
+        d.distance = std::max(0.0, gap);
+      }
+    }
+    if (d.distance < best) {
+      best = d.distance;
+      result.min_distance = best;
+      result.closest_link = link;
+      result.closest_object.clear();
+      result.closest_voxel = d.voxel;
+      result.point_link = d.on_link;
+      result.point_obstacle = d.on_cube;
+    }
+  }
+  return best;
+}
+
+double CollisionChecker::link_object_distance(int link, const Transform& pose, const CollisionObject& object,
+                                              double best, bool solids, EnvironmentResult& result) const {
+  const ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.shape.radius};
+  for (const Shape& s : shapes_[link]) {
+    Vec3 wa, wb;
+    const double d = shapes_distance(ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
+    if (d < best) {
+      best = d;
+      result.min_distance = best;
+      result.closest_link = link;
+      result.closest_object = object.id;
+      result.point_link = wa;
+      result.point_obstacle = wb;
+    }
+  }
+  return best;
+}
+
+EnvironmentResult CollisionChecker::check_environment(const double* state, const Environment& env,
+                                                      const EnvironmentRequest& request) const {
+  EnvironmentResult result;
+  std::vector<Transform>& poses = tl_env_poses;
+  kinematics_.compute(state, poses);
+  const bool use_octree = request.octree && !env.octree().empty();
+  const bool stop_early = !request.all_links && !request.distance;
+  for (std::size_t l = 0; l < shapes_.size() && !(stop_early && result.collision); ++l) {
+    if (shapes_[l].empty()) continue;
+    const int link = static_cast<int>(l);
+    bool hit = use_octree && link_meets_octree(link, poses[l], env.octree(), request, result);
+    for (std::size_t o = 0; request.objects && o < env.objects().size() && !(hit && !request.all_links); ++o) {
+      hit = link_meets_object(link, poses[l], env.objects()[o], request, result) || hit;
+    }
+    result.collision = result.collision || hit;
+  }
+  if (!request.distance) return result;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t l = 0; l < shapes_.size(); ++l) {
+    if (shapes_[l].empty()) continue;
+    const int link = static_cast<int>(l);
+    if (use_octree) best = link_octree_distance(link, poses[l], env.octree(), best, request.solids, result);
+    for (std::size_t o = 0; request.objects && o < env.objects().size(); ++o) {
+      const CollisionObject& object = env.objects()[o];
+      const double gap = (poses[l] * bounds_[l].center - object.pose * object.bound_center).norm() -
+                         bounds_[l].radius - object.bound_radius;
+      if (gap < best) best = link_object_distance(link, poses[l], object, best, request.solids, result);
+    }
+  }
+  if (!std::isfinite(best)) result.min_distance = std::numeric_limits<double>::infinity();
+  return result;
+}
+
+}  // namespace bvh_collision

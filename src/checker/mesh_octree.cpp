@@ -1,0 +1,284 @@
+#include "bvh_collision/checker/mesh_octree.h"
+
+#include <algorithm>
+#include <array>
+
+#include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/intersection.h"
+
+namespace bvh_collision {
+namespace {
+
+// The box's surface as 12 triangles: corner i has x from bit 0, y from bit 1, z from bit 2.
+std::array<Triangle, 12> box_faces(const Vec3& lo, const Vec3& hi) {
+  Vec3 c[8];
+  for (int i = 0; i < 8; ++i) c[i] = Vec3(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  static constexpr int quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  std::array<Triangle, 12> faces;
+  for (int f = 0; f < 6; ++f) {
+    const int* q = quads[f];
+    faces[2 * f] = Triangle{{c[q[0]], c[q[1]], c[q[2]]}};
+    faces[2 * f + 1] = Triangle{{c[q[0]], c[q[2]], c[q[3]]}};
+  }
+  return faces;
+}
+
+bool inside_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+}
+
+// The gap between the triangle's bounding box and the box along the worst axis (0 if they meet).
+double bounds_gap(const Triangle& t, const Vec3& lo, const Vec3& hi) {
+  const Vec3 tlo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), thi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
+  return std::max({0.0, (tlo - hi).maxCoeff(), (lo - thi).maxCoeff()});
+}
+
+Triangle in_world(const Triangle& t, const Transform& pose) { return Triangle{{pose * t[0], pose * t[1], pose * t[2]}}; }
+
+struct Cube {
+  std::int32_t node;
+  int depth;
+  OctreeKey corner;
+  std::uint64_t index;
+};
+
+// What the descent needs of the octree and the link's pose: a cube as a box in the link frame.
+struct CubeFrame {
+  const Octree& tree;
+  Transform link_from_world;
+  Vec3 lo(const Cube& c) const { return tree.cube_min(c.corner); }
+  Vec3 hi(const Cube& c) const { return lo(c) + Vec3::Constant(tree.cube_size(c.depth)); }
+  Obb box(const Cube& c) const {
+    const double half = 0.5 * tree.cube_size(c.depth);
+    const Vec3 centre = lo(c) + Vec3::Constant(half);
+    return Obb{link_from_world.R, link_from_world * centre, Vec3::Constant(half), half * std::sqrt(3.0)};
+  }
+  Octree::Leaf leaf(const Cube& c) const { return {c.corner, c.depth, c.index, tree.value(c.node)}; }
+  template <class F>
+  void for_children(const Cube& c, F&& f) const {
+    for (int b = 0; b < 8; ++b) {
+      const std::int32_t child = tree.child(c.node, b);
+      if (child >= 0 && tree.occupied(tree.value(child))) {
+        f(Cube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
+      }
+    }
+  }
+};
+
+std::optional<Cube> root_cube(const Octree& tree) {
+  if (tree.root() < 0 || !tree.occupied(tree.value(tree.root()))) return std::nullopt;
+  return Cube{tree.root(), 0, OctreeKey{}, 0};
+}
+
+// Occupied leaf cubes that meet the mesh's root volume and hold no surface point but whose centre
+// is inside the closed mesh: wholly inside the solid. Called after the surface test found nothing.
+std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const CubeFrame& frame, QueryStats* stats) {
+  const auto root = root_cube(frame.tree);
+  if (!root || !mesh.closed()) return std::nullopt;
+  const Obb& volume = mesh.root().volume;
+  std::vector<Cube> stack{*root};
+  while (!stack.empty()) {
+    const Cube c = stack.back();
+    stack.pop_back();
+    const Obb box = frame.box(c);
+    if (!overlap_carried(volume, box, 0.0)) continue;
+    if (!frame.tree.is_leaf(c.node)) {
+      frame.for_children(c, [&](const Cube& child) { stack.push_back(child); });
+      continue;
+    }
+    if (contains_point(mesh, box.center, stats)) return c;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+bool triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi) {
+  if (bounds_gap(t, lo, hi) > 0.0) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (inside_box(t[k], lo, hi)) return true;
+  }
+  // No vertex inside: the triangle meets the box only by crossing its surface (a box edge through
+  // the triangle or a triangle edge through a face), which the exact triangle tests decide.
+  for (const Triangle& f : box_faces(lo, hi)) {
+    if (triangles_intersect(t, f)) return true;
+  }
+  return false;
+}
+
+double triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi, Vec3& on_triangle, Vec3& on_box) {
+  for (int k = 0; k < 3; ++k) {
+    if (inside_box(t[k], lo, hi)) {
+      on_triangle = on_box = t[k];
+      return 0.0;
+    }
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (const Triangle& f : box_faces(lo, hi)) {
+    if (triangles_intersect(t, f)) {
+      on_triangle = on_box = intersection_point(t, f);
+      return 0.0;
+    }
+    const ClosestPoints c = triangle_triangle_distance(t, f);
+    if (c.distance < best) {
+      best = c.distance;
+      on_triangle = c.on_a;
+      on_box = c.on_b;
+    }
+  }
+  return best;
+}
+
+bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
+                       double tolerance, bool solids, OctreeContact* contact, QueryStats* stats) {
+  const auto root = root_cube(tree);
+  if (!root || mesh.empty()) return false;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const CubeFrame frame{tree, pose.inverse()};
+  const auto& nodes = mesh.nodes();
+  struct Item {
+    Cube cube;
+    std::int32_t node;
+  };
+  std::vector<Item> stack{{*root, 0}};
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    const BvhNode<Obb>& n = nodes[it.node];
+    const Obb box = frame.box(it.cube);
+    ++s.volume_tests;
+    if (!overlap_carried(n.volume, box, padding)) continue;
+    // Every point of the volume lies within `slack` of the node's triangles, so a volume within
+    // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
+    // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.)
+    const bool cube_leaf = tree.is_leaf(it.cube.node);
+    const bool settled = cube_leaf && tolerance > 0.0 && n.slack <= tolerance;
+    if (settled || (cube_leaf && n.is_leaf())) {
+      const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
+      for (std::int32_t i = n.first; i < n.first + n.count && !settled; ++i) {
+        const Triangle t = in_world(mesh.triangles()[i], pose);
+        ++s.primitive_tests;
+        Vec3 on_t, on_b;
+        const bool hit = padding > 0.0 ? bounds_gap(t, lo, hi) <= padding && triangle_box_distance(t, lo, hi, on_t, on_b) <= padding
+                                       : triangle_meets_box(t, lo, hi);
+        if (hit) {
+          if (contact) *contact = {frame.leaf(it.cube), padding > 0.0 ? on_t : t[0]};
+          return true;
+        }
+      }
+      if (settled) {
+        if (contact) *contact = {frame.leaf(it.cube), pose * n.volume.center};
+        return true;
+      }
+      continue;
+    }
+    // Descend the larger of the two (a leaf cannot be descended).
+    if (!cube_leaf && (n.is_leaf() || 0.5 * std::sqrt(3.0) * tree.cube_size(it.cube.depth) > n.size)) {
+      frame.for_children(it.cube, [&](const Cube& c) { stack.push_back({c, it.node}); });
+    } else {
+      stack.push_back({it.cube, n.right});
+      stack.push_back({it.cube, n.left});
+    }
+  }
+  if (!solids) return false;
+  if (const auto inside = cube_inside_solid(mesh, frame, &s)) {
+    if (contact) *contact = {frame.leaf(*inside), pose * frame.box(*inside).center};
+    return true;
+  }
+  return false;
+}
+
+OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, bool solids,
+                                    double upper_bound, QueryStats* stats) {
+  OctreeDistance best;
+  const auto root = root_cube(tree);
+  if (!root || mesh.empty()) return best;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const CubeFrame frame{tree, pose.inverse()};
+  const auto& nodes = mesh.nodes();
+  const RelativeFrame same;  // cubes are already carried into the link frame
+  double bound = upper_bound;
+  struct Item {
+    double lower;
+    Cube cube;
+    std::int32_t node;
+  };
+  std::vector<Item> stack{{0.0, *root, 0}};
+  std::vector<Item> children;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    if (it.lower >= bound) continue;
+    const BvhNode<Obb>& n = nodes[it.node];
+    const bool cube_leaf = tree.is_leaf(it.cube.node);
+    if (cube_leaf && n.is_leaf()) {
+      const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
+      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+        const Triangle t = in_world(mesh.triangles()[i], pose);
+        if (bounds_gap(t, lo, hi) >= bound) continue;
+        ++s.primitive_tests;
+        Vec3 on_t, on_b;
+        const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
+        if (d < bound) {
+          bound = d;
+          best = {d, on_t, on_b, frame.leaf(it.cube)};
+        }
+      }
+      continue;
+    }
+    children.clear();
+    auto add = [&](const Cube& c, std::int32_t node) {
+      ++s.volume_tests;
+      const double lower = distance_lower_bound(nodes[node].volume, frame.box(c), same);
+      if (lower < bound) children.push_back({lower, c, node});
+    };
+    if (!cube_leaf && (n.is_leaf() || 0.5 * std::sqrt(3.0) * tree.cube_size(it.cube.depth) > n.size)) {
+      frame.for_children(it.cube, [&](const Cube& c) { add(c, it.node); });
+    } else {
+      add(it.cube, n.left);
+      add(it.cube, n.right);
+    }
+    // Nearest on top, so that a small bound comes early and prunes the rest.
+    std::sort(children.begin(), children.end(), [](const Item& a, const Item& b) { return a.lower > b.lower; });
+    stack.insert(stack.end(), children.begin(), children.end());
+  }
+  if (solids && best.distance > 0.0) {
+    if (const auto inside = cube_inside_solid(mesh, frame, &s)) {
+      const Vec3 centre = pose * frame.box(*inside).center;
+      best = {0.0, centre, centre, frame.leaf(*inside)};
+    }
+  }
+  return best;
+}
+
+OctreeDistance point_octree_distance(const Vec3& p, const Octree& tree, double upper_bound) {
+  OctreeDistance best;
+  const auto root = root_cube(tree);
+  if (!root) return best;
+  const CubeFrame frame{tree, Transform::Identity()};
+  double bound = upper_bound;
+  std::vector<std::pair<double, Cube>> stack{{0.0, *root}}, children;
+  while (!stack.empty()) {
+    const auto [lower, c] = stack.back();
+    stack.pop_back();
+    if (lower >= bound) continue;
+    if (tree.is_leaf(c.node)) {
+      const Vec3 nearest = p.cwiseMax(frame.lo(c)).cwiseMin(frame.hi(c));
+      bound = (p - nearest).norm();
+      best = {bound, p, nearest, frame.leaf(c)};
+      continue;
+    }
+    children.clear();
+    frame.for_children(c, [&](const Cube& child) {
+      const double d = (p - p.cwiseMax(frame.lo(child)).cwiseMin(frame.hi(child))).norm();
+      if (d < bound) children.emplace_back(d, child);
+    });
+    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    stack.insert(stack.end(), children.begin(), children.end());
+  }
+  return best;
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,296 @@
+// The robot against its environment: exact cube-triangle primitives against CGAL, a mesh against
+// the octree against the same octree exploded into boxes (each checked with the pairwise BVH
+// queries), solids, collision objects, and a whole robot.
+#include <gtest/gtest.h>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <random>
+#include <set>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/octree/scan.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "cgal_oracle.h"
+#include "mesh_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+using test::Epick;
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(42);
+  return r;
+}
+
+bool cgal_triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi) {
+  const Epick::Iso_cuboid_3 box(test::to_cgal<Epick>(lo), test::to_cgal<Epick>(hi));
+  const test::CgalSimplex s = test::cgal_simplex(t[0], t[1], t[2]);
+  if (s.dim == 2) return CGAL::do_intersect(Epick::Triangle_3(s.p[0], s.p[1], s.p[2]), box);
+  if (s.dim == 1) return CGAL::do_intersect(Epick::Segment_3(s.p[0], s.p[1]), box);
+  return !box.has_on_unbounded_side(s.p[0]);
+}
+
+// Apart: the distance is reached on the box's surface, so the nearest of its 12 face triangles.
+double oracle_triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi) {
+  if (cgal_triangle_meets_box(t, lo, hi)) return 0.0;
+  const TriangleMesh box = box_mesh(hi - lo);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < box.triangles.size(); ++f) {
+    Triangle face = box.triangle(f);
+    for (int k = 0; k < 3; ++k) face[k] += 0.5 * (lo + hi);
+    best = std::min(best, test::cgal_triangle_distance(t, face));
+  }
+  return best;
+}
+
+TEST(CubeTriangle, AgainstCgal) {
+  const Vec3 lo(0.25, -0.5, 1.0), hi(0.5, -0.25, 1.25);
+  std::uniform_real_distribution<double> u(-0.35, 0.35), grid(-1, 5);
+  int meets = 0, apart = 0;
+  for (int i = 0; i < 4000; ++i) {
+    Triangle t;
+    for (int k = 0; k < 3; ++k) {
+      // Vertices often exactly on the box's planes and edges (multiples of the side), where
+      // rounding would decide a filtered test.
+      const Vec3 snapped = lo + 0.0625 * Vec3(std::floor(grid(rng())), std::floor(grid(rng())), std::floor(grid(rng())));
+      t[k] = i % 3 == 0 ? snapped : Vec3(0.375 + u(rng()), -0.375 + u(rng()), 1.125 + u(rng()));
+    }
+    if (i % 17 == 0) t[2] = t[1];                      // a segment
+    if (i % 29 == 0) t[1] = t[2] = t[0];               // a point
+    if (i % 13 == 0) t[2] = 0.5 * (t[0] + t[1]);       // collinear
+    const bool expected = cgal_triangle_meets_box(t, lo, hi);
+    ASSERT_EQ(triangle_meets_box(t, lo, hi), expected) << i;
+    Vec3 on_t, on_b;
+    const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
+    const double oracle = oracle_triangle_box_distance(t, lo, hi);
+    ASSERT_NEAR(d, oracle, 1e-12) << i;
+    EXPECT_NEAR((on_t - on_b).norm(), d, 1e-12);
+    EXPECT_TRUE(((on_b.array() >= lo.array() - 1e-12) && (on_b.array() <= hi.array() + 1e-12)).all());
+    meets += expected;
+    apart += !expected;
+  }
+  EXPECT_GT(meets, 500);
+  EXPECT_GT(apart, 400);
+}
+
+// An octree with scattered voxels, a pruned block and free space.
+Octree scene_tree(double resolution) {
+  Octree tree(resolution);
+  std::uniform_real_distribution<float> u(-0.4f, 0.4f);
+  std::vector<ScanPoint> points;
+  for (int i = 0; i < 300; ++i) points.emplace_back(u(rng()), u(rng()), u(rng()));
+  insert_scan(tree, points, ScanPoint(0, 0, 1.5f));
+  std::vector<ScanPoint> block;
+  for (float x = 0.2f; x < 0.39f; x += 0.01f)
+    for (float y = 0.2f; y < 0.39f; y += 0.01f)
+      for (float z = -0.4f; z < -0.21f; z += 0.01f) block.emplace_back(x, y, z);
+  for (int i = 0; i < 6; ++i) insert_points(tree, block);
+  return tree;
+}
+
+struct Exploded {
+  std::vector<Bvh<Obb>> boxes;
+  std::vector<Transform> poses;
+};
+
+Exploded explode(const Octree& tree) {
+  Exploded e;
+  for (const auto& leaf : tree.leaves()) {
+    if (!tree.occupied(leaf.log_odds)) continue;
+    const double side = tree.cube_size(leaf.depth);
+    e.boxes.push_back(Bvh<Obb>::build(box_mesh(Vec3::Constant(side))));
+    e.poses.push_back(Transform::Translation(tree.cube_min(leaf.key) + Vec3::Constant(0.5 * side)));
+  }
+  return e;
+}
+
+void expect_mesh_matches_exploded(const TriangleMesh& mesh, const Octree& tree, double padding, int poses) {
+  const Bvh<Obb> bvh = Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2});
+  const Exploded boxes = explode(tree);
+  std::uniform_real_distribution<double> u(-0.7, 0.7);
+  int hits = 0, misses = 0;
+  for (int i = 0; i < poses; ++i) {
+    const Transform pose = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), u(rng())));
+    bool expected = false;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < boxes.boxes.size(); ++b) {
+      CollisionRequest r;
+      r.padding = padding;
+      expected = expected || collide(bvh, pose, boxes.boxes[b], boxes.poses[b], r).collision;
+      nearest = std::min(nearest, distance(bvh, pose, boxes.boxes[b], boxes.poses[b]).distance);
+    }
+    OctreeContact contact;
+    const bool hit = mesh_meets_octree(bvh, pose, tree, padding, 0.0, true, &contact);
+    ASSERT_EQ(hit, expected) << "pose " << i;
+    const OctreeDistance d = mesh_octree_distance(bvh, pose, tree, true);
+    ASSERT_NEAR(d.distance, nearest, 1e-9) << "pose " << i;
+    if (d.distance > 0) {
+      EXPECT_NEAR((d.on_link - d.on_cube).norm(), d.distance, 1e-9);
+    }
+    EXPECT_TRUE(tree.occupied(d.voxel.log_odds));
+    // A tolerance may only add collisions, and only within padding + tolerance.
+    const bool loose = mesh_meets_octree(bvh, pose, tree, padding, 0.03, true);
+    EXPECT_TRUE(!expected || loose);
+    if (loose) {
+      EXPECT_LE(nearest, padding + 0.03 + 1e-12);
+    }
+    hits += expected;
+    misses += !expected;
+  }
+  EXPECT_GT(hits, poses / 10);
+  EXPECT_GT(misses, poses / 10);
+}
+
+TEST(MeshAgainstOctree, ClosedMeshAgainstExplodedBoxes) {
+  const Octree tree = scene_tree(0.05);
+  expect_mesh_matches_exploded(test::bumpy_sphere(rng(), 0.12, 8, 12, 0.2), tree, 0.0, 60);
+  expect_mesh_matches_exploded(test::bumpy_sphere(rng(), 0.12, 8, 12, 0.2), tree, 0.02, 40);
+}
+
+TEST(MeshAgainstOctree, TriangleSoupAgainstExplodedBoxes) {
+  const Octree tree = scene_tree(0.04);
+  expect_mesh_matches_exploded(test::triangle_soup(rng(), 60, 0.3, 0.05), tree, 0.0, 60);
+}
+
+TEST(MeshAgainstOctree, RobotMeshAgainstExplodedBoxes) {
+  BVH_REQUIRE_ROBOTS();
+  const Octree tree = scene_tree(0.05);
+  expect_mesh_matches_exploded(test::robot_mesh("panda/moveit_resources_panda_description/meshes/collision/hand.stl"),
+                               tree, 0.0, 40);
+}
+
+// Solids: a link wholly inside a block of occupied voxels, and a voxel wholly inside a link.
+TEST(MeshAgainstOctree, SolidsInsideEachOther) {
+  Octree tree(0.02);
+  std::vector<ScanPoint> block;
+  for (float x = -0.3f; x < 0.3f; x += 0.01f)
+    for (float y = -0.3f; y < 0.3f; y += 0.01f)
+      for (float z = -0.3f; z < 0.3f; z += 0.01f) block.emplace_back(x, y, z);
+  for (int i = 0; i < 3; ++i) insert_points(tree, block);
+  const Bvh<Obb> small = Bvh<Obb>::build(test::bumpy_sphere(rng(), 0.05, 8, 12, 0.1));
+  const Transform pose = Transform::Translation(Vec3(0.01, -0.02, 0.03));
+  EXPECT_TRUE(mesh_meets_octree(small, pose, tree, 0.0, 0.0, true));
+  EXPECT_EQ(mesh_octree_distance(small, pose, tree, true).distance, 0.0);
+
+  Octree one(0.02);
+  one.update(*one.grid().key(Vec3(0.01, 0.01, 0.01)), true);
+  const Bvh<Obb> big = Bvh<Obb>::build(test::bumpy_sphere(rng(), 0.3, 10, 16, 0.1));
+  ASSERT_TRUE(big.closed());
+  EXPECT_TRUE(mesh_meets_octree(big, Transform::Identity(), one, 0.0, 0.0, true));
+  EXPECT_FALSE(mesh_meets_octree(big, Transform::Identity(), one, 0.0, 0.0, false));
+  EXPECT_EQ(mesh_octree_distance(big, Transform::Identity(), one, true).distance, 0.0);
+  EXPECT_GT(mesh_octree_distance(big, Transform::Identity(), one, false).distance, 0.2);
+}
+
+TEST(PointAgainstOctree, NearestOccupiedCube) {
+  const Octree tree = scene_tree(0.05);
+  std::vector<Octree::Leaf> occupied;
+  for (const auto& l : tree.leaves()) {
+    if (tree.occupied(l.log_odds)) occupied.push_back(l);
+  }
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 p(u(rng()), u(rng()), u(rng()));
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& l : occupied) {
+      const Vec3 lo = tree.cube_min(l.key), hi = lo + Vec3::Constant(tree.cube_size(l.depth));
+      best = std::min(best, (p - p.cwiseMax(lo).cwiseMin(hi)).norm());
+    }
+    const OctreeDistance d = point_octree_distance(p, tree);
+    ASSERT_EQ(d.distance, best);
+    EXPECT_NEAR((d.on_cube - p).norm(), best, 1e-15);
+    EXPECT_FALSE(std::isfinite(point_octree_distance(p, tree, best * 0.5).distance) && best > 0);
+  }
+}
+
+TEST(Environment, ObjectsAddMoveRemoveAndBadInput) {
+  Environment env(0.05);
+  env.add_object("table", ObjectShape::box(Vec3(1.0, 0.8, 0.05)), Transform::Translation(Vec3(0.5, 0, 0.4)));
+  env.add_object("ball", ObjectShape::sphere(0.05), Transform::Translation(Vec3(0.5, 0.2, 0.5)));
+  env.add_object("can", ObjectShape::cylinder(0.04, 0.12), Transform::Translation(Vec3(0.4, -0.2, 0.5)));
+  env.add_object("blob", ObjectShape::triangles(test::bumpy_sphere(rng(), 0.05, 6, 8, 0.1)), Transform::Identity());
+  EXPECT_EQ(env.objects().size(), 4u);
+  EXPECT_TRUE(env.find_object("can")->mesh->closed());
+  EXPECT_TRUE(env.move_object("ball", Transform::Translation(Vec3(0, 0, 2))));
+  EXPECT_EQ(env.find_object("ball")->pose.t.z(), 2.0);
+  EXPECT_FALSE(env.move_object("nothing", Transform::Identity()));
+  EXPECT_TRUE(env.remove_object("blob"));
+  EXPECT_FALSE(env.remove_object("blob"));
+  env.add_object("ball", ObjectShape::sphere(0.1), Transform::Identity());  // replaces
+  EXPECT_EQ(env.objects().size(), 3u);
+  EXPECT_EQ(env.find_object("ball")->shape.radius, 0.1);
+  EXPECT_THROW(env.add_object("", ObjectShape::sphere(1), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::box(Vec3(1, 0, 1)), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(std::nan("")), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::cylinder(-1, 1), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::triangles(TriangleMesh{}), Transform::Identity()), std::invalid_argument);
+  Transform skewed;
+  skewed.R(0, 0) = 2.0;
+  EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(1), skewed), std::invalid_argument);
+  EXPECT_THROW(env.move_object("ball", skewed), std::invalid_argument);
+  EXPECT_EQ(env.objects().size(), 3u);
+  EXPECT_EQ(env.find_object("bad"), nullptr);
+  EXPECT_THROW(Environment(0.0), std::invalid_argument);
+}
+
+// A whole robot against an octree and objects, link by link against the exploded oracle.
+TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
+  BVH_REQUIRE_ROBOTS();
+  const std::string dir = test::robots_dir() + "/panda";
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+  CheckerOptions options;
+  options.link_padding["panda_hand"] = 0.01;
+  const CollisionChecker checker(model, AllowedCollisionMatrix::adjacent_links(model), options);
+  Environment env(0.04);
+  // A table top of voxels in front of the robot, and objects.
+  std::vector<ScanPoint> table;
+  for (float x = 0.2f; x < 0.8f; x += 0.01f)
+    for (float y = -0.4f; y < 0.4f; y += 0.01f) table.emplace_back(x, y, 0.3f);
+  insert_scan(env.octree(), table, ScanPoint(0.5f, 0.0f, 1.5f));
+  env.add_object("post", ObjectShape::cylinder(0.05, 1.0), Transform::Translation(Vec3(0.0, 0.5, 0.5)));
+  env.add_object("ball", ObjectShape::sphere(0.1), Transform::Translation(Vec3(0.5, -0.3, 0.6)));
+  const Exploded boxes = explode(env.octree());
+  const Bvh<Obb> post = Bvh<Obb>::build(cylinder_mesh(0.05, 1.0, kObjectCylinderMaxError));
+  int colliding = 0, free = 0;
+  for (int i = 0; i < 60; ++i) {
+    const std::vector<double> state = random_configuration(checker.model(), rng());
+    std::vector<Transform> poses;
+    forward_kinematics(checker.model(), state.data(), poses);
+    std::set<int> expected;
+    for (std::size_t l = 0; l < poses.size(); ++l) {
+      const double padding = checker.link_padding(static_cast<int>(l));
+      for (const CollisionElement& e : checker.model().links()[l].collision) {
+        ASSERT_NE(e.shape, CollisionElement::Shape::kSphere);  // panda: meshes only
+        const Bvh<Obb> link = Bvh<Obb>::build(*e.mesh);
+        const Transform pose = poses[l] * e.origin;
+        CollisionRequest r;
+        r.padding = padding;
+        bool hit = collide(link, pose, post, env.find_object("post")->pose, r).collision;
+        hit = hit || point_distance(link, pose, Vec3(0.5, -0.3, 0.6)).distance <= 0.1 + padding ||
+              contains_point(link, pose.inverse() * Vec3(0.5, -0.3, 0.6));
+        for (std::size_t b = 0; b < boxes.boxes.size() && !hit; ++b) {
+          hit = collide(link, pose, boxes.boxes[b], boxes.poses[b], r).collision;
+        }
+        if (hit) expected.insert(static_cast<int>(l));
+      }
+    }
+    EnvironmentRequest request;
+    request.all_links = true;
+    const EnvironmentResult result = checker.check_environment(state.data(), env, request);
+    std::set<int> got;
+    for (const auto& c : result.contacts) got.insert(c.link);
+    ASSERT_EQ(got, expected) << "state " << i;
+    EXPECT_EQ(checker.check_environment(state.data(), env).collision, !expected.empty());
+    colliding += !expected.empty();
+    free += expected.empty();
+  }
+  EXPECT_GT(colliding, 5);
+  EXPECT_GT(free, 5);
+}
+
+}  // namespace
+}  // namespace bvh_collision
