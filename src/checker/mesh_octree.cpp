@@ -70,10 +70,41 @@ std::optional<Cube> root_cube(const Octree& tree) {
   return Cube{tree.root(), 0, OctreeKey{}, 0};
 }
 
+// The smallest node holding every voxel the box [lo, hi] (world) can touch, found by descending
+// while the box's two corner keys fall into the same child (the seed's box descent): a link's
+// query starts there instead of 16 levels above.
+std::optional<Cube> start_cube(const Octree& tree, const Vec3& lo, const Vec3& hi) {
+  auto cube = root_cube(tree);
+  if (!cube) return cube;
+  const auto a = tree.grid().key(lo), b = tree.grid().key(hi);
+  if (!a || !b) return cube;
+  // One voxel of margin below: a cube whose upper face touches `lo` still matters.
+  OctreeKey low = *a;
+  for (auto& k : low.k) k = static_cast<std::uint16_t>(k > 0 ? k - 1 : 0);
+  while (cube->depth < kOctreeDepth && !tree.is_leaf(cube->node)) {
+    const int bit = child_bits(low, cube->depth);
+    if (bit != child_bits(*b, cube->depth)) break;
+    const std::int32_t child = tree.child(cube->node, bit);
+    if (child < 0 || !tree.occupied(tree.value(child))) return std::nullopt;  // nothing occupied there
+    *cube = Cube{child, cube->depth + 1, child_corner(cube->corner, cube->depth, bit), child_index(cube->index, bit)};
+  }
+  return cube;
+}
+
+// The world box around a mesh's root volume, grown by `margin`.
+std::pair<Vec3, Vec3> world_bounds(const Bvh<Obb>& mesh, const Transform& pose, double margin) {
+  const Obb& v = mesh.root().volume;
+  const Vec3 centre = pose * v.center;
+  const Vec3 half = (pose.R * v.axes).cwiseAbs() * v.half + Vec3::Constant(margin + 1e-9 * (1.0 + centre.cwiseAbs().maxCoeff()));
+  return {centre - half, centre + half};
+}
+
 // Occupied leaf cubes that meet the mesh's root volume and hold no surface point but whose centre
 // is inside the closed mesh: wholly inside the solid. Called after the surface test found nothing.
-std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const CubeFrame& frame, QueryStats* stats) {
-  const auto root = root_cube(frame.tree);
+std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const Transform& pose, const CubeFrame& frame,
+                                      QueryStats* stats) {
+  const auto [lo, hi] = world_bounds(mesh, pose, 0.0);
+  const auto root = start_cube(frame.tree, lo, hi);
   if (!root || !mesh.closed()) return std::nullopt;
   const Obb& volume = mesh.root().volume;
   std::vector<Cube> stack{*root};
@@ -131,8 +162,10 @@ double triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi, 
 
 bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
                        double tolerance, bool solids, OctreeContact* contact, QueryStats* stats) {
-  const auto root = root_cube(tree);
-  if (!root || mesh.empty()) return false;
+  if (mesh.empty()) return false;
+  const auto [reach_lo, reach_hi] = world_bounds(mesh, pose, padding + tolerance);
+  const auto root = start_cube(tree, reach_lo, reach_hi);
+  if (!root) return false;
   QueryStats local;
   QueryStats& s = stats ? *stats : local;
   const CubeFrame frame{tree, pose.inverse()};
@@ -141,7 +174,8 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     Cube cube;
     std::int32_t node;
   };
-  std::vector<Item> stack{{*root, 0}};
+  thread_local std::vector<Item> stack;  // one query per link and state: no allocation per call
+  stack.assign(1, Item{*root, 0});
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
@@ -182,7 +216,7 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     }
   }
   if (!solids) return false;
-  if (const auto inside = cube_inside_solid(mesh, frame, &s)) {
+  if (const auto inside = cube_inside_solid(mesh, pose, frame, &s)) {
     if (contact) *contact = {frame.leaf(*inside), pose * frame.box(*inside).center};
     return true;
   }
@@ -245,7 +279,7 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
     stack.insert(stack.end(), children.begin(), children.end());
   }
   if (solids && best.distance > 0.0) {
-    if (const auto inside = cube_inside_solid(mesh, frame, &s)) {
+    if (const auto inside = cube_inside_solid(mesh, pose, frame, &s)) {
       const Vec3 centre = pose * frame.box(*inside).center;
       best = {0.0, centre, centre, frame.leaf(*inside)};
     }

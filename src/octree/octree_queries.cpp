@@ -114,7 +114,8 @@ std::vector<Octree::Leaf> Octree::occupied_in_box(const Vec3& min, const Vec3& m
 std::vector<Octree::Leaf> Octree::occupied_in_sphere(const Vec3& centre, double radius, bool any) const {
   std::vector<Leaf> out;
   if (nodes_.empty() || !(radius >= 0.0) || !centre.allFinite()) return out;
-  std::vector<Item> stack{{0, 0, OctreeKey{}, 0}};
+  thread_local std::vector<Item> stack;  // robot checks ask this per link: no allocation per call
+  stack.assign(1, Item{0, 0, OctreeKey{}, 0});
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
