@@ -267,6 +267,38 @@ TEST(OctreeAgainstOctomap, OccupiedOnlyInsert) {
   EXPECT_EQ(ours(tree), theirs(reference));
 }
 
+// Rays that only clear (the self filter's robot points and shadows): OctoMap's own ray keys for
+// them join the scan's free set, their end voxels are not marked, and the update is applied as
+// insertPointCloud applies one (free first, each voxel once, an occupied end never also freed).
+TEST(OctreeAgainstOctomap, ClearOnlyRays) {
+  for (const int threads : {1, 2}) {
+    Octree tree(0.05);
+    octomap::OcTree reference(0.05);
+    for (int s = 0; s < 3; ++s) {
+      const ScanPoint origin(0.2f * s, 0.1f, 1.2f);
+      const auto marked = random_scan(origin, 6000, 1.5), clearing = random_scan(origin, 6000, 1.0);
+      octomap::Pointcloud cloud;
+      for (const ScanPoint& p : marked) cloud.push_back(p.x(), p.y(), p.z());
+      const octomap::point3d o(origin.x(), origin.y(), origin.z());
+      octomap::KeySet free, occupied;
+      reference.computeUpdate(cloud, o, free, occupied, -1.0);
+      octomap::KeyRay ray;
+      for (const ScanPoint& p : clearing) {
+        ASSERT_TRUE(reference.computeRayKeys(o, octomap::point3d(p.x(), p.y(), p.z()), ray));
+        free.insert(ray.begin(), ray.end());
+      }
+      for (const auto& k : occupied) free.erase(k);
+      for (const auto& k : free) reference.updateNode(k, false);
+      for (const auto& k : occupied) reference.updateNode(k, true);
+      const ScanStats stats = insert_scan(tree, marked, clearing, origin, with(-1.0, threads));
+      EXPECT_EQ(stats.points, marked.size() + clearing.size());
+      EXPECT_EQ(stats.occupied, occupied.size());
+      EXPECT_EQ(stats.free, free.size());
+    }
+    EXPECT_EQ(ours(tree), theirs(reference)) << threads << " threads";
+  }
+}
+
 // A tree with occupied, free and pruned nodes to query: scans of a random scene.
 Octree scanned_tree(double resolution) {
   Octree tree(resolution);

@@ -88,14 +88,14 @@ bool within_range(const ScanPoint& p, const ScanPoint& origin, const ScanOptions
 
 // OctoMap's bounding-box branch: points outside the box (or beyond max_range) are dropped; a kept
 // ray frees its voxels from the end point back to where it leaves the box.
-void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, const ScanPoint& origin, const ScanOptions& options,
-                       const KeyBox& box, ScanPart& part) {
+void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
+                       const ScanOptions& options, const KeyBox& box, ScanPart& part) {
   if (!within_range(p, origin, options) || !options.workspace->contains(p)) {
     ++part.stats.skipped_workspace;
     return;
   }
   if (const auto k = key_of(grid, p)) {
-    part.occupied.insert(*k);
+    if (mark_end) part.occupied.insert(*k);
   } else {
     ++part.stats.skipped_outside;
   }
@@ -104,8 +104,8 @@ void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, const ScanPoi
   for (auto it = part.ray.rbegin(); it != part.ray.rend() && box.contains(*it); ++it) part.free.insert(*it);
 }
 
-void cast(const OctreeGrid& grid, const ScanPoint& p, const ScanPoint& origin, const ScanOptions& options,
-          ScanPart& part) {
+void cast(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
+          const ScanOptions& options, ScanPart& part) {
   const bool within = within_range(p, origin, options);
   ScanPoint end = p;
   if (!within) {
@@ -120,23 +120,33 @@ void cast(const OctreeGrid& grid, const ScanPoint& p, const ScanPoint& origin, c
     return;
   }
   if (const auto k = key_of(grid, p)) {
-    part.occupied.insert(*k);
+    if (mark_end) part.occupied.insert(*k);
   } else {
     ++part.stats.skipped_outside;  // the end point is outside the key range: nothing inserted
   }
 }
 
-void cast_all(const OctreeGrid& grid, const ScanPoint* first, const ScanPoint* last, const ScanPoint& origin,
-              const ScanOptions& options, ScanPart& part) {
+// A scan's two lists seen as one sequence: end points that mark, then end points that only clear.
+struct ScanRays {
+  const std::vector<ScanPoint>& points;
+  const std::vector<ScanPoint>& clear_only;
+  std::size_t size() const { return points.size() + clear_only.size(); }
+  bool marks(std::size_t i) const { return i < points.size(); }
+  const ScanPoint& operator[](std::size_t i) const { return marks(i) ? points[i] : clear_only[i - points.size()]; }
+};
+
+void cast_all(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, std::size_t last,
+              const ScanPoint& origin, const ScanOptions& options, ScanPart& part) {
   std::optional<KeyBox> box;
   if (options.workspace) box = key_box(grid, *options.workspace);
   for (; first != last; ++first) {
-    if (!first->allFinite()) {
+    const ScanPoint& p = rays[first];
+    if (!p.allFinite()) {
       ++part.stats.skipped_invalid;
     } else if (box) {
-      cast_in_workspace(grid, *first, origin, options, *box, part);
+      cast_in_workspace(grid, p, rays.marks(first), origin, options, *box, part);
     } else {
-      cast(grid, *first, origin, options, part);
+      cast(grid, p, rays.marks(first), origin, options, part);
     }
   }
 }
@@ -148,15 +158,14 @@ int thread_count(const ScanOptions& options, std::size_t points) {
 }
 
 // Cast the scan's rays on several threads, each into its own sets, then merge.
-ScanPart cast_scan(const OctreeGrid& grid, const std::vector<ScanPoint>& points, const ScanPoint& origin,
-                   const ScanOptions& options) {
-  const auto threads = static_cast<std::size_t>(thread_count(options, points.size()));
+ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint& origin, const ScanOptions& options) {
+  const auto threads = static_cast<std::size_t>(thread_count(options, rays.size()));
   std::vector<ScanPart> parts(threads);
   std::vector<std::thread> workers;
-  const std::size_t chunk = (points.size() + threads - 1) / threads;
+  const std::size_t chunk = (rays.size() + threads - 1) / threads;
   for (std::size_t t = 0; t < threads; ++t) {
-    const std::size_t begin = std::min(points.size(), t * chunk), end = std::min(points.size(), begin + chunk);
-    auto work = [&, t, begin, end] { cast_all(grid, points.data() + begin, points.data() + end, origin, options, parts[t]); };
+    const std::size_t begin = std::min(rays.size(), t * chunk), end = std::min(rays.size(), begin + chunk);
+    auto work = [&, t, begin, end] { cast_all(grid, rays, begin, end, origin, options, parts[t]); };
     if (t + 1 < threads) {
       workers.emplace_back(work);
     } else {
@@ -184,8 +193,14 @@ bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& 
 
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const ScanPoint& origin,
                       const ScanOptions& options) {
-  ScanPart scan = cast_scan(tree.grid(), points, origin, options);
-  scan.stats.points = points.size();
+  return insert_scan(tree, points, {}, origin, options);
+}
+
+ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const std::vector<ScanPoint>& clear_only,
+                      const ScanPoint& origin, const ScanOptions& options) {
+  const ScanRays rays{points, clear_only};
+  ScanPart scan = cast_scan(tree.grid(), rays, origin, options);
+  scan.stats.points = rays.size();
   // A voxel that ends a ray is occupied, not also freed. Free updates go first, as in OctoMap.
   scan.free.erase_all(scan.occupied);
   const std::vector<OctreeKey> free = scan.free.sorted_keys(), occupied = scan.occupied.sorted_keys();

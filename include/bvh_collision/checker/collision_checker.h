@@ -12,6 +12,7 @@
 #include "bvh_collision/checker/environment.h"
 #include "bvh_collision/checker/mesh_octree.h"
 #include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
 
@@ -75,6 +76,14 @@ struct EnvironmentResult {
   QueryStats stats;
 };
 
+// A scan split by the self filter, ready for insert_scan(tree, obstacles, clear_only, sensor).
+struct FilteredScan {
+  std::vector<ScanPoint> obstacles;   // kept, in scan order (invalid points too: insert_scan counts them)
+  std::vector<ScanPoint> clear_only;  // robot points and shadows, cut to `padding` before the robot
+  std::size_t on_robot = 0;           // points on or within padding of a link, or inside a closed one
+  std::size_t shadowed = 0;           // points whose ray from the sensor passes through a link
+};
+
 class CollisionChecker {
  public:
   CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
@@ -97,6 +106,16 @@ class CollisionChecker {
   // links' padding.
   EnvironmentResult check_environment(const double* state, const Environment& env,
                                       const EnvironmentRequest& request = {}) const;
+
+  // The self filter (DESIGN.md section 3), for a scan taken with the robot in `state`; points and
+  // sensor in the root link's frame. A point on or within `padding` of a link (or inside a closed
+  // link) is the robot, not an obstacle; a point whose ray from the sensor passes through a link is
+  // in the robot's shadow and not an obstacle either. Neither is dropped outright: the sensor saw
+  // through the space in front of the robot, so their rays still clear it, up to `padding` before
+  // the ray first meets a link. A link that holds the sensor (within padding) casts no shadow: a
+  // camera inside its mount's mesh would otherwise see nothing. Uses every core.
+  FilteredScan filter_scan(const double* state, const std::vector<ScanPoint>& points, const ScanPoint& sensor,
+                           double padding) const;
 
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return meshes_.size(); }
@@ -153,6 +172,10 @@ class CollisionChecker {
                               EnvironmentResult& result) const;
   double link_object_distance(int link, const Transform& pose, const CollisionObject& object, double best,
                               bool solids, EnvironmentResult& result) const;
+
+  // Self filter primitives: is p on or within padding of the link; where does the ray first meet it.
+  bool point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const;
+  double ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit, double length) const;
 
   RobotModel model_;
   AllowedCollisionMatrix acm_;

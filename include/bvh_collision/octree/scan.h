@@ -48,6 +48,13 @@ struct ScanStats {
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const ScanPoint& origin,
                       const ScanOptions& options = {});
 
+// The same with rays that only clear: `clear_only` end points mark nothing occupied, their rays
+// free the voxels they cross (without the end's voxel), as a point beyond max_range does. The self
+// filter sends the robot's own points and their shadows this way, shortened to before the robot.
+// ScanStats::points counts both lists.
+ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const std::vector<ScanPoint>& clear_only,
+                      const ScanPoint& origin, const ScanOptions& options = {});
+
 // End points only, without rays (no free space observed): each voxel holding a point is updated
 // once as occupied. max_range does not apply (there is no sensor origin); the workspace does.
 ScanStats insert_points(Octree& tree, const std::vector<ScanPoint>& points, const ScanOptions& options = {});

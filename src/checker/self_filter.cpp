@@ -1,0 +1,153 @@
+// The self filter: a scan's points on the robot and in its shadow are not obstacles.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <thread>
+
+#include "bvh_collision/checker/collision_checker.h"
+
+namespace bvh_collision {
+namespace {
+
+// A link as the filter sees it for one scan: pose and bounding sphere in the scan's frame.
+struct LinkInScan {
+  int link = -1;
+  Transform pose;
+  Vec3 centre = Vec3::Zero();
+  double radius = 0.0;
+  bool holds_sensor = false;
+};
+
+// Does the segment origin + s * unit, 0 <= s <= length, meet the ball?
+bool segment_meets_ball(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
+  const double s = std::clamp((centre - origin).dot(unit), 0.0, length);
+  return (origin + s * unit - centre).squaredNorm() <= radius * radius;
+}
+
+// Where the ray origin + s * unit first meets a ball, or infinity.
+double ray_meets_ball(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
+  const Vec3 m = origin - centre;
+  const double b = m.dot(unit), c = m.squaredNorm() - radius * radius;
+  if (c <= 0.0) return 0.0;  // the origin is inside
+  const double disc = b * b - c;
+  if (b > 0.0 || disc < 0.0) return std::numeric_limits<double>::infinity();
+  const double s = -b - std::sqrt(disc);
+  return s <= length ? s : std::numeric_limits<double>::infinity();
+}
+
+// fn(begin, end, part) over contiguous chunks of [0, n), one per core (a thread pays for itself
+// only with a few thousand points); the parts come back in order.
+template <class Part, class Fn>
+std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
+  const std::size_t cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t workers = std::clamp<std::size_t>(n / 4096, 1, cores);
+  std::vector<Part> parts(workers);
+  const std::size_t chunk = (n + workers - 1) / workers;
+  std::vector<std::thread> threads;
+  for (std::size_t w = 0; w < workers; ++w) {
+    const std::size_t begin = std::min(n, w * chunk), end = std::min(n, begin + chunk);
+    auto work = [&fn, &parts, w, begin, end] { fn(begin, end, parts[w]); };
+    if (w + 1 < workers) {
+      threads.emplace_back(work);
+    } else {
+      work();
+    }
+  }
+  for (std::thread& t : threads) t.join();
+  return parts;
+}
+
+}  // namespace
+
+bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const {
+  // "On or within": a point exactly at the padding distance counts.
+  const double reach = std::nextafter(padding, std::numeric_limits<double>::infinity());
+  for (const Shape& s : shapes_[link]) {
+    const Transform sp = pose * s.origin;
+    if (s.mesh < 0) {
+      if ((p - sp.t).norm() <= s.radius + padding) return true;
+      continue;
+    }
+    const Bvh<Obb>& mesh = meshes_[s.mesh];
+    if (point_distance(mesh, sp, p, reach).distance <= padding) return true;
+    if (mesh.closed() && contains_point(mesh, sp.R.transpose() * (p - sp.t))) return true;
+  }
+  return false;
+}
+
+double CollisionChecker::ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit,
+                                        double length) const {
+  double first = std::numeric_limits<double>::infinity();
+  for (const Shape& s : shapes_[link]) {
+    const Transform sp = pose * s.origin;
+    if (s.mesh < 0) {
+      first = std::min(first, ray_meets_ball(origin, unit, length, sp.t, s.radius));
+      continue;
+    }
+    const RayHit hit = raycast(meshes_[s.mesh], sp, origin, unit, std::min(first, length));
+    if (hit.hit) first = std::min(first, hit.distance);
+  }
+  return first;
+}
+
+FilteredScan CollisionChecker::filter_scan(const double* state, const std::vector<ScanPoint>& points,
+                                           const ScanPoint& sensor, double padding) const {
+  if (!(padding >= 0.0) || !std::isfinite(padding)) {
+    throw std::invalid_argument("self filter: padding must be finite and >= 0, got " + std::to_string(padding));
+  }
+  if (!sensor.allFinite()) throw std::invalid_argument("self filter: the sensor origin is not finite");
+  std::vector<Transform> poses;
+  kinematics_.compute(state, poses);
+  const Vec3 origin = sensor.cast<double>();
+  std::vector<LinkInScan> links;
+  for (std::size_t l = 0; l < shapes_.size(); ++l) {
+    if (shapes_[l].empty()) continue;
+    const int link = static_cast<int>(l);
+    links.push_back({link, poses[l], poses[l] * bounds_[l].center, bounds_[l].radius,
+                     point_on_link(link, poses[l], origin, padding)});
+  }
+  // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`
+  // before the ray first meets a link.
+  auto classify = [&](const ScanPoint& point, FilteredScan& out) {
+    const Vec3 p = point.cast<double>();
+    const Vec3 d = p - origin;
+    const double length = d.norm();
+    if (!p.allFinite() || !(length > 0.0)) {
+      out.obstacles.push_back(point);  // insert_scan skips and counts these
+      return;
+    }
+    const Vec3 unit = d / length;
+    bool on_robot = false;
+    double first = length;
+    for (const LinkInScan& v : links) {
+      const double reach = v.radius + padding;
+      if (!on_robot && (p - v.centre).squaredNorm() <= reach * reach) {
+        on_robot = point_on_link(v.link, v.pose, p, padding);
+      }
+      if (!v.holds_sensor && segment_meets_ball(origin, unit, first, v.centre, v.radius)) {
+        first = std::min(first, ray_meets_link(v.link, v.pose, origin, unit, first));
+      }
+    }
+    if (!on_robot && first >= length) {
+      out.obstacles.push_back(point);
+      return;
+    }
+    ++(on_robot ? out.on_robot : out.shadowed);
+    if (first - padding > 0.0) out.clear_only.push_back((origin + unit * (first - padding)).cast<float>());
+  };
+  auto filter_chunk = [&](std::size_t begin, std::size_t end, FilteredScan& part) {
+    for (std::size_t i = begin; i < end; ++i) classify(points[i], part);
+  };
+  std::vector<FilteredScan> parts = in_chunks<FilteredScan>(points.size(), filter_chunk);
+  FilteredScan all = std::move(parts.front());
+  for (std::size_t w = 1; w < parts.size(); ++w) {
+    all.obstacles.insert(all.obstacles.end(), parts[w].obstacles.begin(), parts[w].obstacles.end());
+    all.clear_only.insert(all.clear_only.end(), parts[w].clear_only.begin(), parts[w].clear_only.end());
+    all.on_robot += parts[w].on_robot;
+    all.shadowed += parts[w].shadowed;
+  }
+  return all;
+}
+
+}  // namespace bvh_collision
