@@ -13,9 +13,6 @@ thread_local std::vector<Transform> tl_env_poses;
 bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const Octree& tree,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
   const double padding = padding_[link];
-  // Broad phase, exact and cheap: no occupied cube within the link's bounding sphere (plus reach).
-  const Vec3 centre = pose * bounds_[link].center;
-  if (tree.occupied_in_sphere(centre, bounds_[link].radius + padding + request.tolerance, true).empty()) return false;
   for (const Shape& s : shapes_[link]) {
     const Transform p = pose * s.origin;
     OctreeContact contact;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 
+#include "bvh_collision/bvh/traversal_stack.h"
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
 
@@ -64,6 +65,89 @@ struct CubeFrame {
     }
   }
 };
+
+// The voxel keys a world box can touch, per axis, as integers: a cube outside them is rejected
+// with six comparisons before any separating-axis test. One voxel of margin below, since a cube
+// whose upper face touches the box's lower corner has the next key.
+struct KeyRange {
+  int lo[3], hi[3];
+  KeyRange(const OctreeGrid& grid, const Vec3& box_lo, const Vec3& box_hi) {
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::max(0, clamped_key(grid, box_lo[i]) - 1);
+      hi[i] = clamped_key(grid, box_hi[i]);
+    }
+  }
+  bool meets(const OctreeKey& corner, int depth) const {
+    const int span = 1 << (kOctreeDepth - depth);
+    for (int i = 0; i < 3; ++i) {
+      if (corner.k[i] > hi[i] || corner.k[i] + span <= lo[i]) return false;
+    }
+    return true;
+  }
+  static int clamped_key(const OctreeGrid& grid, double x) {
+    if (const auto k = grid.key(x)) return *k;
+    return x < 0.0 ? 0 : 0xFFFF;
+  }
+};
+
+// A BVH node's box in world axes, carried once per node and query (a node meets many cubes).
+struct NodeInWorld {
+  Vec3 centre;
+  Mat3 axes;         // columns: the box's axes in world
+  Vec3 half;
+  Vec3 reach;        // half extents of its world-aligned bounding box
+  Vec3 axis_spread;  // per box axis, the 1-norm of its world coordinates (a cube's projection)
+};
+
+class WorldVolumes {
+ public:
+  // Looked up once per query: thread_local access costs a call in a shared library.
+  static WorldVolumes& for_query(const Bvh<Obb>& mesh, const Transform& pose) {
+    thread_local WorldVolumes cache;
+    cache.mesh_ = &mesh;
+    cache.pose_ = pose;
+    ++cache.query_;
+    if (cache.stamp_.size() < mesh.nodes().size()) {
+      cache.stamp_.resize(mesh.nodes().size(), 0);
+      cache.nodes_.resize(mesh.nodes().size());
+    }
+    return cache;
+  }
+  const NodeInWorld& operator[](std::int32_t n) {
+    if (stamp_[n] != query_) {
+      const Obb& v = mesh_->nodes()[n].volume;
+      NodeInWorld& w = nodes_[n];
+      w.centre = pose_ * v.center;
+      w.axes = pose_.R * v.axes;
+      w.half = v.half;
+      w.reach = w.axes.cwiseAbs() * v.half;
+      w.axis_spread = w.axes.cwiseAbs().colwise().sum().transpose();
+      stamp_[n] = query_;
+    }
+    return nodes_[n];
+  }
+
+ private:
+  const Bvh<Obb>* mesh_ = nullptr;
+  Transform pose_;
+  std::uint64_t query_ = 0;
+  std::vector<std::uint64_t> stamp_;
+  std::vector<NodeInWorld> nodes_;
+};
+
+// Can the node's box come within `padding` of the cube (centre c, half side h)? The separating
+// axes of both boxes' faces (world axes first: a bounding-box test); the nine edge axes are
+// skipped, so the answer may be a conservative yes, never a wrong no. A small margin keeps
+// rounding from separating boxes that touch.
+bool node_meets_cube(const NodeInWorld& n, const Vec3& c, double h, double padding) {
+  const Vec3 d = n.centre - c;
+  const double s = padding + 4.0 * kVolumeMargin * (d.cwiseAbs().sum() + c.cwiseAbs().sum() + n.reach.sum() + h + 1.0);
+  if ((d.cwiseAbs() - n.reach).maxCoeff() > h + s) return false;
+  for (int j = 0; j < 3; ++j) {
+    if (std::abs(n.axes.col(j).dot(d)) > n.half[j] + h * n.axis_spread[j] + s) return false;
+  }
+  return true;
+}
 
 std::optional<Cube> root_cube(const Octree& tree) {
   if (tree.root() < 0 || !tree.occupied(tree.value(tree.root()))) return std::nullopt;
@@ -174,15 +258,16 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     Cube cube;
     std::int32_t node;
   };
-  thread_local std::vector<Item> stack;  // one query per link and state: no allocation per call
-  stack.assign(1, Item{*root, 0});
+  const KeyRange reach(tree.grid(), reach_lo, reach_hi);
+  WorldVolumes& world = WorldVolumes::for_query(mesh, pose);
+  TraversalStack<Item> stack;
+  stack.push(Item{*root, 0});
   while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
+    const Item it = stack.pop();
     const BvhNode<Obb>& n = nodes[it.node];
-    const Obb box = frame.box(it.cube);
+    const double half = 0.5 * tree.cube_size(it.cube.depth);
     ++s.volume_tests;
-    if (!overlap_carried(n.volume, box, padding)) continue;
+    if (!node_meets_cube(world[it.node], frame.lo(it.cube) + Vec3::Constant(half), half, padding)) continue;
     // Every point of the volume lies within `slack` of the node's triangles, so a volume within
     // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
     // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.)
@@ -208,11 +293,13 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
       continue;
     }
     // Descend the larger of the two (a leaf cannot be descended).
-    if (!cube_leaf && (n.is_leaf() || 0.5 * std::sqrt(3.0) * tree.cube_size(it.cube.depth) > n.size)) {
-      frame.for_children(it.cube, [&](const Cube& c) { stack.push_back({c, it.node}); });
+    if (!cube_leaf && (n.is_leaf() || std::sqrt(3.0) * half > n.size)) {
+      frame.for_children(it.cube, [&](const Cube& c) {
+        if (reach.meets(c.corner, c.depth)) stack.push({c, it.node});
+      });
     } else {
-      stack.push_back({it.cube, n.right});
-      stack.push_back({it.cube, n.left});
+      stack.push({it.cube, n.right});
+      stack.push({it.cube, n.left});
     }
   }
   if (!solids) return false;
