@@ -316,15 +316,15 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
     const Ray ray(point, far - point, 1.0);
     int crossings = 0;
     bool degenerate = false;
-    std::vector<std::int32_t> stack{0};
+    TraversalStack<std::int32_t> stack;
+    stack.push(0);
     while (!stack.empty() && !degenerate) {
-      const BvhNode<BV>& n = bvh.nodes()[stack.back()];
-      stack.pop_back();
+      const BvhNode<BV>& n = bvh.nodes()[stack.pop()];
       ++s.volume_tests;
       if (!ray_hits(n.volume, ray)) continue;
       if (!n.is_leaf()) {
-        stack.push_back(n.left);
-        stack.push_back(n.right);
+        stack.push(n.left);
+        stack.push(n.right);
         continue;
       }
       for (std::int32_t i = n.first; i < n.first + n.count && !degenerate; ++i) {

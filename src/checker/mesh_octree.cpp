@@ -55,11 +55,16 @@ struct CubeFrame {
     return Obb{link_from_world.R, link_from_world * centre, Vec3::Constant(half), half * std::sqrt(3.0)};
   }
   Octree::Leaf leaf(const Cube& c) const { return {c.corner, c.depth, c.index, tree.value(c.node)}; }
+  // Calls f for each occupied child whose bit is set in `which`.
   template <class F>
-  void for_children(const Cube& c, F&& f) const {
-    for (int b = 0; b < 8; ++b) {
-      const std::int32_t child = tree.child(c.node, b);
-      if (child >= 0 && tree.occupied(tree.value(child))) {
+  void for_children(const Cube& c, F&& f, std::uint8_t which = 0xFF) const {
+    unsigned bits = which & tree.child_mask(c.node);
+    const std::int32_t first = tree.children_block(c.node);
+    while (bits) {
+      const int b = __builtin_ctz(bits);
+      bits &= bits - 1;
+      const std::int32_t child = first + b;
+      if (tree.occupied(tree.value(child))) {
         f(Cube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
       }
     }
@@ -77,12 +82,19 @@ struct KeyRange {
       hi[i] = clamped_key(grid, box_hi[i]);
     }
   }
-  bool meets(const OctreeKey& corner, int depth) const {
-    const int span = 1 << (kOctreeDepth - depth);
+  // The children of the cube (corner, depth) that meet the range, as a mask of seed bits b
+  // (x is bit 2 of b, y bit 1, z bit 0).
+  std::uint8_t children(const OctreeKey& corner, int depth) const {
+    static constexpr unsigned kHalves[3][2] = {{0x0F, 0xF0}, {0x33, 0xCC}, {0x55, 0xAA}};
+    const int half = 1 << (kOctreeDepth - depth - 1);
+    unsigned mask = 0xFF;
     for (int i = 0; i < 3; ++i) {
-      if (corner.k[i] > hi[i] || corner.k[i] + span <= lo[i]) return false;
+      const int mid = corner.k[i] + half;
+      const unsigned low = corner.k[i] <= hi[i] && mid > lo[i] ? kHalves[i][0] : 0u;  // keys [corner, mid)
+      const unsigned high = mid <= hi[i] && mid + half > lo[i] ? kHalves[i][1] : 0u;  // [mid, mid + half)
+      mask &= low | high;
     }
-    return true;
+    return static_cast<std::uint8_t>(mask);
   }
   static int clamped_key(const OctreeGrid& grid, double x) {
     if (const auto k = grid.key(x)) return *k;
@@ -183,25 +195,40 @@ std::pair<Vec3, Vec3> world_bounds(const Bvh<Obb>& mesh, const Transform& pose, 
   return {centre - half, centre + half};
 }
 
-// Occupied leaf cubes that meet the mesh's root volume and hold no surface point but whose centre
-// is inside the closed mesh: wholly inside the solid. Called after the surface test found nothing.
+// Is the cube (centre c, half side h) inside the node's box, up to a rounding margin?
+bool cube_within_node(const NodeInWorld& n, const Vec3& c, double h) {
+  const Vec3 d = n.centre - c;
+  const double s = 4.0 * kVolumeMargin * (d.cwiseAbs().sum() + c.cwiseAbs().sum() + n.reach.sum() + h + 1.0);
+  for (int j = 0; j < 3; ++j) {
+    if (std::abs(n.axes.col(j).dot(d)) + h * n.axis_spread[j] > n.half[j] + s) return false;
+  }
+  return true;
+}
+
+// An occupied leaf cube wholly inside the closed mesh, if there is one. Called after the surface
+// test found no occupied leaf meeting a triangle: each such leaf is then wholly inside or wholly
+// outside, so its centre decides, and only leaves inside the root volume (which holds the solid)
+// need the point-in-mesh test.
 std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const Transform& pose, const CubeFrame& frame,
-                                      QueryStats* stats) {
+                                      WorldVolumes& world, QueryStats* stats) {
+  if (!mesh.closed()) return std::nullopt;
   const auto [lo, hi] = world_bounds(mesh, pose, 0.0);
   const auto root = start_cube(frame.tree, lo, hi);
-  if (!root || !mesh.closed()) return std::nullopt;
-  const Obb& volume = mesh.root().volume;
-  std::vector<Cube> stack{*root};
+  if (!root) return std::nullopt;
+  const KeyRange range(frame.tree.grid(), lo, hi);
+  const NodeInWorld& volume = world[0];
+  TraversalStack<Cube> stack;
+  stack.push(*root);
   while (!stack.empty()) {
-    const Cube c = stack.back();
-    stack.pop_back();
-    const Obb box = frame.box(c);
-    if (!overlap_carried(volume, box, 0.0)) continue;
+    const Cube c = stack.pop();
+    const double half = 0.5 * frame.tree.cube_size(c.depth);
+    const Vec3 centre = frame.lo(c) + Vec3::Constant(half);
+    if (!node_meets_cube(volume, centre, half, 0.0)) continue;
     if (!frame.tree.is_leaf(c.node)) {
-      frame.for_children(c, [&](const Cube& child) { stack.push_back(child); });
-      continue;
+      frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
+    } else if (cube_within_node(volume, centre, half) && contains_point(mesh, frame.link_from_world * centre, stats)) {
+      return c;
     }
-    if (contains_point(mesh, box.center, stats)) return c;
   }
   return std::nullopt;
 }
@@ -294,16 +321,15 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     }
     // Descend the larger of the two (a leaf cannot be descended).
     if (!cube_leaf && (n.is_leaf() || std::sqrt(3.0) * half > n.size)) {
-      frame.for_children(it.cube, [&](const Cube& c) {
-        if (reach.meets(c.corner, c.depth)) stack.push({c, it.node});
-      });
+      frame.for_children(it.cube, [&](const Cube& c) { stack.push({c, it.node}); },
+                         reach.children(it.cube.corner, it.cube.depth));
     } else {
       stack.push({it.cube, n.right});
       stack.push({it.cube, n.left});
     }
   }
   if (!solids) return false;
-  if (const auto inside = cube_inside_solid(mesh, pose, frame, &s)) {
+  if (const auto inside = cube_inside_solid(mesh, pose, frame, world, &s)) {
     if (contact) *contact = {frame.leaf(*inside), pose * frame.box(*inside).center};
     return true;
   }
@@ -366,7 +392,7 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
     stack.insert(stack.end(), children.begin(), children.end());
   }
   if (solids && best.distance > 0.0) {
-    if (const auto inside = cube_inside_solid(mesh, pose, frame, &s)) {
+    if (const auto inside = cube_inside_solid(mesh, pose, frame, WorldVolumes::for_query(mesh, pose), &s)) {
       const Vec3 centre = pose * frame.box(*inside).center;
       best = {0.0, centre, centre, frame.leaf(*inside)};
     }

@@ -1,25 +1,30 @@
 // The stack of a hierarchy traversal (BVH against BVH, BVH against octree).
 #pragma once
 
-#include <array>
 #include <cstddef>
+#include <cstring>
+#include <type_traits>
 #include <vector>
 
 namespace bvh_collision {
 
 // A stack that lives on the C++ stack for the usual depths (no allocation per query) and moves
-// to the heap only when a degenerate hierarchy needs more.
+// to the heap only when a degenerate hierarchy needs more. The local slots are raw bytes: items
+// are small trivially copyable records, and value-initialising 256 of them on every query cost
+// more than a shallow traversal itself.
 template <class T, std::size_t N = 256>
 class TraversalStack {
+  static_assert(std::is_trivially_copyable_v<T>, "items are copied as bytes");
+
  public:
   bool empty() const { return size_ == 0; }
   void push(const T& v) {
     if (size_ < N) {
-      local_[size_++] = v;
+      std::memcpy(local_ + size_ * sizeof(T), &v, sizeof(T));
     } else {
       overflow_.push_back(v);
-      ++size_;
     }
+    ++size_;
   }
   T pop() {
     --size_;
@@ -28,11 +33,13 @@ class TraversalStack {
       overflow_.pop_back();
       return v;
     }
-    return local_[size_];
+    T v;
+    std::memcpy(&v, local_ + size_ * sizeof(T), sizeof(T));
+    return v;
   }
 
  private:
-  std::array<T, N> local_;
+  alignas(T) unsigned char local_[N * sizeof(T)];
   std::vector<T> overflow_;
   std::size_t size_ = 0;
 };

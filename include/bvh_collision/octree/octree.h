@@ -76,6 +76,9 @@ class Octree {
   std::int32_t root() const { return nodes_.empty() ? -1 : 0; }
   float value(std::int32_t node) const { return nodes_[node].log_odds; }
   bool is_leaf(std::int32_t node) const { return nodes_[node].children < 0; }
+  // Bit b set when child b exists; child b is then node children_block(node) + b.
+  std::uint8_t child_mask(std::int32_t node) const { return nodes_[node].mask; }
+  std::int32_t children_block(std::int32_t node) const { return nodes_[node].children; }
   std::int32_t child(std::int32_t node, int b) const {
     return ((nodes_[node].mask >> b) & 1) ? nodes_[node].children + b : -1;
   }
