@@ -186,6 +186,36 @@ TEST(MeshAgainstOctree, SolidsInsideEachOther) {
   EXPECT_GT(mesh_octree_distance(big, Transform::Identity(), one, false).distance, 0.2);
 }
 
+// A box meeting one voxel by a face, an edge or a corner, from each of the 26 directions, exactly
+// touching, just apart and just overlapping, on both sides of the key origin and far from it.
+// With dyadic sizes every coordinate is exact, so the oracle is the closed-interval overlap of the
+// two boxes per axis; the cheap key-range and start-cube filters must not drop a touching voxel.
+TEST(MeshAgainstOctree, BoxTouchingAVoxelFromEveryDirection) {
+  const double res = 0.25, half = 0.375;  // the link box is 0.75 m wide, three voxels
+  const Bvh<Obb> box = Bvh<Obb>::build(box_mesh(Vec3::Constant(2 * half)));
+  int touching = 0;
+  for (const Vec3& voxel : {Vec3(0.125, 0.125, 0.125), Vec3(-0.125, -0.125, 0.125), Vec3(100.125, -50.375, 7.625)}) {
+    Octree tree(res);
+    tree.update(*tree.grid().key(voxel), true);
+    const Vec3 lo = tree.cube_min(*tree.grid().key(voxel)), hi = lo + Vec3::Constant(res);
+    for (int dir = 0; dir < 27; ++dir) {
+      const Vec3 d(dir % 3 - 1, dir / 3 % 3 - 1, dir / 9 - 1);
+      if (d.isZero()) continue;
+      for (const double gap : {0.0, 1.0 / 1024, -1.0 / 1024}) {
+        const Vec3 centre = voxel + d * (0.5 * res + half + gap);
+        const Vec3 box_lo = centre - Vec3::Constant(half), box_hi = centre + Vec3::Constant(half);
+        const bool expected = (box_lo.array() <= hi.array()).all() && (lo.array() <= box_hi.array()).all();
+        const Transform pose = Transform::Translation(centre);
+        EXPECT_EQ(mesh_meets_octree(box, pose, tree, 0.0, 0.0, false), expected) << voxel.transpose() << " / " << d.transpose() << " gap " << gap;
+        EXPECT_EQ(mesh_meets_octree(box, pose, tree, 0.0, 0.0, true), expected) << voxel.transpose() << " / " << d.transpose() << " gap " << gap;
+        EXPECT_EQ(mesh_octree_distance(box, pose, tree, true).distance == 0.0, expected);
+        touching += gap == 0.0 && expected;
+      }
+    }
+  }
+  EXPECT_EQ(touching, 3 * 26);  // touching counts as contact (closed sets)
+}
+
 TEST(PointAgainstOctree, NearestOccupiedCube) {
   const Octree tree = scene_tree(0.05);
   std::vector<Octree::Leaf> occupied;

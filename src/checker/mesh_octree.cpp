@@ -147,16 +147,28 @@ class WorldVolumes {
   std::vector<NodeInWorld> nodes_;
 };
 
-// Can the node's box come within `padding` of the cube (centre c, half side h)? The separating
-// axes of both boxes' faces (world axes first: a bounding-box test); the nine edge axes are
-// skipped, so the answer may be a conservative yes, never a wrong no. A small margin keeps
-// rounding from separating boxes that touch.
-bool node_meets_cube(const NodeInWorld& n, const Vec3& c, double h, double padding) {
-  const Vec3 d = n.centre - c;
-  const double s = padding + 4.0 * kVolumeMargin * (d.cwiseAbs().sum() + c.cwiseAbs().sum() + n.reach.sum() + h + 1.0);
-  if ((d.cwiseAbs() - n.reach).maxCoeff() > h + s) return false;
+// The rounding allowance of the box tests below for one query: a multiple of kVolumeMargin times
+// a bound on the magnitudes the tests add up (centres, extents and sizes of every node and cube,
+// all inside the two world boxes given), so that rounding never separates boxes that touch.
+double rounding_slack(const Vec3& lo, const Vec3& hi, const Vec3& cube_lo, const Vec3& cube_hi) {
+  const double b = std::max({lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff(), cube_lo.cwiseAbs().maxCoeff(),
+                             cube_hi.cwiseAbs().maxCoeff()});
+  return 4.0 * kVolumeMargin * (20.0 * b + 1.0);
+}
+
+// Can the node's box come within `reach` (padding plus rounding slack) of the cube (centre c, half
+// side h)? The separating axes of both boxes' faces (world axes first: a bounding-box test); the
+// nine edge axes are skipped, so the answer may be a conservative yes, never a wrong no. Scalar
+// code: this runs for every pair the descent meets.
+bool node_meets_cube(const NodeInWorld& n, const Vec3& c, double h, double reach) {
+  const double d[3] = {n.centre.x() - c.x(), n.centre.y() - c.y(), n.centre.z() - c.z()};
+  const double r = h + reach;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) > n.reach[i] + r) return false;
+  }
   for (int j = 0; j < 3; ++j) {
-    if (std::abs(n.axes.col(j).dot(d)) > n.half[j] + h * n.axis_spread[j] + s) return false;
+    const double* a = n.axes.col(j).data();
+    if (std::abs(a[0] * d[0] + a[1] * d[1] + a[2] * d[2]) > n.half[j] + h * n.axis_spread[j] + reach) return false;
   }
   return true;
 }
@@ -195,12 +207,24 @@ std::pair<Vec3, Vec3> world_bounds(const Bvh<Obb>& mesh, const Transform& pose, 
   return {centre - half, centre + half};
 }
 
-// Is the cube (centre c, half side h) inside the node's box, up to a rounding margin?
-bool cube_within_node(const NodeInWorld& n, const Vec3& c, double h) {
+// Does any occupied leaf inside `cube` meet the key range? Integer work only: a cheap test that
+// lets a link in free space skip every box test.
+bool occupied_in_range(const CubeFrame& frame, const Cube& cube, const KeyRange& range) {
+  TraversalStack<Cube> stack;
+  stack.push(cube);
+  while (!stack.empty()) {
+    const Cube c = stack.pop();
+    if (frame.tree.is_leaf(c.node)) return true;
+    frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
+  }
+  return false;
+}
+
+// Is the cube (centre c, half side h) inside the node's box, up to the rounding slack?
+bool cube_within_node(const NodeInWorld& n, const Vec3& c, double h, double slack) {
   const Vec3 d = n.centre - c;
-  const double s = 4.0 * kVolumeMargin * (d.cwiseAbs().sum() + c.cwiseAbs().sum() + n.reach.sum() + h + 1.0);
   for (int j = 0; j < 3; ++j) {
-    if (std::abs(n.axes.col(j).dot(d)) + h * n.axis_spread[j] > n.half[j] + s) return false;
+    if (std::abs(n.axes.col(j).dot(d)) + h * n.axis_spread[j] > n.half[j] + slack) return false;
   }
   return true;
 }
@@ -216,6 +240,7 @@ std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const Transform& pos
   const auto root = start_cube(frame.tree, lo, hi);
   if (!root) return std::nullopt;
   const KeyRange range(frame.tree.grid(), lo, hi);
+  const double slack = rounding_slack(lo, hi, frame.lo(*root), frame.hi(*root));
   const NodeInWorld& volume = world[0];
   TraversalStack<Cube> stack;
   stack.push(*root);
@@ -223,10 +248,10 @@ std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const Transform& pos
     const Cube c = stack.pop();
     const double half = 0.5 * frame.tree.cube_size(c.depth);
     const Vec3 centre = frame.lo(c) + Vec3::Constant(half);
-    if (!node_meets_cube(volume, centre, half, 0.0)) continue;
+    if (!node_meets_cube(volume, centre, half, slack)) continue;
     if (!frame.tree.is_leaf(c.node)) {
       frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
-    } else if (cube_within_node(volume, centre, half) && contains_point(mesh, frame.link_from_world * centre, stats)) {
+    } else if (cube_within_node(volume, centre, half, slack) && contains_point(mesh, frame.link_from_world * centre, stats)) {
       return c;
     }
   }
@@ -286,6 +311,8 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     std::int32_t node;
   };
   const KeyRange reach(tree.grid(), reach_lo, reach_hi);
+  if (!occupied_in_range(frame, *root, reach)) return false;
+  const double allowance = padding + rounding_slack(reach_lo, reach_hi, frame.lo(*root), frame.hi(*root));
   WorldVolumes& world = WorldVolumes::for_query(mesh, pose);
   TraversalStack<Item> stack;
   stack.push(Item{*root, 0});
@@ -294,7 +321,7 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     const BvhNode<Obb>& n = nodes[it.node];
     const double half = 0.5 * tree.cube_size(it.cube.depth);
     ++s.volume_tests;
-    if (!node_meets_cube(world[it.node], frame.lo(it.cube) + Vec3::Constant(half), half, padding)) continue;
+    if (!node_meets_cube(world[it.node], frame.lo(it.cube) + Vec3::Constant(half), half, allowance)) continue;
     // Every point of the volume lies within `slack` of the node's triangles, so a volume within
     // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
     // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.)
