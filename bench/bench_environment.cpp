@@ -5,6 +5,7 @@
 #include <octomap/OcTree.h>
 
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <random>
@@ -25,9 +26,13 @@ struct SceneBox {
   Vec3 lo, hi;
 };
 
+// The distance along a ray (unit direction) to something more in the scene than the boxes, if
+// nearer than `best`: the robot, for the self-filter figures.
+using ExtraHit = std::function<double(const Vec3& origin, const Vec3& direction, double best)>;
+
 // A depth camera (600 x 500 rays, 70 x 58 degrees) above and behind a robot, looking at a table
 // with boxes on it, a floor and a wall; 2 mm depth noise; rays that hit nothing return NaN.
-std::vector<ScanPoint> table_scene(const Vec3& camera) {
+std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr) {
   const std::vector<SceneBox> boxes = {
       {{0.3, -0.6, 0.30}, {1.0, 0.6, 0.35}},   // table top
       {{0.5, -0.2, 0.35}, {0.6, -0.1, 0.50}},  // a box
@@ -54,6 +59,7 @@ std::vector<ScanPoint> table_scene(const Vec3& camera) {
         }
         if (t0 <= t1) best = t0;
       }
+      if (extra) best = extra(camera, d, best);
       const float nan = std::numeric_limits<float>::quiet_NaN();
       points.push_back(std::isfinite(best) && best < 6.0 ? ScanPoint((camera + (best + noise(rng)) * d).cast<float>())
                                                          : ScanPoint(nan, nan, nan));
@@ -161,6 +167,28 @@ void environment_check(const std::vector<ScanPoint>& scan, const Vec3& camera, d
     disagree += ours != theirs;
     colliding += ours;
   }
+  // FCL's distance on a subset (it takes 50 to 150 ms a state): the same minimum over links, free states.
+  std::vector<double> fcl_dist_us, our_dist_us;
+  double worst_gap = 0.0;
+  for (int i = 0; i < n && fcl_dist_us.size() < 40; i += 7) {
+    EnvironmentResult mine;
+    const double t = bench::time_us([&] { mine = checker.check_environment(states[i].data(), env, distance); });
+    if (mine.collision) continue;
+    double theirs = std::numeric_limits<double>::infinity();
+    fcl_dist_us.push_back(bench::time_us([&] {
+      forward_kinematics(checker.model(), states[i].data(), poses);
+      for (std::size_t k = 0; k < links.objects.size(); ++k) {
+        links.objects[k]->setTransform(test::fcl_transform(poses[links.link[k]] * links.origin[k]));
+        links.objects[k]->computeAABB();
+        fcl::DistanceRequestd r;
+        fcl::DistanceResultd result;
+        fcl::distance(links.objects[k].get(), &fcl_octree, r, result);
+        theirs = std::min(theirs, result.min_distance);
+      }
+    }));
+    our_dist_us.push_back(t);
+    worst_gap = std::max(worst_gap, std::abs(theirs - mine.min_distance));
+  }
   const double a = bench::median(ours_us), b = bench::median(fcl_us);
   std::printf("| panda vs octree %.2f m (%zu nodes) | %.1f us (mean %.1f) | %.1f us (mean %.1f) | %.1fx | %d of %d colliding, %d disagreements |\n",
               resolution, env.octree().node_count(), a, bench::mean(ours_us), b, bench::mean(fcl_us), b / a, colliding, n,
@@ -169,12 +197,105 @@ void environment_check(const std::vector<ScanPoint>& scan, const Vec3& camera, d
               bench::median(solids_us), bench::mean(solids_us));
   std::printf("| panda distance to octree %.2f m | %.1f us (mean %.1f) | | | |\n", resolution, bench::median(dist_us),
               bench::mean(dist_us));
+  const double da = bench::median(our_dist_us), db = bench::median(fcl_dist_us);
+  std::printf("| panda distance to octree %.2f m, %zu free states | %.1f us | %.1f us | %.1fx | largest difference %.1e m |\n",
+              resolution, our_dist_us.size(), da, db, db / da, worst_gap);
   const std::string name = "panda_octree_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
   figures.add(name + "_boolean_median", "us", a, b);
   figures.add(name + "_boolean_mean", "us", bench::mean(ours_us), bench::mean(fcl_us));
   figures.add(name + "_solids_median", "us", bench::median(solids_us));
   figures.add(name + "_distance_median", "us", bench::median(dist_us));
+  figures.add(name + "_distance_free_states_median", "us", da, db);
+  figures.add(name + "_distance_largest_difference", "m", worst_gap);
   figures.add(name + "_disagreements", "states", disagree);
+}
+
+// Occupied leaves that meet the robot (centre within half the cube's diagonal of a link).
+int voxels_on_robot(const Octree& tree, const std::vector<Bvh<Obb>>& meshes, const std::vector<Transform>& poses) {
+  int n = 0;
+  for (const Octree::Leaf& leaf : tree.leaves()) {
+    if (!tree.occupied(leaf.log_odds)) continue;
+    const double size = tree.cube_size(leaf.depth), reach = 0.5 * std::sqrt(3.0) * size;
+    const Vec3 centre = tree.cube_min(leaf.key) + Vec3::Constant(0.5 * size);
+    for (std::size_t m = 0; m < meshes.size(); ++m) {
+      if (point_distance(meshes[m], poses[m], centre, reach).distance <= reach) {
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
+}
+
+// The self filter on the table scene with panda in it, reaching over the table: the camera sees
+// the robot, and the filter keeps its points and shadows out of the octree. Timed: the filter
+// alone, and filter plus insertion against inserting the raw scan; counted: points removed,
+// voxels left on the robot, and whether the robot collides with the octree it built.
+void self_filter(const Vec3& camera, double resolution, double padding, bench::FigureFile& figures) {
+  const std::string dir = test::robots_dir() + "/panda";
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+  const CollisionChecker checker(model, AllowedCollisionMatrix::adjacent_links(model));
+  std::vector<double> state(checker.model().variable_count(), 0.0);
+  const std::map<std::string, double> reach_over_table = {
+      {"panda_joint2", 0.3}, {"panda_joint4", -1.9}, {"panda_joint6", 2.2}, {"panda_joint7", 0.785}};
+  for (std::size_t i = 0; i < state.size(); ++i) {
+    const auto it = reach_over_table.find(checker.model().variable_names()[i]);
+    if (it != reach_over_table.end()) state[i] = it->second;
+  }
+  std::vector<Transform> link_poses, poses;
+  forward_kinematics(checker.model(), state.data(), link_poses);
+  std::vector<Bvh<Obb>> meshes;
+  for (std::size_t l = 0; l < link_poses.size(); ++l) {
+    for (const CollisionElement& e : checker.model().links()[l].collision) {
+      meshes.push_back(Bvh<Obb>::build(*e.mesh));
+      poses.push_back(link_poses[l] * e.origin);
+    }
+  }
+  const auto scan = table_scene(camera, [&](const Vec3& origin, const Vec3& direction, double best) {
+    for (std::size_t m = 0; m < meshes.size(); ++m) {
+      const RayHit hit = raycast(meshes[m], poses[m], origin, direction, std::min(best, 10.0));
+      if (hit.hit) best = std::min(best, hit.distance);
+    }
+    return best;
+  });
+  const ScanPoint sensor = camera.cast<float>();
+  std::vector<double> filter_s, filtered_insert_s, raw_insert_s;
+  FilteredScan filtered;
+  Octree raw(resolution), clean(resolution);
+  for (int r = 0; r < 5; ++r) {
+    raw = Octree(resolution);
+    clean = Octree(resolution);
+    filter_s.push_back(bench::time_us([&] { filtered = checker.filter_scan(state.data(), scan, sensor, padding); }) * 1e-6);
+    filtered_insert_s.push_back(filter_s.back() + bench::time_us([&] {
+      insert_scan(clean, filtered.obstacles, filtered.clear_only, sensor);
+    }) * 1e-6);
+    raw_insert_s.push_back(bench::time_us([&] { insert_scan(raw, scan, sensor); }) * 1e-6);
+  }
+  const int raw_on = voxels_on_robot(raw, meshes, poses), clean_on = voxels_on_robot(clean, meshes, poses);
+  Environment raw_env(resolution), clean_env(resolution);
+  raw_env.octree() = raw;
+  clean_env.octree() = clean;
+  EnvironmentRequest all;
+  all.all_links = true;
+  const auto raw_hit = checker.check_environment(state.data(), raw_env, all);
+  const auto clean_hit = checker.check_environment(state.data(), clean_env, all);
+  const double f = bench::median(filter_s), fi = bench::median(filtered_insert_s), ri = bench::median(raw_insert_s);
+  const double points = static_cast<double>(scan.size());
+  std::printf("| self filter %.2f m, padding %.2f m (%zu on robot, %zu shadowed) | %.3f s (%.2f Mpt/s) | | | |\n",
+              resolution, padding, filtered.on_robot, filtered.shadowed, f, points / f * 1e-6);
+  std::printf("| filter + insert %.2f m | %.3f s | %.3f s (raw insert) | %.2fx | occupied voxels on the robot: %d raw, %d filtered |\n",
+              resolution, fi, ri, ri / fi, raw_on, clean_on);
+  std::printf("| panda against the octree it built | %zu links collide (filtered) | %zu links collide (raw) | | |\n",
+              clean_hit.contacts.size(), raw_hit.contacts.size());
+  const std::string name = "self_filter_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
+  figures.add(name, "s", f);
+  figures.add(name + "_points_per_second", "1/s", points / f);
+  figures.add(name + "_with_insert", "s", fi, ri);
+  figures.add(name + "_points_on_robot", "points", static_cast<double>(filtered.on_robot));
+  figures.add(name + "_points_shadowed", "points", static_cast<double>(filtered.shadowed));
+  figures.add(name + "_voxels_on_robot", "voxels", clean_on, raw_on);
+  figures.add(name + "_links_colliding", "links", static_cast<double>(clean_hit.contacts.size()),
+              static_cast<double>(raw_hit.contacts.size()));
 }
 
 }  // namespace
@@ -191,6 +312,7 @@ int main(int argc, char** argv) {
   bench::FigureFile figures("environment");
   for (const double res : {0.02, 0.05}) insertion(scan, camera, res, figures);
   for (const double res : {0.02, 0.05}) environment_check(scan, camera, res, figures);
+  self_filter(camera, 0.02, 0.04, figures);  // padding above the voxel diagonal: no cube reaches a link
   figures.write(bench::output_dir(argc, argv));
   return 0;
 }

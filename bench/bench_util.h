@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -78,14 +79,21 @@ class FigureFile {
     out << "[\n" << std::setprecision(6);
     for (std::size_t i = 0; i < figures_.size(); ++i) {
       const Figure& f = figures_[i];
-      out << "  {\"name\": \"" << f.name << "\", \"unit\": \"" << f.unit << "\", \"ours\": " << f.ours;
-      if (f.baseline) out << ", \"baseline\": " << *f.baseline << ", \"ratio\": " << (*f.baseline / f.ours);
+      out << "  {\"name\": \"" << f.name << "\", \"unit\": \"" << f.unit << "\", \"ours\": " << number(f.ours);
+      if (f.baseline) out << ", \"baseline\": " << number(*f.baseline) << ", \"ratio\": " << number(*f.baseline / f.ours);
       out << "}" << (i + 1 < figures_.size() ? "," : "") << "\n";
     }
     out << "]\n";
   }
 
  private:
+  // JSON has no infinity or NaN (a ratio against 0 voxels, say): those are written as null.
+  static std::string number(double x) {
+    if (!std::isfinite(x)) return "null";
+    std::ostringstream s;
+    s << std::setprecision(6) << x;
+    return s.str();
+  }
   std::string name_;
   std::vector<Figure> figures_;
 };
