@@ -89,12 +89,15 @@ void insertion(const std::vector<ScanPoint>& scan, const Vec3& camera, double re
   octomap::Pointcloud cloud;
   for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
   const octomap::point3d origin(camera.x(), camera.y(), camera.z());
-  std::vector<double> ours, theirs;
+  std::vector<double> ours, ours_one_core, theirs;
   bool same = true;
+  ScanOptions one_core;
+  one_core.threads = 1;
   for (int r = 0; r < 5; ++r) {
-    Octree tree(resolution);
+    Octree tree(resolution), single(resolution);
     octomap::OcTree reference(resolution);
     ours.push_back(bench::time_us([&] { insert_scan(tree, scan, camera.cast<float>()); }) * 1e-6);
+    ours_one_core.push_back(bench::time_us([&] { insert_scan(single, scan, camera.cast<float>(), one_core); }) * 1e-6);
     theirs.push_back(bench::time_us([&] { reference.insertPointCloud(cloud, origin); }) * 1e-6);
     if (r == 0) same = leaves_of(tree) == leaves_of(reference);
   }
@@ -102,7 +105,11 @@ void insertion(const std::vector<ScanPoint>& scan, const Vec3& camera, double re
   const double points = static_cast<double>(scan.size());
   std::printf("| insert %.2f m | %.3f s (%.2f Mpt/s) | %.3f s (%.2f Mpt/s) | %.1fx | %s |\n", resolution, a,
               points / a * 1e-6, b, points / b * 1e-6, b / a, same ? "identical" : "DIFFERENT");
+  const double c = bench::median(ours_one_core);
+  std::printf("| insert %.2f m, one core | %.3f s (%.2f Mpt/s) | %.3f s (%.2f Mpt/s) | %.1fx | |\n", resolution, c,
+              points / c * 1e-6, b, points / b * 1e-6, b / c);
   const std::string name = "insert_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
+  figures.add(name + "_one_core", "s", c, b);
   figures.add(name, "s", a, b);
   figures.add(name + "_points_per_second", "1/s", points / a, points / b);
   figures.add(name + "_identical_to_octomap", "bool", same ? 1.0 : 0.0);

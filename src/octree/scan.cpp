@@ -1,6 +1,7 @@
 #include "bvh_collision/octree/scan.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -157,15 +158,21 @@ int thread_count(const ScanOptions& options, std::size_t points) {
   return static_cast<int>(std::clamp<std::size_t>(points / 4096, 1, static_cast<std::size_t>(std::max(wanted, 1))));
 }
 
-// Cast the scan's rays on several threads, each into its own sets, then merge.
+// Cast the scan's rays on several threads, each into its own sets, then merge. Threads take
+// blocks of rays as they go: a depth image's far rows have rays many times longer than its near
+// rows, so fixed halves would leave one core idle half the time.
 ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint& origin, const ScanOptions& options) {
   const auto threads = static_cast<std::size_t>(thread_count(options, rays.size()));
   std::vector<ScanPart> parts(threads);
   std::vector<std::thread> workers;
-  const std::size_t chunk = (rays.size() + threads - 1) / threads;
+  constexpr std::size_t kBlock = 2048;
+  std::atomic<std::size_t> next{0};
   for (std::size_t t = 0; t < threads; ++t) {
-    const std::size_t begin = std::min(rays.size(), t * chunk), end = std::min(rays.size(), begin + chunk);
-    auto work = [&, t, begin, end] { cast_all(grid, rays, begin, end, origin, options, parts[t]); };
+    auto work = [&, t] {
+      for (std::size_t begin; (begin = next.fetch_add(kBlock)) < rays.size();) {
+        cast_all(grid, rays, begin, std::min(rays.size(), begin + kBlock), origin, options, parts[t]);
+      }
+    };
     if (t + 1 < threads) {
       workers.emplace_back(work);
     } else {
