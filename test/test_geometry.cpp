@@ -313,4 +313,49 @@ TEST(Distance, TranslationFarFromOriginChangesNothing) {
 }
 
 }  // namespace
+// Ray entry into a ball against bisection on the squared distance in long double: the first s
+// in [0, length] where |o + s u - c| <= r, found without the quadratic formula.
+TEST(RayBall, EntryMatchesBisection) {
+  std::mt19937_64 r(99);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), size(0.01, 1.0);
+  int hits = 0, misses = 0, inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 origin(u(r), u(r), u(r)), centre(u(r), u(r), u(r));
+    const double radius = 0.5 * size(r), length = 2.0 * size(r);
+    // Half the rays aim near the ball (hits and grazes), half anywhere (mostly misses).
+    const Vec3 jitter(u(r), u(r), u(r));
+    const Vec3 aim = i % 2 ? Vec3(centre + 1.2 * radius * jitter) : Vec3(origin + jitter);
+    if ((aim - origin).norm() < 1e-6) continue;
+    const Vec3 unit = (aim - origin).normalized();
+    auto f = [&](long double s) {
+      long double q = 0;
+      for (int k = 0; k < 3; ++k) {
+        const long double d = origin[k] + s * unit[k] - centre[k];
+        q += d * d;
+      }
+      return q - static_cast<long double>(radius) * radius;
+    };
+    const double got = ray_ball_entry(origin, unit, length, centre, radius);
+    if (f(0) <= 0) {
+      EXPECT_EQ(got, 0.0);
+      ++inside;
+      continue;
+    }
+    const long double nearest = std::clamp<long double>((centre - origin).dot(unit), 0.0L, length);
+    if (f(nearest) > 1e-12L) {
+      EXPECT_TRUE(std::isinf(got)) << i;
+      ++misses;
+      continue;
+    }
+    if (f(nearest) > -1e-12L) continue;  // grazing within rounding: either answer
+    long double lo = 0, hi = nearest;
+    for (int k = 0; k < 200; ++k) (f(0.5L * (lo + hi)) > 0 ? lo : hi) = 0.5L * (lo + hi);
+    EXPECT_NEAR(got, static_cast<double>(hi), 1e-9) << i;
+    ++hits;
+  }
+  EXPECT_GT(hits, 1000);
+  EXPECT_GT(misses, 1000);
+  EXPECT_GT(inside, 100);
+}
+
 }  // namespace bvh_collision

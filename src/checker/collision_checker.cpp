@@ -85,6 +85,7 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
     bounds_[l] = {c, r};
   }
   kinematics_ = KinematicsPlan(model_, needed);
+  compute_motion_rates();
 }
 
 bool CollisionChecker::shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,

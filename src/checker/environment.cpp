@@ -9,8 +9,7 @@ namespace {
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
 void require_rigid(const Transform& pose, const std::string& id) {
-  const bool finite = pose.R.allFinite() && pose.t.allFinite();
-  if (!finite || !(pose.R.transpose() * pose.R).isApprox(Mat3::Identity(), 1e-6) || pose.R.determinant() < 0) {
+  if (!is_rigid(pose)) {
     throw std::invalid_argument("object '" + id + "': the pose must be finite with a rotation matrix");
   }
 }

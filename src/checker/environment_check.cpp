@@ -105,6 +105,10 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
   EnvironmentResult result;
   std::vector<Transform>& poses = tl_env_poses;
   kinematics_.compute(state, poses);
+  if (!is_rigid(request.root_pose)) throw std::invalid_argument("environment check: the root pose is not a finite rigid transform");
+  for (std::size_t l = 0; l < shapes_.size(); ++l) {
+    if (!shapes_[l].empty()) poses[l] = request.root_pose * poses[l];
+  }
   const bool use_octree = request.octree && !env.octree().empty();
   const bool stop_early = !request.all_links && !request.distance;
   for (std::size_t l = 0; l < shapes_.size() && !(stop_early && result.collision); ++l) {

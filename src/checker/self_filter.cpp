@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/intersection.h"
 
 namespace bvh_collision {
 namespace {
@@ -23,17 +24,6 @@ struct LinkInScan {
 bool segment_meets_ball(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
   const double s = std::clamp((centre - origin).dot(unit), 0.0, length);
   return (origin + s * unit - centre).squaredNorm() <= radius * radius;
-}
-
-// Where the ray origin + s * unit first meets a ball, or infinity.
-double ray_meets_ball(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
-  const Vec3 m = origin - centre;
-  const double b = m.dot(unit), c = m.squaredNorm() - radius * radius;
-  if (c <= 0.0) return 0.0;  // the origin is inside
-  const double disc = b * b - c;
-  if (b > 0.0 || disc < 0.0) return std::numeric_limits<double>::infinity();
-  const double s = -b - std::sqrt(disc);
-  return s <= length ? s : std::numeric_limits<double>::infinity();
 }
 
 // fn(begin, end, part) over contiguous chunks of [0, n), one per core (a thread pays for itself
@@ -82,7 +72,7 @@ double CollisionChecker::ray_meets_link(int link, const Transform& pose, const V
   for (const Shape& s : shapes_[link]) {
     const Transform sp = pose * s.origin;
     if (s.mesh < 0) {
-      first = std::min(first, ray_meets_ball(origin, unit, length, sp.t, s.radius));
+      first = std::min(first, ray_ball_entry(origin, unit, length, sp.t, s.radius));
       continue;
     }
     const RayHit hit = raycast(meshes_[s.mesh], sp, origin, unit, std::min(first, length));
@@ -92,11 +82,12 @@ double CollisionChecker::ray_meets_link(int link, const Transform& pose, const V
 }
 
 FilteredScan CollisionChecker::filter_scan(const double* state, const std::vector<ScanPoint>& points,
-                                           const ScanPoint& sensor, double padding) const {
+                                           const ScanPoint& sensor, double padding, const Transform& root_pose) const {
   if (!(padding >= 0.0) || !std::isfinite(padding)) {
     throw std::invalid_argument("self filter: padding must be finite and >= 0, got " + std::to_string(padding));
   }
   if (!sensor.allFinite()) throw std::invalid_argument("self filter: the sensor origin is not finite");
+  if (!is_rigid(root_pose)) throw std::invalid_argument("self filter: the root pose is not a finite rigid transform");
   std::vector<Transform> poses;
   kinematics_.compute(state, poses);
   const Vec3 origin = sensor.cast<double>();
@@ -104,6 +95,7 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
   for (std::size_t l = 0; l < shapes_.size(); ++l) {
     if (shapes_[l].empty()) continue;
     const int link = static_cast<int>(l);
+    poses[l] = root_pose * poses[l];
     links.push_back({link, poses[l], poses[l] * bounds_[l].center, bounds_[l].radius,
                      point_on_link(link, poses[l], origin, padding)});
   }

@@ -56,6 +56,7 @@ struct EnvironmentRequest {
   bool solids = true;      // closed meshes bound solids; occupied space is solid
   bool octree = true;      // check against the octree...
   bool objects = true;     // ...and against the collision objects
+  Transform root_pose;     // the root link in the environment's (world) frame: a moving base
 };
 
 struct EnvironmentContact {
@@ -74,6 +75,40 @@ struct EnvironmentResult {
   Octree::Leaf closest_voxel;
   Vec3 point_link = Vec3::Zero(), point_obstacle = Vec3::Zero();  // world frame witnesses
   QueryStats stats;
+};
+
+// The straight joint-space motion from start to goal (DESIGN.md section 4, check_motion).
+struct MotionRequest {
+  bool self = true, environment = true;
+  // > 0: states every `resolution` of joint motion (max norm over joints, rad or m), both ends
+  // included. 0: certified: each step is shorter than the clearance at its start divided by a
+  // bound on how fast any point of any link moves, so no collision hides between states.
+  double resolution = 0.0;
+  double tolerance = 0.0;     // DESIGN.md section 2
+  Transform root_pose;        // the root link in the world frame
+  // Certified: a motion that comes within this of collision counts as colliding. Advancement
+  // by clearance can only creep towards an exact contact, never reach it; this bounds the steps
+  // (about log(clearance / min_clearance) of them near a contact) and is a tolerance of its own.
+  double min_clearance = 1e-5;
+  std::size_t max_states = 20000;  // certified: beyond this the motion is not certified (invalid)
+};
+
+struct MotionResult {
+  bool valid = false;
+  double last_valid_fraction = 0.0;  // the last state checked free before the first collision (1 when valid)
+  std::size_t states_checked = 0;
+  bool certified = false;    // the whole motion (or up to the collision) was certified
+  std::string message;       // why a certified check gave up, when it did
+};
+
+// The first body along a ray: a link, a collision object, or an occupied voxel.
+struct RayCastResult {
+  bool hit = false;
+  double distance = std::numeric_limits<double>::infinity();  // along the ray from its origin
+  Vec3 point = Vec3::Zero();
+  int link = -1;           // the link hit, or -1
+  std::string object;      // the object hit, or empty
+  bool octree = false;     // an occupied voxel was hit
 };
 
 // A scan split by the self filter, ready for insert_scan(tree, obstacles, clear_only, sensor).
@@ -107,15 +142,30 @@ class CollisionChecker {
   EnvironmentResult check_environment(const double* state, const Environment& env,
                                       const EnvironmentRequest& request = {}) const;
 
-  // The self filter (DESIGN.md section 3), for a scan taken with the robot in `state`; points and
-  // sensor in the root link's frame. A point on or within `padding` of a link (or inside a closed
+  // The self filter (DESIGN.md section 3), for a scan taken with the robot in `state`. A point on or within `padding` of a link (or inside a closed
   // link) is the robot, not an obstacle; a point whose ray from the sensor passes through a link is
   // in the robot's shadow and not an obstacle either. Neither is dropped outright: the sensor saw
   // through the space in front of the robot, so their rays still clear it, up to `padding` before
   // the ray first meets a link. A link that holds the sensor (within padding) casts no shadow: a
   // camera inside its mount's mesh would otherwise see nothing. Uses every core.
+  // `root_pose` places the root link in the points' frame (a moving base).
   FilteredScan filter_scan(const double* state, const std::vector<ScanPoint>& points, const ScanPoint& sensor,
-                           double padding) const;
+                           double padding, const Transform& root_pose = Transform::Identity()) const;
+
+  // The motion from `start` to `goal` (both variable_count() values). Throws std::invalid_argument
+  // for a negative or non-finite resolution or tolerance.
+  MotionResult check_motion(const double* start, const double* goal, const Environment& env,
+                            const MotionRequest& request = {}) const;
+
+  // How far any point of `link` can move per unit change of each state variable, over every
+  // configuration (revolute: the farthest its geometry can be from the axis; prismatic: 1).
+  const std::vector<double>& motion_rates(int link) const { return motion_rates_[link]; }
+
+  // The first link, object or occupied voxel along origin + s * direction, 0 <= s <= max_range
+  // (max_range <= 0: unlimited), the robot in `state` with its root at `root_pose`. Throws
+  // std::invalid_argument for a non-finite origin or a zero or non-finite direction.
+  RayCastResult cast_ray(const double* state, const Environment& env, const Vec3& origin, const Vec3& direction,
+                         double max_range, const Transform& root_pose = Transform::Identity()) const;
 
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return meshes_.size(); }
@@ -177,6 +227,8 @@ class CollisionChecker {
   bool point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const;
   double ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit, double length) const;
 
+  void compute_motion_rates();
+
   RobotModel model_;
   AllowedCollisionMatrix acm_;
   KinematicsPlan kinematics_;  // poses of the modelled links only
@@ -186,6 +238,7 @@ class CollisionChecker {
   std::vector<LinkBound> bounds_;
   std::vector<double> padding_;
   std::vector<std::pair<int, int>> checked_pairs_;
+  std::vector<std::vector<double>> motion_rates_;  // per link, per state variable
 };
 
 }  // namespace bvh_collision

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "bvh_collision/geometry/types.h"
 
@@ -26,6 +28,18 @@ bool segment_intersects_triangle(const Vec3& u, const Vec3& v, const Vec3& a, co
 
 // Closed segments (possibly points) in 3-D.
 bool segments_intersect(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2);
+
+// Where the ray origin + s * unit (unit length), 0 <= s <= length, first meets the closed ball:
+// 0 when the origin is inside, infinity when it misses.
+inline double ray_ball_entry(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
+  const Vec3 m = origin - centre;
+  const double b = m.dot(unit), c = m.squaredNorm() - radius * radius;
+  if (c <= 0.0) return 0.0;
+  const double disc = b * b - c;
+  if (b > 0.0 || disc < 0.0) return std::numeric_limits<double>::infinity();
+  const double s = -b - std::sqrt(disc);
+  return s <= length ? s : std::numeric_limits<double>::infinity();
+}
 
 // Closed sphere against closed axis-aligned box, exactly as the geometry is: the squared distance
 // from the centre to the box is at most r^2. (The seed's "distance between the centres <= r"

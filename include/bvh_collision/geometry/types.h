@@ -22,6 +22,13 @@ struct Transform {
   Transform inverse() const { return {R.transpose(), -(R.transpose() * t)}; }
 };
 
+// Finite, with a proper rotation (orthonormal to 1e-6, determinant +1): what a pose from a user
+// or a message must be before any query uses it.
+inline bool is_rigid(const Transform& pose) {
+  return pose.R.allFinite() && pose.t.allFinite() && (pose.R.transpose() * pose.R).isApprox(Mat3::Identity(), 1e-6) &&
+         pose.R.determinant() > 0;
+}
+
 // The pose of b in a's frame, a^-1 * b, computed as R_a^T (t_b - t_a): two poses far from the
 // origin with the same translation cancel exactly, so results do not depend on where the scene is.
 inline Transform relative_transform(const Transform& a, const Transform& b) {

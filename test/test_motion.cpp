@@ -1,0 +1,357 @@
+// Motion checks and ray casts of CollisionChecker: the motion-rate bound against forward
+// kinematics of every vertex; stepped motions against one check per state; certified motions
+// against a dense sweep (never a missed collision, a thin obstacle a coarse step misses); rays
+// against brute force over every link and object triangle, sphere and occupied voxel.
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <random>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/octree/scan.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "mesh_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(23);
+  return r;
+}
+
+CollisionChecker load(const std::string& robot) {
+  const std::string dir = test::robots_dir() + "/" + robot;
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  return CollisionChecker(std::move(model), std::move(acm));
+}
+
+// Every collision vertex of every link, in the world, for a state.
+std::vector<std::vector<Vec3>> link_vertices(const RobotModel& model, const std::vector<double>& state) {
+  std::vector<Transform> poses;
+  forward_kinematics(model, state.data(), poses);
+  std::vector<std::vector<Vec3>> out(poses.size());
+  for (std::size_t l = 0; l < poses.size(); ++l) {
+    for (const CollisionElement& e : model.links()[l].collision) {
+      if (!e.mesh) continue;
+      for (const Vec3& v : e.mesh->vertices) out[l].push_back(poses[l] * (e.origin * v));
+    }
+  }
+  return out;
+}
+
+TEST(MotionRates, BoundEveryVertexDisplacement) {
+  BVH_REQUIRE_ROBOTS();
+  for (const std::string robot : {"panda", "ur5e", "pr2"}) {
+    const CollisionChecker checker = load(robot);
+    const RobotModel& model = checker.model();
+    std::uniform_real_distribution<double> step(-0.05, 0.05);
+    double tightest = 0.0;
+    for (int i = 0; i < 40; ++i) {
+      const std::vector<double> q = random_configuration(model, rng());
+      std::vector<double> q2 = q;
+      for (double& v : q2) v += step(rng());
+      const auto a = link_vertices(model, q), b = link_vertices(model, q2);
+      for (std::size_t l = 0; l < a.size(); ++l) {
+        if (a[l].empty()) continue;
+        double bound = 0.0;
+        for (std::size_t j = 0; j < q.size(); ++j) bound += checker.motion_rates(static_cast<int>(l))[j] * std::abs(q2[j] - q[j]);
+        for (std::size_t k = 0; k < a[l].size(); ++k) {
+          const double moved = (b[l][k] - a[l][k]).norm();
+          // A straight joint move traces an arc at least as long as the chord.
+          ASSERT_LE(moved, bound + 1e-12) << robot << " link " << model.links()[l].name;
+          if (bound > 0) tightest = std::max(tightest, moved / bound);
+        }
+      }
+    }
+    EXPECT_GT(tightest, 0.1) << robot << ": the bound is valid but uselessly loose";
+  }
+}
+
+// A scene for motions: a table-top box and a thin plate (2 mm) standing in the arm's way.
+Environment motion_scene(double plate_thickness) {
+  Environment env(0.02);
+  env.add_object("table", ObjectShape::box(Vec3(0.6, 1.2, 0.05)), Transform::Translation(Vec3(0.6, 0.0, 0.2)));
+  env.add_object("plate", ObjectShape::box(Vec3(plate_thickness, 0.6, 0.6)), Transform::Translation(Vec3(0.45, 0.0, 0.7)));
+  return env;
+}
+
+bool state_collides(const CollisionChecker& checker, const double* q, const Environment& env) {
+  return checker.check_self(q).collision || checker.check_environment(q, env).collision;
+}
+
+TEST(Motion, SteppedEqualsOneCheckPerState) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  const Environment env = motion_scene(0.02);
+  int invalid = 0;
+  for (int i = 0; i < 30; ++i) {
+    const auto a = random_configuration(checker.model(), rng()), b = random_configuration(checker.model(), rng());
+    MotionRequest request;
+    request.resolution = 0.1;
+    const MotionResult got = checker.check_motion(a.data(), b.data(), env, request);
+    double longest = 0.0;
+    for (std::size_t j = 0; j < a.size(); ++j) longest = std::max(longest, std::abs(b[j] - a[j]));
+    const int steps = static_cast<int>(std::ceil(longest / 0.1));
+    double last = 0.0;
+    bool valid = true;
+    for (int k = 0; k <= steps && valid; ++k) {
+      std::vector<double> q(a.size());
+      for (std::size_t j = 0; j < a.size(); ++j) q[j] = k == steps ? b[j] : a[j] + (b[j] - a[j]) * k / steps;
+      valid = !state_collides(checker, q.data(), env);
+      if (valid) last = static_cast<double>(k) / steps;
+    }
+    EXPECT_EQ(got.valid, valid) << i;
+    if (!valid) EXPECT_DOUBLE_EQ(got.last_valid_fraction, last) << i;
+    invalid += !valid;
+  }
+  EXPECT_GT(invalid, 3);
+  EXPECT_LT(invalid, 30);
+}
+
+// A dense sweep (2,000 states) as the oracle: a certified "valid" must see no colliding state in
+// it, and a certified "invalid" must stop no later than the sweep's first collision.
+TEST(Motion, CertifiedNeverMissesWhatADenseSweepFinds) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  const Environment env = motion_scene(0.002);
+  int valid = 0, invalid = 0;
+  for (int i = 0; i < 12; ++i) {
+    const auto a = random_configuration(checker.model(), rng()), b = random_configuration(checker.model(), rng());
+    if (state_collides(checker, a.data(), env)) continue;
+    const MotionResult got = checker.check_motion(a.data(), b.data(), env);
+    ASSERT_TRUE(got.certified) << got.message;
+    double first = 2.0;
+    for (int k = 0; k <= 2000 && first > 1.0; ++k) {
+      std::vector<double> q(a.size());
+      for (std::size_t j = 0; j < a.size(); ++j) q[j] = k == 2000 ? b[j] : a[j] + (b[j] - a[j]) * k / 2000.0;
+      if (state_collides(checker, q.data(), env)) first = k / 2000.0;
+    }
+    if (got.valid) {
+      EXPECT_GT(first, 1.0) << i << ": certified valid, but the sweep collides at " << first;
+    } else {
+      EXPECT_LE(got.last_valid_fraction, first) << i;
+    }
+    valid += got.valid;
+    invalid += !got.valid;
+  }
+  EXPECT_GT(valid + invalid, 6);
+}
+
+TEST(Motion, CertifiedFindsAThinPlateACoarseStepMisses) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  Environment env(0.02);
+  // A 1 mm plate across the hand's path as joint 1 swings from -0.6 to 0.6 rad.
+  std::vector<double> a(checker.model().variable_count(), 0.0);
+  const auto& names = checker.model().variable_names();
+  auto set = [&](std::vector<double>& q, const std::string& joint, double v) {
+    q[std::find(names.begin(), names.end(), joint) - names.begin()] = v;
+  };
+  set(a, "panda_joint2", -0.785);  // panda's "ready" pose
+  set(a, "panda_joint4", -2.356);
+  set(a, "panda_joint6", 1.571);
+  set(a, "panda_joint7", -0.785);  // the hand's long side along the arm: it sweeps its narrow side
+  set(a, "panda_finger_joint1", 0.03);  // closed fingers touch each other
+  std::vector<double> b = a;
+  set(a, "panda_joint1", -0.6);
+  set(b, "panda_joint1", 0.6);
+  std::vector<Transform> poses;
+  forward_kinematics(checker.model(), a.data(), poses);
+  const Vec3 hand = poses[checker.model().link_index("panda_hand")].t;
+  const double radius = std::hypot(hand.x(), hand.y());
+  // The plate stands in the plane y = 0 (joint 1 at 0 puts the hand there), at the hand's reach.
+  env.add_object("plate", ObjectShape::box(Vec3(0.02, 0.001, 0.02)), Transform::Translation(Vec3(radius, 0.0, hand.z())));
+  ASSERT_FALSE(checker.check_self(a.data()).collision);
+  ASSERT_FALSE(checker.check_environment(a.data(), env).collision) << "hand at " << hand.transpose();
+  ASSERT_FALSE(state_collides(checker, b.data(), env));
+  // The colliding stretch of joint 1 is [-w, w] (a dense sweep); n steps, n odd, put the states
+  // nearest 0 at +-0.6 / n, outside it when n < 0.6 / w.
+  double w = 0.0;
+  for (int k = 0; k <= 1200; ++k) {
+    std::vector<double> q = a;
+    set(q, "panda_joint1", -0.6 + k * 0.001);
+    if (state_collides(checker, q.data(), env)) w = std::max(w, std::abs(-0.6 + k * 0.001));
+  }
+  ASSERT_GT(w, 0.0) << "the plate is not in the way";
+  std::cout << "plate in the way for joint 1 in [-" << w << ", " << w << "]\n";
+  int n = static_cast<int>(std::ceil(0.6 / w)) - 1;
+  if (n % 2 == 0) --n;
+  ASSERT_GE(n, 3) << "the plate is in the way of too much of the motion to make a coarse step miss it";
+  MotionRequest coarse;
+  coarse.resolution = 1.2 / n;
+  const MotionResult stepped = checker.check_motion(a.data(), b.data(), env, coarse);
+  const MotionResult certified = checker.check_motion(a.data(), b.data(), env);
+  EXPECT_TRUE(stepped.valid) << "the coarse step should miss the plate (else the test shows nothing)";
+  EXPECT_FALSE(certified.valid);
+  EXPECT_TRUE(certified.certified);
+  EXPECT_LT(certified.last_valid_fraction, 0.5);
+  EXPECT_GT(certified.last_valid_fraction, 0.2);
+}
+
+TEST(Motion, BadInput) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  const Environment env(0.05);
+  std::vector<double> a(checker.model().variable_count(), 0.0);
+  a[1] = -0.785;  // "ready": free
+  a[3] = -2.356;
+  a[5] = 1.571;
+  a[checker.model().variable_count() - 1] = 0.03;  // panda_finger_joint1: closed fingers touch
+  ASSERT_EQ(checker.model().variable_names().back(), "panda_finger_joint1");
+  std::vector<double> b = a;
+  MotionRequest r;
+  r.resolution = -1;
+  EXPECT_THROW(checker.check_motion(a.data(), b.data(), env, r), std::invalid_argument);
+  r.resolution = 0;
+  r.tolerance = std::nan("");
+  EXPECT_THROW(checker.check_motion(a.data(), b.data(), env, r), std::invalid_argument);
+  b[0] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(checker.check_motion(a.data(), b.data(), env), std::invalid_argument);
+  b = a;
+  // Start equals goal: one state, valid.
+  const MotionResult same = checker.check_motion(a.data(), a.data(), env);
+  EXPECT_TRUE(same.valid);
+  EXPECT_EQ(same.last_valid_fraction, 1.0);
+}
+
+// Brute force: every link and object triangle (exact segment test, distance from the plane),
+// every sphere, every occupied leaf (slabs).
+double brute_force_ray(const CollisionChecker& checker, const std::vector<double>& state, const Environment& env,
+                       const Vec3& o, const Vec3& u, double range, std::string* body) {
+  double best = range;
+  auto triangle = [&](const Vec3& a, const Vec3& b, const Vec3& c, const std::string& name) {
+    if (!segment_intersects_triangle(o, o + best * u, a, b, c)) return;
+    const Vec3 n = (b - a).cross(c - a);
+    const double t = std::abs(n.dot(u)) > 1e-12 ? n.dot(a - o) / n.dot(u) : 0.0;
+    if (t < best) {
+      best = std::max(0.0, t);
+      *body = name;
+    }
+  };
+  std::vector<Transform> poses;
+  forward_kinematics(checker.model(), state.data(), poses);
+  for (std::size_t l = 0; l < poses.size(); ++l) {
+    for (const CollisionElement& e : checker.model().links()[l].collision) {
+      const Transform p = poses[l] * e.origin;
+      if (!e.mesh) continue;
+      for (const auto& f : e.mesh->triangles) {
+        triangle(p * e.mesh->vertices[f[0]], p * e.mesh->vertices[f[1]], p * e.mesh->vertices[f[2]], checker.model().links()[l].name);
+      }
+    }
+  }
+  for (const CollisionObject& obj : env.objects()) {
+    const double t = ray_ball_entry(o, u, best, obj.pose.t, obj.shape.kind == ObjectShape::Kind::kSphere ? obj.shape.radius : -1);
+    if (obj.shape.kind == ObjectShape::Kind::kSphere && t < best) {
+      best = t;
+      *body = obj.id;
+    }
+    if (!obj.mesh) continue;
+    for (std::int32_t i = 0; i < static_cast<std::int32_t>(obj.mesh->triangles().size()); ++i) {
+      const Triangle& t3 = obj.mesh->triangles()[i];
+      triangle(obj.pose * t3[0], obj.pose * t3[1], obj.pose * t3[2], obj.id);
+    }
+  }
+  for (const Octree::Leaf& leaf : env.octree().leaves()) {
+    if (!env.octree().occupied(leaf.log_odds)) continue;
+    const Vec3 lo = env.octree().cube_min(leaf.key), hi = lo + Vec3::Constant(env.octree().cube_size(leaf.depth));
+    double t0 = 0.0, t1 = best;
+    for (int k = 0; k < 3 && t0 <= t1; ++k) {
+      if (u[k] == 0.0) {
+        if (o[k] < lo[k] || o[k] > hi[k]) t0 = 2 * best + 1;
+        continue;
+      }
+      const double s1 = (lo[k] - o[k]) / u[k], s2 = (hi[k] - o[k]) / u[k];
+      t0 = std::max(t0, std::min(s1, s2));
+      t1 = std::min(t1, std::max(s1, s2));
+    }
+    if (t0 <= t1 && t0 < best) {
+      best = t0;
+      *body = "octree";
+    }
+  }
+  return best;
+}
+
+TEST(RayCast, AgainstBruteForce) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  Environment env = motion_scene(0.02);
+  env.add_object("ball", ObjectShape::sphere(0.1), Transform::Translation(Vec3(-0.4, 0.4, 0.5)));
+  std::vector<ScanPoint> wall;
+  for (float y = -1.0f; y <= 1.0f; y += 0.01f)
+    for (float z = 0.0f; z <= 1.0f; z += 0.01f) wall.emplace_back(-0.8f, y, z);
+  insert_points(env.octree(), wall);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits[4] = {0, 0, 0, 0};
+  for (int i = 0; i < 400; ++i) {
+    const auto q = random_configuration(checker.model(), rng());
+    const Vec3 origin(1.5 * u(rng()), 1.5 * u(rng()), 0.5 + 0.8 * u(rng()));
+    const Vec3 target(0.5 * u(rng()), 0.5 * u(rng()), 0.5 + 0.5 * u(rng()));
+    const Vec3 dir = (target - origin) * (1.0 + u(rng()));
+    const RayCastResult got = checker.cast_ray(q.data(), env, origin, dir, 5.0);
+    std::string body;
+    const double want = brute_force_ray(checker, q, env, origin, dir.normalized(), 5.0, &body);
+    if (want >= 5.0) {
+      EXPECT_FALSE(got.hit) << i;
+      ++hits[3];
+      continue;
+    }
+    ASSERT_TRUE(got.hit) << i << " expected " << body << " at " << want;
+    EXPECT_NEAR(got.distance, want, 1e-9) << i;
+    const std::string name = got.octree ? "octree" : got.link >= 0 ? checker.model().links()[got.link].name : got.object;
+    if (std::abs(got.distance - want) < 1e-9 && name != body) continue;  // a tie between two bodies
+    EXPECT_EQ(name, body) << i;
+    ++hits[got.octree ? 2 : got.link >= 0 ? 0 : 1];
+  }
+  EXPECT_GT(hits[0], 20);  // links
+  EXPECT_GT(hits[1], 20);  // objects
+  EXPECT_GT(hits[2], 10);  // voxels
+  EXPECT_GT(hits[3], 20);  // nothing
+  const auto q = random_configuration(checker.model(), rng());
+  EXPECT_THROW(checker.cast_ray(q.data(), env, Vec3::Zero(), Vec3::Zero(), 1.0), std::invalid_argument);
+  EXPECT_THROW(checker.cast_ray(q.data(), env, Vec3(std::nan(""), 0, 0), Vec3::UnitX(), 1.0), std::invalid_argument);
+  EXPECT_FALSE(checker.cast_ray(q.data(), env, Vec3(0, 0, 5), Vec3::UnitZ(), -1.0).hit);  // unlimited, up into nothing
+}
+
+// A moving base: the robot with its root at T against the objects equals the robot at the origin
+// against the objects moved by T^-1.
+TEST(RootPose, MovingTheBaseEqualsMovingTheWorldTheOtherWay) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = load("panda");
+  const Environment env = motion_scene(0.02);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  int colliding = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Transform base = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), 0.5 * u(rng())));
+    Environment moved(0.02);
+    for (const CollisionObject& o : env.objects()) moved.add_object(o.id, o.shape, base.inverse() * o.pose);
+    const auto q = random_configuration(checker.model(), rng());
+    EnvironmentRequest at_base;
+    at_base.root_pose = base;
+    at_base.distance = true;
+    EnvironmentRequest at_origin;
+    at_origin.distance = true;
+    const EnvironmentResult a = checker.check_environment(q.data(), env, at_base);
+    const EnvironmentResult b = checker.check_environment(q.data(), moved, at_origin);
+    ASSERT_EQ(a.collision, b.collision) << i;
+    EXPECT_NEAR(a.min_distance, b.min_distance, 1e-9) << i;
+    colliding += a.collision;
+    const Vec3 origin = base * Vec3(1.5, 0.2, 0.6), target = base * Vec3(0.0, 0.0, 0.5);
+    const RayCastResult ra = checker.cast_ray(q.data(), env, origin, target - origin, 5.0, base);
+    const RayCastResult rb = checker.cast_ray(q.data(), moved, base.inverse() * origin, base.R.transpose() * (target - origin), 5.0);
+    ASSERT_EQ(ra.hit, rb.hit) << i;
+    if (ra.hit) EXPECT_NEAR(ra.distance, rb.distance, 1e-9) << i;
+  }
+  EXPECT_GT(colliding, 5);
+  EnvironmentRequest bad;
+  bad.root_pose.R(0, 0) = 2.0;
+  const auto q = random_configuration(checker.model(), rng());
+  EXPECT_THROW(checker.check_environment(q.data(), env, bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bvh_collision
