@@ -16,6 +16,7 @@
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "checker_fixtures.h"
 #include "fcl_oracle.h"
 #include "robot_data.h"
 
@@ -124,9 +125,7 @@ struct FclLinks {
 
 void environment_check(const std::vector<ScanPoint>& scan, const Vec3& camera, double resolution,
                        bench::FigureFile& figures) {
-  const std::string dir = test::robots_dir() + "/panda";
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  const CollisionChecker checker(model, AllowedCollisionMatrix::adjacent_links(model));
+  const CollisionChecker checker = test::load_checker("panda");
   Environment env(resolution);
   insert_scan(env.octree(), scan, camera.cast<float>());
   auto reference = std::make_shared<octomap::OcTree>(resolution);
@@ -244,9 +243,7 @@ int voxels_on_robot(const Octree& tree, const std::vector<Bvh<Obb>>& meshes, con
 // alone, and filter plus insertion against inserting the raw scan; counted: points removed,
 // voxels left on the robot, and whether the robot collides with the octree it built.
 void self_filter(const Vec3& camera, double resolution, double padding, bench::FigureFile& figures) {
-  const std::string dir = test::robots_dir() + "/panda";
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  const CollisionChecker checker(model, AllowedCollisionMatrix::adjacent_links(model));
+  const CollisionChecker checker = test::load_checker("panda");
   std::vector<double> state(checker.model().variable_count(), 0.0);
   const std::map<std::string, double> reach_over_table = {
       {"panda_joint2", 0.3}, {"panda_joint4", -1.9}, {"panda_joint6", 2.2}, {"panda_joint7", 0.785}};

@@ -12,6 +12,7 @@
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "mesh_fixtures.h"
+#include "checker_fixtures.h"
 #include "robot_data.h"
 
 namespace bvh_collision {
@@ -20,13 +21,6 @@ namespace {
 std::mt19937_64& rng() {
   static std::mt19937_64 r(23);
   return r;
-}
-
-CollisionChecker load(const std::string& robot) {
-  const std::string dir = test::robots_dir() + "/" + robot;
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm));
 }
 
 // Every collision vertex of every link, in the world, for a state.
@@ -46,7 +40,7 @@ std::vector<std::vector<Vec3>> link_vertices(const RobotModel& model, const std:
 TEST(MotionRates, BoundEveryVertexDisplacement) {
   BVH_REQUIRE_ROBOTS();
   for (const std::string robot : {"panda", "ur5e", "pr2"}) {
-    const CollisionChecker checker = load(robot);
+    const CollisionChecker checker = test::load_checker(robot);
     const RobotModel& model = checker.model();
     std::uniform_real_distribution<double> step(-0.05, 0.05);
     double tightest = 0.0;
@@ -85,7 +79,7 @@ bool state_collides(const CollisionChecker& checker, const double* q, const Envi
 
 TEST(Motion, SteppedEqualsOneCheckPerState) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const Environment env = motion_scene(0.02);
   int invalid = 0;
   for (int i = 0; i < 30; ++i) {
@@ -116,7 +110,7 @@ TEST(Motion, SteppedEqualsOneCheckPerState) {
 // it, and a certified "invalid" must stop no later than the sweep's first collision.
 TEST(Motion, CertifiedNeverMissesWhatADenseSweepFinds) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const Environment env = motion_scene(0.002);
   int valid = 0, invalid = 0;
   for (int i = 0; i < 12; ++i) {
@@ -143,7 +137,7 @@ TEST(Motion, CertifiedNeverMissesWhatADenseSweepFinds) {
 
 TEST(Motion, CertifiedFindsAThinPlateACoarseStepMisses) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   Environment env(0.02);
   // A 1 mm plate across the hand's path as joint 1 swings from -0.6 to 0.6 rad.
   std::vector<double> a(checker.model().variable_count(), 0.0);
@@ -194,7 +188,7 @@ TEST(Motion, CertifiedFindsAThinPlateACoarseStepMisses) {
 
 TEST(Motion, BadInput) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const Environment env(0.05);
   std::vector<double> a(checker.model().variable_count(), 0.0);
   a[1] = -0.785;  // "ready": free
@@ -278,7 +272,7 @@ double brute_force_ray(const CollisionChecker& checker, const std::vector<double
 
 TEST(RayCast, AgainstBruteForce) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   Environment env = motion_scene(0.02);
   env.add_object("ball", ObjectShape::sphere(0.1), Transform::Translation(Vec3(-0.4, 0.4, 0.5)));
   std::vector<ScanPoint> wall;
@@ -321,7 +315,7 @@ TEST(RayCast, AgainstBruteForce) {
 // against the objects moved by T^-1.
 TEST(RootPose, MovingTheBaseEqualsMovingTheWorldTheOtherWay) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const Environment env = motion_scene(0.02);
   std::uniform_real_distribution<double> u(-0.3, 0.3);
   int colliding = 0;

@@ -11,6 +11,7 @@
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "checker_fixtures.h"
 #include "robot_data.h"
 
 namespace bvh_collision {
@@ -19,13 +20,6 @@ namespace {
 std::mt19937_64& rng() {
   static std::mt19937_64 r(17);
   return r;
-}
-
-CollisionChecker load(const std::string& robot) {
-  const std::string dir = test::robots_dir() + "/" + robot;
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm));
 }
 
 // The robot's collision geometry in the scan frame, element by element, for the oracle.
@@ -227,7 +221,7 @@ TEST(SelfFilter, AgainstBruteForce) {
                                    {"panda_capsules", {{1.2, -0.5, 1.0}, {0.3, 0.0, 0.4}}, {0.02}}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.robot);
-    const CollisionChecker checker = load(c.robot);
+    const CollisionChecker checker = test::load_checker(c.robot);
     const auto state = named_state(checker.model(), kPandaReady);
     for (const double padding : c.paddings) {
       const FilteredScan got = expect_filter_matches_oracle(checker, state, c.camera, padding);
@@ -244,7 +238,7 @@ TEST(SelfFilter, AgainstBruteForce) {
 // would see nothing), the fingers below it still do.
 TEST(SelfFilter, SensorInsideItsMount) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const auto state = named_state(checker.model(), kPandaReady);
   const int hand = checker.model().link_index("panda_hand");
   Vec3 sensor = Vec3::Zero();
@@ -271,7 +265,7 @@ double robot_distance(const std::vector<WorldElement>& elements, const Vec3& p, 
 // The floor stays, and stale voxels in front of the robot are cleared by the rays to the robot.
 TEST(SelfFilter, ScanOfTheRobotLeavesNoVoxelOnIt) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const auto state = named_state(checker.model(), kPandaReady);
   const std::vector<WorldElement> elements = world_elements(checker.model(), state);
   const Vec3 sensor(1.3, 0.6, 0.9);
@@ -318,7 +312,7 @@ TEST(SelfFilter, ScanOfTheRobotLeavesNoVoxelOnIt) {
 
 TEST(SelfFilter, BadInput) {
   BVH_REQUIRE_ROBOTS();
-  const CollisionChecker checker = load("panda");
+  const CollisionChecker checker = test::load_checker("panda");
   const auto state = named_state(checker.model(), kPandaReady);
   const ScanPoint sensor(1.0f, 0.0f, 1.0f);
   const float nan = std::numeric_limits<float>::quiet_NaN();

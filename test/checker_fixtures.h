@@ -1,0 +1,21 @@
+// A CollisionChecker for one of the real robots of ../shared/robots, with the allowed-collision
+// matrix from adjacency: what most checker tests and benchmarks start from.
+#pragma once
+
+#include <string>
+#include <utility>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "robot_data.h"
+
+namespace bvh_collision::test {
+
+inline CollisionChecker load_checker(const std::string& robot, const CheckerOptions& options = {}) {
+  const std::string dir = robots_dir() + "/" + robot;
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  return CollisionChecker(std::move(model), std::move(acm), options);
+}
+
+}  // namespace bvh_collision::test
