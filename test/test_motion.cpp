@@ -341,6 +341,23 @@ TEST(RootPose, MovingTheBaseEqualsMovingTheWorldTheOtherWay) {
     if (ra.hit) EXPECT_NEAR(ra.distance, rb.distance, 1e-9) << i;
   }
   EXPECT_GT(colliding, 5);
+  // The self filter too: points around a robot based at T, against the same points moved by T^-1
+  // and the robot at the origin (a dyadic shift, so the moved floats are the same points).
+  const Transform shift = Transform::Translation(Vec3(0.25, -0.5, 0.125));
+  std::uniform_real_distribution<float> box(-0.8f, 0.8f);
+  std::vector<ScanPoint> near_base, near_origin;
+  for (int i = 0; i < 5000; ++i) {
+    const ScanPoint p(box(rng()), box(rng()), 0.6f + box(rng()));
+    near_origin.push_back(p);
+    near_base.push_back((p + shift.t.cast<float>()).eval());
+  }
+  const ScanPoint sensor(1.0f, 0.5f, 1.0f);
+  const auto state = random_configuration(checker.model(), rng());
+  const FilteredScan at_t = checker.filter_scan(state.data(), near_base, (sensor + shift.t.cast<float>()).eval(), 0.02, shift);
+  const FilteredScan at_0 = checker.filter_scan(state.data(), near_origin, sensor, 0.02);
+  EXPECT_GT(at_0.on_robot + at_0.shadowed, 50u);
+  EXPECT_NEAR(double(at_t.on_robot), double(at_0.on_robot), 2.0);  // a point on a boundary may round either way
+  EXPECT_NEAR(double(at_t.shadowed), double(at_0.shadowed), 2.0);
   EnvironmentRequest bad;
   bad.root_pose.R(0, 0) = 2.0;
   const auto q = random_configuration(checker.model(), rng());
