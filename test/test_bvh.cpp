@@ -160,6 +160,21 @@ TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
       }
     }
   }
+  // Coarse volumes (spheres) around the random meshes' large triangles have more slack than any
+  // tolerance above, so without the robots' meshes no pose above may take the shortcut. Two finely
+  // tessellated spheres of radius 0.1 with centres 0.198 apart must take it at 2 cm whatever the
+  // volume type. They intersect without a brute-force oracle: the facets lie within 0.2 mm of the
+  // true sphere, so a's vertex (0.1, 0, 0) is inside b and a's vertex (-0.1, 0, 0) outside it.
+  std::mt19937_64 local(11);
+  const TriangleMesh fine = test::bumpy_sphere(local, 0.1, 48, 64, 0.0);
+  const auto a = Bvh<TypeParam>::build(fine);
+  const Transform overlapping = Transform::Translation(Vec3(0.198, 0.0, 0.0));
+  CollisionRequest request;
+  request.tolerance = 0.02;
+  request.solids = false;
+  const CollisionResult r = collide(a, Transform(), a, overlapping, request);
+  EXPECT_TRUE(r.collision);
+  shortcuts += r.within_tolerance;
   EXPECT_GT(shortcuts, 0) << "the tolerance never took effect";
 }
 
