@@ -65,6 +65,72 @@ TEST(MotionRates, BoundEveryVertexDisplacement) {
   }
 }
 
+// A slide (prismatic, 0..0.1 m) carrying a turntable whose arm reaches 0.3 m, and a mimic
+// slide (twice the first, its own limits only 0..0.05 m) carrying a wrist: the rates assume joints
+// within limits, and a request may hold values outside them ("say so, still answer").
+constexpr const char* kSlideUrdf = R"(<robot name="slide">
+  <link name="base"/>
+  <link name="carriage"><collision><geometry><box size="0.05 0.05 0.05"/></geometry></collision></link>
+  <link name="arm"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.02 0.02"/></geometry></collision></link>
+  <link name="finger"/>
+  <link name="tip"><collision><origin xyz="0 0.2 0"/><geometry><box size="0.02 0.1 0.02"/></geometry></collision></link>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="carriage"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.1" effort="1" velocity="1"/></joint>
+  <joint name="turn" type="revolute"><parent link="carriage"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="finger_slide" type="prismatic"><parent link="arm"/><child link="finger"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.05" effort="1" velocity="1"/><mimic joint="slide" multiplier="2"/></joint>
+  <joint name="wrist" type="revolute"><parent link="finger"/><child link="tip"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>)";
+
+// The bound on how far a link's points move along a segment holds for states outside the joint
+// limits and for a mimic slide whose own limits are narrower than its source's travel.
+TEST(MotionRates, BoundHoldsOutsideLimitsAndForMimicSlides) {
+  RobotModel model = RobotModel::from_urdf(*parse_robot_description(kSlideUrdf), PackageResolver({}));
+  AllowedCollisionMatrix acm(model.links().size());
+  const CollisionChecker checker(std::move(model), std::move(acm));
+  const RobotModel& m = checker.model();
+  ASSERT_EQ(m.variable_count(), 3u);
+  std::uniform_real_distribution<double> slide(-2.0, 2.0), angle(-3.0, 3.0);
+  const std::size_t s = std::find(m.variable_names().begin(), m.variable_names().end(), "slide") - m.variable_names().begin();
+  int outside = 0;
+  for (int i = 0; i < 400; ++i) {
+    std::vector<double> start(3), goal(3);
+    for (std::size_t j = 0; j < 3; ++j) {
+      start[j] = j == s ? slide(rng()) : angle(rng());
+      goal[j] = i % 2 == 0 && j == s ? start[j] : (j == s ? slide(rng()) : angle(rng()));
+    }
+    if (i % 4 == 1) {
+      // Within limits, at the far end, the wrist holding the tip straight out: only the turn
+      // moves, so the tip's lever is the whole reach through the mimic slide.
+      const std::size_t w = std::find(m.variable_names().begin(), m.variable_names().end(), "wrist") - m.variable_names().begin();
+      start[s] = goal[s] = 0.1;
+      start[w] = goal[w] = -M_PI / 2;
+    }
+    outside += std::abs(start[s]) > 0.1;
+    std::vector<double> speed(m.links().size());
+    for (std::size_t l = 0; l < speed.size(); ++l) speed[l] = checker.link_speed(static_cast<int>(l), start.data(), goal.data());
+    // Along the segment, every vertex's displacement between nearby fractions within the bound.
+    for (double f = 0.0; f < 1.0; f += 0.125) {
+      std::vector<double> qa(3), qb(3);
+      for (std::size_t j = 0; j < 3; ++j) {
+        qa[j] = start[j] + f * (goal[j] - start[j]);
+        qb[j] = start[j] + (f + 0.01) * (goal[j] - start[j]);
+      }
+      const auto a = link_vertices(m, qa), b = link_vertices(m, qb);
+      for (std::size_t l = 0; l < a.size(); ++l) {
+        for (std::size_t k = 0; k < a[l].size(); ++k) {
+          ASSERT_LE((b[l][k] - a[l][k]).norm(), 0.01 * speed[l] * (1 + 1e-12) + 1e-15)
+              << m.links()[l].name << " slide " << start[s] << " -> " << goal[s];
+        }
+      }
+    }
+  }
+  EXPECT_GT(outside, 100);
+  EXPECT_LT(outside, 300);
+}
+
 // A scene for motions: a table-top box and a thin plate (2 mm) standing in the arm's way.
 Environment motion_scene(double plate_thickness) {
   Environment env(0.02);
@@ -99,7 +165,9 @@ TEST(Motion, SteppedEqualsOneCheckPerState) {
       if (valid) last = static_cast<double>(k) / steps;
     }
     EXPECT_EQ(got.valid, valid) << i;
-    if (!valid) EXPECT_DOUBLE_EQ(got.last_valid_fraction, last) << i;
+    if (!valid) {
+      EXPECT_DOUBLE_EQ(got.last_valid_fraction, last) << i;
+    }
     invalid += !valid;
   }
   EXPECT_GT(invalid, 3);
@@ -338,7 +406,9 @@ TEST(RootPose, MovingTheBaseEqualsMovingTheWorldTheOtherWay) {
     const RayCastResult ra = checker.cast_ray(q.data(), env, origin, target - origin, 5.0, base);
     const RayCastResult rb = checker.cast_ray(q.data(), moved, base.inverse() * origin, base.R.transpose() * (target - origin), 5.0);
     ASSERT_EQ(ra.hit, rb.hit) << i;
-    if (ra.hit) EXPECT_NEAR(ra.distance, rb.distance, 1e-9) << i;
+    if (ra.hit) {
+      EXPECT_NEAR(ra.distance, rb.distance, 1e-9) << i;
+    }
   }
   EXPECT_GT(colliding, 5);
   // The self filter too: points around a robot based at T, against the same points moved by T^-1

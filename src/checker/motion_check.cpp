@@ -13,31 +13,59 @@ namespace bvh_collision {
 // For each link, walk to the root: a revolute joint moves the link's points at most at their
 // distance from the joint's origin per radian, which is bounded by the sum of the joint offsets
 // below it plus the link's geometry reach (the chain's length, whatever the other joints do);
-// a prismatic joint moves them at 1 m per metre and lengthens the chain by its largest travel.
+// a prismatic joint moves them at 1 m per metre and lengthens the chain by its largest travel
+// within its source variable's limits (link_speed widens the bound for values beyond them).
 void CollisionChecker::compute_motion_rates() {
   const auto& links = model_.links();
   const auto& joints = model_.joints();
+  std::vector<double> travel(model_.variable_count(), 0.0);  // largest |value| within limits
+  for (const RobotJoint& joint : joints) {
+    if (joint.variable >= 0) travel[joint.variable] = std::max(std::abs(joint.lower), std::abs(joint.upper));
+  }
   motion_rates_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
+  motion_turns_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
+  motion_slides_.assign(links.size(), {});
   for (std::size_t l = 0; l < links.size(); ++l) {
     if (bounds_[l].radius < 0.0) continue;
     double reach = bounds_[l].center.norm() + bounds_[l].radius + padding_[l];
     for (int j = links[l].parent_joint; j >= 0; j = links[joints[j].parent_link].parent_joint) {
       const RobotJoint& joint = joints[j];
       int variable = joint.variable;
-      double multiplier = 1.0;
+      double multiplier = 1.0, offset = 0.0;
       if (joint.mimic >= 0) {
         variable = joints[joint.mimic].variable;
         multiplier = std::abs(joint.multiplier);
+        offset = std::abs(joint.offset);
       }
       if (variable >= 0 && (joint.type == JointType::kRevolute || joint.type == JointType::kContinuous)) {
         motion_rates_[l][variable] += multiplier * reach;
+        motion_turns_[l][variable] += multiplier;
       } else if (variable >= 0 && joint.type == JointType::kPrismatic) {
         motion_rates_[l][variable] += multiplier;
-        reach += multiplier * std::max(std::abs(joint.lower), std::abs(joint.upper)) + std::abs(joint.offset);
+        reach += multiplier * travel[variable] + offset;
+        motion_slides_[l].push_back({variable, multiplier, travel[variable]});
       }
       reach += joint.origin.t.norm();
     }
   }
+}
+
+// A slide beyond its travel lengthens every lever above it by at most |multiplier| times the
+// excess, which is largest at an end of the segment (|value| is convex along it).
+double CollisionChecker::link_speed(int link, const double* start, const double* goal) const {
+  const auto& rates = motion_rates_[link];
+  double speed = 0.0, turning = 0.0;
+  for (std::size_t j = 0; j < rates.size(); ++j) {
+    const double change = std::abs(goal[j] - start[j]);
+    speed += rates[j] * change;
+    turning += motion_turns_[link][j] * change;
+  }
+  double excess = 0.0;
+  for (const SlideBound& slide : motion_slides_[link]) {
+    const double farthest = std::max(std::abs(start[slide.variable]), std::abs(goal[slide.variable]));
+    excess += slide.multiplier * std::max(0.0, farthest - slide.travel);
+  }
+  return speed + excess * turning;
 }
 
 namespace {
@@ -53,6 +81,8 @@ class Segment {
     return state_.data();
   }
   const std::vector<double>& delta() const { return delta_; }
+  const double* start() const { return start_; }
+  const double* goal() const { return goal_; }
   double longest() const {
     double m = 0.0;
     for (double d : delta_) m = std::max(m, std::abs(d));
@@ -119,10 +149,7 @@ MotionResult motion_certified(const CollisionChecker& checker, Segment& segment,
   MotionResult result;
   double speed = 0.0, max_padding = 0.0;
   for (std::size_t l = 0; l < checker.model().links().size(); ++l) {
-    const auto& rates = checker.motion_rates(static_cast<int>(l));
-    double m = 0.0;
-    for (std::size_t j = 0; j < rates.size(); ++j) m += rates[j] * std::abs(segment.delta()[j]);
-    speed = std::max(speed, m);
+    speed = std::max(speed, checker.link_speed(static_cast<int>(l), segment.start(), segment.goal()));
     max_padding = std::max(max_padding, checker.link_padding(static_cast<int>(l)));
   }
   const double closing = (request.self ? 2.0 : 1.0) * speed;

@@ -158,8 +158,13 @@ class CollisionChecker {
                             const MotionRequest& request = {}) const;
 
   // How far any point of `link` can move per unit change of each state variable, over every
-  // configuration (revolute: the farthest its geometry can be from the axis; prismatic: 1).
+  // configuration within the joint limits (revolute: the farthest its geometry can be from the
+  // axis; prismatic: 1).
   const std::vector<double>& motion_rates(int link) const { return motion_rates_[link]; }
+  // How far any point of `link` can move per unit fraction of the straight segment from `start`
+  // to `goal`: the rates weighted by each variable's change, widened where a prismatic joint on
+  // the link's chain leaves its limits (the rates assume it does not).
+  double link_speed(int link, const double* start, const double* goal) const;
 
   // The first link, object or occupied voxel along origin + s * direction, 0 <= s <= max_range
   // (max_range <= 0: unlimited), the robot in `state` with its root at `root_pose`. Throws
@@ -239,6 +244,13 @@ class CollisionChecker {
   std::vector<double> padding_;
   std::vector<std::pair<int, int>> checked_pairs_;
   std::vector<std::vector<double>> motion_rates_;  // per link, per state variable
+  std::vector<std::vector<double>> motion_turns_;  // per link, per variable: revolute multipliers on its chain
+  struct SlideBound {
+    int variable = -1;
+    double multiplier = 1.0;  // |multiplier| of the (mimic) prismatic joint
+    double travel = 0.0;      // the largest |value| the rates assumed
+  };
+  std::vector<std::vector<SlideBound>> motion_slides_;  // per link: prismatic joints on its chain
 };
 
 }  // namespace bvh_collision
