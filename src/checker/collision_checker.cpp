@@ -1,8 +1,10 @@
 #include "bvh_collision/checker/collision_checker.h"
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 namespace bvh_collision {
@@ -338,6 +340,38 @@ std::vector<bool> CollisionChecker::check_self_batch(const double* states, std::
   work(0);
   for (std::thread& t : threads) t.join();
   return std::vector<bool>(out.begin(), out.end());
+}
+
+std::vector<char> CollisionChecker::check_batch(const double* states, std::size_t count, const Environment* env,
+                                                const BatchRequest& request) const {
+  if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
+  std::vector<char> out(count, 0);
+  SelfCollisionRequest self;
+  self.tolerance = request.tolerance;
+  EnvironmentRequest environment;
+  environment.tolerance = request.tolerance;
+  environment.root_pose = request.root_pose;
+  const std::size_t stride = model_.variable_count();
+  // States are taken in blocks as threads come free: their costs differ by orders of magnitude
+  // (a free state near nothing against one deep in clutter).
+  constexpr std::size_t kBlock = 16;
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t first; (first = next.fetch_add(kBlock)) < count;) {
+      for (std::size_t i = first; i < std::min(count, first + kBlock); ++i) {
+        const double* q = states + i * stride;
+        out[i] = (request.self && check_self(q, self).collision) ||
+                 (request.environment && check_environment(q, *env, environment).collision);
+      }
+    }
+  };
+  const std::size_t blocks = (count + kBlock - 1) / kBlock;
+  const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), blocks));
+  std::vector<std::thread> threads;
+  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work);
+  work();
+  for (std::thread& t : threads) t.join();
+  return out;
 }
 
 }  // namespace bvh_collision

@@ -25,6 +25,7 @@ void CollisionChecker::compute_motion_rates() {
   motion_rates_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
   motion_turns_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
   motion_slides_.assign(links.size(), {});
+  reach_ = 0.0;
   for (std::size_t l = 0; l < links.size(); ++l) {
     if (bounds_[l].radius < 0.0) continue;
     double reach = bounds_[l].center.norm() + bounds_[l].radius + padding_[l];
@@ -47,6 +48,7 @@ void CollisionChecker::compute_motion_rates() {
       }
       reach += joint.origin.t.norm();
     }
+    reach_ = std::max(reach_, reach);
   }
 }
 

@@ -101,6 +101,13 @@ struct MotionResult {
   std::string message;       // why a certified check gave up, when it did
 };
 
+// A batch of states checked for collision, boolean (check_batch).
+struct BatchRequest {
+  bool self = true, environment = true;
+  double tolerance = 0.0;  // DESIGN.md section 2
+  Transform root_pose;     // the root link in the world frame
+};
+
 // The first body along a ray: a link, a collision object, or an occupied voxel.
 struct RayCastResult {
   bool hit = false;
@@ -135,6 +142,12 @@ class CollisionChecker {
 
   // Boolean self-collision for `count` states stored row by row; uses every core.
   std::vector<bool> check_self_batch(const double* states, std::size_t count, double tolerance = 0.0) const;
+
+  // Boolean self and/or environment collision for `count` states stored row by row (1 = in
+  // collision); uses every core when there is more than one state. `env` may be null when
+  // request.environment is false.
+  std::vector<char> check_batch(const double* states, std::size_t count, const Environment* env,
+                                const BatchRequest& request) const;
 
   // The robot in `state` against the environment: every link with geometry (the allowed-collision
   // matrix is about link pairs) against the octree's occupied cubes and the objects, with the
@@ -171,6 +184,10 @@ class CollisionChecker {
   // std::invalid_argument for a non-finite origin or a zero or non-finite direction.
   RayCastResult cast_ray(const double* state, const Environment& env, const Vec3& origin, const Vec3& direction,
                          double max_range, const Transform& root_pose = Transform::Identity()) const;
+
+  // How far from the root link's origin any link geometry (with its padding) can get, over every
+  // configuration within the joint limits: the default workspace is this plus a margin.
+  double reach() const { return reach_; }
 
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return meshes_.size(); }
@@ -251,6 +268,7 @@ class CollisionChecker {
     double travel = 0.0;      // the largest |value| the rates assumed
   };
   std::vector<std::vector<SlideBound>> motion_slides_;  // per link: prismatic joints on its chain
+  double reach_ = 0.0;
 };
 
 }  // namespace bvh_collision
