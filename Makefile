@@ -18,6 +18,7 @@ DEB_PACKAGES := \
   ros-core-dev libroscpp-dev rosbash python3-roslaunch python3-rostest librostest-dev \
   python3-rosnode python3-rosservice python3-rosparam \
   libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev \
+  libdiagnostic-msgs-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev ros-robot-state-publisher \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev liboctomap-dev \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
   libkdl-parser-dev liborocos-kdl-dev

@@ -11,7 +11,10 @@ int main(int argc, char** argv) {
   ros::NodeHandle private_nh("~");
   try {
     bvh_collision::CollisionCheckerNode node(nh, private_nh);
-    ros::spin();
+    // Services, joint_states and timers on several threads: requests are answered side by side
+    // (clouds have a thread of their own inside the node).
+    ros::MultiThreadedSpinner spinner(static_cast<std::uint32_t>(node.parameters().service_threads));
+    spinner.spin();
   } catch (const bvh_collision::NodeStartupError& e) {
     ROS_FATAL_STREAM("collision_checker cannot start: " << e.what());
     return 1;

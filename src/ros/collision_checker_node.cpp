@@ -1,55 +1,205 @@
+// Start-up, the robot's state from joint_states, and poses from tf2.
 #include "bvh_collision/ros/collision_checker_node.h"
 
-#include <cmath>
+#include <sstream>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/console.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "bvh_collision/octree/octomap_bridge.h"
 
 namespace bvh_collision {
 
-NodeParameters read_node_parameters(const ros::NodeHandle& private_nh) {
-  NodeParameters p;
-  private_nh.param<std::string>("world_frame", p.world_frame, "");
-  if (!private_nh.param("resolution", p.resolution, p.resolution)) {
-    // A parameter of the wrong type reads as "not set" in roscpp; say so rather than ignore it.
-    if (private_nh.hasParam("resolution")) {
-      throw NodeStartupError("parameter ~resolution must be a number");
-    }
-  }
-  if (!std::isfinite(p.resolution) || p.resolution <= 0.0) {
-    throw NodeStartupError("parameter ~resolution must be a positive number of metres, got " +
-                           std::to_string(p.resolution));
-  }
-  return p;
-}
+namespace {
+
+const char* const kServices[] = {"check_state", "check_states", "check_motion", "cast_ray", "clear_environment",
+                                 "clear_box", "set_collision_object", "remove_collision_object", "save_octree"};
+
+}  // namespace
 
 CollisionCheckerNode::CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(std::move(nh)), private_nh_(std::move(private_nh)) {
+    : nh_(std::move(nh)), private_nh_(std::move(private_nh)), resolver_(PackageResolver::from_environment()) {
   params_ = read_node_parameters(private_nh_);
+  for (const char* name : kServices) latency_[name];
+  load_robot();
+  store_ = std::make_unique<EnvironmentStore>(initial_environment());
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  advertise();
+  ROS_INFO_STREAM("collision_checker: " << summary_.to_string() << "; world frame '" << params_.world_frame
+                                        << "', octree resolution " << params_.resolution << " m, "
+                                        << checker_->checked_pairs().size() << " link pairs checked");
+  publish_status();  // last: once these are set, the node is up
+}
+
+CollisionCheckerNode::~CollisionCheckerNode() {
+  if (cloud_spinner_) cloud_spinner_->stop();
+}
+
+void CollisionCheckerNode::load_robot() {
   std::string xml;
   if (!nh_.getParam("robot_description", xml)) {
     throw NodeStartupError("parameter '" + nh_.resolveName("robot_description") +
                            "' is not set (or is not a string): it must hold the robot's URDF");
   }
   try {
-    model_ = parse_robot_description(xml);
+    urdf_ = parse_robot_description(xml);
   } catch (const RobotDescriptionError& e) {
     throw NodeStartupError("parameter '" + nh_.resolveName("robot_description") + "': " + e.what());
   }
-  summary_ = summarize(*model_);
+  summary_ = summarize(*urdf_);
   if (params_.world_frame.empty()) params_.world_frame = summary_.root_link;
-  ROS_INFO_STREAM("collision_checker: " << summary_.to_string() << "; world frame '"
-                                        << params_.world_frame << "', octree resolution "
-                                        << params_.resolution << " m");
-  publish_status();  // last: once these are set, the node is up
+  RobotModel model = [&] {
+    try {
+      return RobotModel::from_urdf(*urdf_, resolver_);
+    } catch (const RobotLoadError& e) {
+      throw NodeStartupError(std::string("robot '") + summary_.name + "': " + e.what());
+    }
+  }();
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  std::string srdf;
+  if (nh_.getParam("robot_description_semantic", srdf) && !srdf.empty()) {
+    try {
+      for (const std::string& name : apply_srdf(parse_srdf(srdf), model, acm)) {
+        ROS_WARN_STREAM("collision_checker: the SRDF names '" << name << "', which the URDF does not have");
+      }
+    } catch (const std::invalid_argument& e) {
+      throw NodeStartupError("parameter '" + nh_.resolveName("robot_description_semantic") + "': " + e.what());
+    }
+  }
+  for (const auto& [link, padding] : params_.link_padding) {
+    if (model.link_index(link) < 0) throw NodeStartupError("parameter ~link_padding names unknown link '" + link + "'");
+  }
+  for (const RobotLink& link : model.links()) has_geometry_ = has_geometry_ || !link.collision.empty();
+  root_link_ = model.links()[model.root_link()].name;
+  state_ = neutral_state(model);
+  CheckerOptions options;
+  options.padding = params_.padding;
+  options.link_padding = params_.link_padding;
+  checker_ = std::make_unique<const CollisionChecker>(std::move(model), std::move(acm), options);
+  joint_map_ = std::make_unique<const JointValueMap>(checker_->model());
+}
+
+Environment CollisionCheckerNode::initial_environment() const {
+  const OccupancyModel model = params_.occupancy_model();
+  Environment env(params_.resolution, model);
+  if (params_.octree_file.empty()) return env;
+  Octree loaded = [&] {
+    try {
+      return load_octree(params_.octree_file);
+    } catch (const std::exception& e) {
+      throw NodeStartupError(std::string("parameter ~octree_file: ") + e.what());
+    }
+  }();
+  // The file's voxels and values, this node's sensor model for what comes next.
+  std::stringstream nodes;
+  loaded.write_nodes(nodes);
+  if (loaded.resolution() != params_.resolution) {
+    ROS_WARN_STREAM("collision_checker: ~octree_file has resolution " << loaded.resolution()
+                                                                      << " m, which replaces ~resolution "
+                                                                      << params_.resolution << " m");
+  }
+  Environment from_file(loaded.resolution(), model);
+  from_file.octree() = Octree::read_nodes(nodes, loaded.resolution(), model);
+  ROS_INFO_STREAM("collision_checker: started from '" << params_.octree_file << "' ("
+                                                      << from_file.octree().node_count() << " nodes)");
+  return from_file;
+}
+
+void CollisionCheckerNode::advertise() {
+  // Resolution may come from an octree file; keep the advertised parameter truthful.
+  params_.resolution = store_->snapshot()->octree().resolution();
+  services_.push_back(private_nh_.advertiseService("check_state", &CollisionCheckerNode::check_state, this));
+  services_.push_back(private_nh_.advertiseService("check_states", &CollisionCheckerNode::check_states, this));
+  services_.push_back(private_nh_.advertiseService("check_motion", &CollisionCheckerNode::check_motion, this));
+  services_.push_back(private_nh_.advertiseService("cast_ray", &CollisionCheckerNode::cast_ray, this));
+  services_.push_back(
+      private_nh_.advertiseService("clear_environment", &CollisionCheckerNode::clear_environment, this));
+  services_.push_back(private_nh_.advertiseService("clear_box", &CollisionCheckerNode::clear_box, this));
+  services_.push_back(
+      private_nh_.advertiseService("set_collision_object", &CollisionCheckerNode::set_collision_object, this));
+  services_.push_back(private_nh_.advertiseService("remove_collision_object",
+                                                   &CollisionCheckerNode::remove_collision_object, this));
+  services_.push_back(private_nh_.advertiseService("save_octree", &CollisionCheckerNode::save_octree, this));
+
+  joint_state_sub_ = nh_.subscribe("joint_states", 10, &CollisionCheckerNode::on_joint_state, this,
+                                   ros::TransportHints().tcpNoDelay());
+  // Clouds on their own queue and thread; queue size 1: a checker that falls behind drops old
+  // clouds rather than insert stale ones.
+  ros::NodeHandle cloud_nh(nh_);
+  cloud_nh.setCallbackQueue(&cloud_queue_);
+  cloud_sub_ = cloud_nh.subscribe("obstacle_cloud", 1, &CollisionCheckerNode::on_cloud, this);
+  cloud_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &cloud_queue_);
+  cloud_spinner_->start();
+
+  cells_pub_ = private_nh_.advertise<visualization_msgs::MarkerArray>("occupied_cells", 1);
+  contacts_pub_ = private_nh_.advertise<visualization_msgs::MarkerArray>("contacts", 1);
+  diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
+  cells_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.marker_rate),
+                                     &CollisionCheckerNode::publish_occupied_cells, this);
+  diagnostics_timer_ =
+      nh_.createWallTimer(ros::WallDuration(1.0), &CollisionCheckerNode::publish_diagnostics, this);
 }
 
 void CollisionCheckerNode::publish_status() {
   private_nh_.setParam("world_frame", params_.world_frame);
+  private_nh_.setParam("resolution", params_.resolution);
   private_nh_.setParam("robot/name", summary_.name);
   private_nh_.setParam("robot/root_link", summary_.root_link);
   private_nh_.setParam("robot/links", static_cast<int>(summary_.links));
   private_nh_.setParam("robot/joints", static_cast<int>(summary_.joints));
   private_nh_.setParam("robot/collision_elements", static_cast<int>(summary_.collision_elements));
+  private_nh_.setParam("robot/variables", checker_->model().variable_names());
+  private_nh_.setParam("robot/checked_pairs", static_cast<int>(checker_->checked_pairs().size()));
+  private_nh_.setParam("robot/reach", checker_->reach());
+}
+
+void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPtr& msg) {
+  if (msg->position.size() != msg->name.size()) {
+    ROS_WARN_THROTTLE(5.0, "collision_checker: joint_states with %zu names and %zu positions ignored",
+                      msg->name.size(), msg->position.size());
+    return;
+  }
+  // Joint states may come from several publishers and other robots: take what is ours and
+  // finite, ignore the rest.
+  const RobotModel& model = checker_->model();
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  for (std::size_t i = 0; i < msg->name.size(); ++i) {
+    const int j = model.joint_index(msg->name[i]);
+    if (j < 0 || !std::isfinite(msg->position[i])) continue;
+    const int variable = model.joints()[j].variable;
+    if (variable >= 0) state_[variable] = msg->position[i];
+  }
+}
+
+std::vector<double> CollisionCheckerNode::current_state() const {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  return state_;
+}
+
+Transform CollisionCheckerNode::root_pose(const ros::Time& stamp, const ros::Duration& timeout) const {
+  if (params_.world_frame == root_link_) return Transform::Identity();
+  try {
+    return to_transform(tf_buffer_.lookupTransform(params_.world_frame, root_link_, stamp, timeout).transform);
+  } catch (const tf2::TransformException& e) {
+    throw RequestError("cannot place the root link '" + root_link_ + "' in world frame '" + params_.world_frame +
+                       "': " + e.what());
+  }
+}
+
+Transform CollisionCheckerNode::frame_to_world(const std::string& frame) const {
+  if (frame.empty() || frame == params_.world_frame) return Transform::Identity();
+  try {
+    return to_transform(tf_buffer_.lookupTransform(params_.world_frame, frame, ros::Time(0)).transform);
+  } catch (const tf2::TransformException& e) {
+    throw RequestError("unknown frame '" + frame + "' (no transform to '" + params_.world_frame + "'): " + e.what());
+  }
+}
+
+void CollisionCheckerNode::require_geometry() const {
+  if (!has_geometry_) {
+    throw RequestError("robot '" + summary_.name + "' has no collision geometry: there is nothing to check");
+  }
 }
 
 }  // namespace bvh_collision

@@ -1,14 +1,47 @@
-// The collision_checker node: reads its parameters and the robot description, and (in later
-// issues) serves the queries of DESIGN.md section 4. Construction throws NodeStartupError when
-// the node cannot run, with a message that says why; main() prints it and exits non-zero.
+// The collision_checker node (DESIGN.md section 4): the checker's queries as ROS services, the
+// obstacle octree fed by point clouds through tf2, markers and diagnostics.
+//
+// Threads: services, joint_states and timers run on the global callback queue, served by a
+// multi-threaded spinner; clouds run on a queue of their own with one thread, so a long scan
+// insertion never delays a query. Queries read an immutable snapshot of the environment
+// (EnvironmentStore): they never see a half-updated octree and never wait for an insertion.
+// Construction throws NodeStartupError when the node cannot run, with a message that says why.
 #pragma once
 
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include <ros/callback_queue.h>
+#include <ros/console.h>
 #include <ros/node_handle.h>
+#include <ros/spinner.h>
+#include <sensor_msgs/JointState.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
+#include "bvh_collision/CastRay.h"
+#include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/CheckState.h"
+#include "bvh_collision/CheckStates.h"
+#include "bvh_collision/ClearBox.h"
+#include "bvh_collision/RemoveCollisionObject.h"
+#include "bvh_collision/SaveOctree.h"
+#include "bvh_collision/SetCollisionObject.h"
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/environment_store.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/ros/conversions.h"
+#include "bvh_collision/ros/latency_stats.h"
 
 namespace bvh_collision {
 
@@ -17,10 +50,26 @@ class NodeStartupError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The node's private parameters (DESIGN.md section 4) that are in use so far.
+// The node's private parameters (DESIGN.md section 4, and the node's own below the line).
 struct NodeParameters {
   std::string world_frame;  // empty until resolved: then the URDF root link
   double resolution = 0.02;
+  double padding = 0.0;
+  std::map<std::string, double> link_padding;
+  double tolerance = 0.0;
+  // Octree bounds in world_frame; unset: a cube of half-edge reach + 0.5 m around the root link.
+  std::optional<Vec3> workspace_min, workspace_max;
+  double max_range = 5.0;
+  double self_filter_padding = 0.02;
+  // Probabilities, as octomap_server takes them (OctoMap's defaults).
+  double sensor_hit = 0.7, sensor_miss = 0.4, sensor_min = 0.1192, sensor_max = 0.971;
+  std::string octree_file;
+  // ---
+  double cloud_transform_timeout = 0.2;  // s to wait for a cloud's transform at its stamp
+  double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
+  int service_threads = 4;               // spinner threads for services (batches use every core anyway)
+
+  OccupancyModel occupancy_model() const;
 };
 
 // Reads and validates the private parameters; throws NodeStartupError on a bad value.
@@ -29,20 +78,115 @@ NodeParameters read_node_parameters(const ros::NodeHandle& private_nh);
 class CollisionCheckerNode {
  public:
   CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  ~CollisionCheckerNode();
+  CollisionCheckerNode(const CollisionCheckerNode&) = delete;
+  CollisionCheckerNode& operator=(const CollisionCheckerNode&) = delete;
 
   const RobotSummary& robot_summary() const { return summary_; }
   const NodeParameters& parameters() const { return params_; }
 
  private:
-  // Publishes what was loaded as private parameters (~robot/..., ~world_frame), so that tools
-  // and tests can see that the node is up and what it understood.
+  // Start-up (collision_checker_node.cpp).
+  void load_robot();
+  Environment initial_environment() const;
+  void advertise();
   void publish_status();
 
-  ros::NodeHandle nh_;
-  ros::NodeHandle private_nh_;
+  // The robot's state and pose (collision_checker_node.cpp).
+  void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg);
+  std::vector<double> current_state() const;
+  // The root link in world_frame at `stamp` (0: the latest); throws RequestError when tf2 cannot
+  // tell within `timeout`.
+  Transform root_pose(const ros::Time& stamp, const ros::Duration& timeout = ros::Duration(0)) const;
+  // `frame` to world_frame, the latest transform; throws RequestError naming the frame.
+  Transform frame_to_world(const std::string& frame) const;
+  void require_geometry() const;
+
+  // Queries (query_services.cpp).
+  bool check_state(CheckState::Request& req, CheckState::Response& res);
+  bool check_states(CheckStates::Request& req, CheckStates::Response& res);
+  bool check_motion(CheckMotion::Request& req, CheckMotion::Response& res);
+  bool cast_ray(CastRay::Request& req, CastRay::Response& res);
+  void answer_check_state(const CheckState::Request& req, CheckState::Response& res);
+  void self_part(const double* state, const CheckState::Request& req, double tolerance, const Transform& root,
+                 CheckState::Response& res);
+  void environment_part(const double* state, const Environment& env, const CheckState::Request& req,
+                        double tolerance, const Transform& root, CheckState::Response& res);
+  double request_tolerance(double requested) const;
+  // Runs `handler` with the request timed under `name`; a RequestError (or any exception) becomes
+  // the response's error, so no request can take the node down.
+  template <class Response, class Handler>
+  bool serve(const char* name, Response& res, Handler&& handler);
+
+  // The environment (environment_services.cpp).
+  void on_cloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void insert_cloud(const sensor_msgs::PointCloud2& msg);
+  bool clear_environment(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
+  bool clear_box(ClearBox::Request& req, ClearBox::Response& res);
+  bool set_collision_object(SetCollisionObject::Request& req, SetCollisionObject::Response& res);
+  bool remove_collision_object(RemoveCollisionObject::Request& req, RemoveCollisionObject::Response& res);
+  bool save_octree(SaveOctree::Request& req, SaveOctree::Response& res);
+
+  // Output (node_output.cpp).
+  void publish_occupied_cells(const ros::WallTimerEvent&);
+  void publish_contacts(const std::vector<Contact>& contacts);
+  void publish_diagnostics(const ros::WallTimerEvent&);
+
+  ros::NodeHandle nh_, private_nh_;
   NodeParameters params_;
-  std::shared_ptr<urdf::ModelInterface> model_;
+  std::shared_ptr<urdf::ModelInterface> urdf_;
   RobotSummary summary_;
+  PackageResolver resolver_;
+  std::unique_ptr<const CollisionChecker> checker_;
+  std::unique_ptr<const JointValueMap> joint_map_;
+  std::string root_link_;
+  bool has_geometry_ = false;
+  std::unique_ptr<EnvironmentStore> store_;
+
+  mutable std::mutex state_mutex_;
+  std::vector<double> state_;  // from joint_states; neutral_state() until the first message
+
+  tf2_ros::Buffer tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+
+  ros::CallbackQueue cloud_queue_;
+  std::unique_ptr<ros::AsyncSpinner> cloud_spinner_;
+  std::vector<ros::ServiceServer> services_;
+  ros::Subscriber joint_state_sub_, cloud_sub_;
+  ros::Publisher cells_pub_, contacts_pub_, diagnostics_pub_;
+  ros::WallTimer cells_timer_, diagnostics_timer_;
+  std::uint64_t cells_version_ = ~std::uint64_t(0);  // the environment version last drawn
+  std::uint32_t cells_subscribers_ = 0;
+  std::atomic<double> last_contacts_time_{0.0};
+  std::uint64_t clouds_lost_reported_ = 0;  // dropped + rejected at the last diagnostics
+
+  struct CloudCounters {
+    std::atomic<std::uint64_t> received{0}, inserted{0}, dropped_transform{0}, rejected{0};
+    std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
+    std::atomic<std::uint64_t> on_robot{0}, shadowed{0};
+    std::atomic<double> last_insert_seconds{0.0};
+  } clouds_;
+  std::map<std::string, LatencyStats> latency_;  // keys fixed at start-up: lookups need no lock
 };
+
+template <class Response, class Handler>
+bool CollisionCheckerNode::serve(const char* name, Response& res, Handler&& handler) {
+  const auto start = std::chrono::steady_clock::now();
+  bool failed = false;
+  try {
+    handler();
+  } catch (const std::invalid_argument& e) {  // RequestError, or the checker refusing an argument
+    res = Response();
+    res.error = e.what();
+    failed = true;
+  } catch (const std::exception& e) {  // not the request's fault: say so in the log as well
+    ROS_ERROR_STREAM("collision_checker: " << name << " failed: " << e.what());
+    res = Response();
+    res.error = std::string("internal error: ") + e.what();
+    failed = true;
+  }
+  latency_.at(name).record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), failed);
+  return true;  // the error travels in the response; false would only tell the client "call failed"
+}
 
 }  // namespace bvh_collision

@@ -1,0 +1,131 @@
+// The environment: point clouds into the octree (through tf2 and the self filter), and the
+// services that change or save it.
+#include <chrono>
+#include <cmath>
+
+#include "bvh_collision/octree/octomap_bridge.h"
+#include "bvh_collision/ros/collision_checker_node.h"
+
+namespace bvh_collision {
+
+namespace {
+
+// Beyond the robot's reach, by this much, obstacles are ignored (DESIGN.md section 4).
+constexpr double kWorkspaceMargin = 0.5;
+
+}  // namespace
+
+void CollisionCheckerNode::on_cloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  ++clouds_.received;
+  try {
+    insert_cloud(*msg);
+  } catch (const RequestError& e) {
+    ++clouds_.rejected;
+    ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud rejected: " << e.what());
+  } catch (const std::exception& e) {
+    ++clouds_.rejected;
+    ROS_ERROR_STREAM_THROTTLE(5.0, "collision_checker: cloud insertion failed: " << e.what());
+  }
+}
+
+void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
+  const auto start = std::chrono::steady_clock::now();
+  if (msg.header.frame_id.empty()) throw RequestError("cloud has an empty frame_id");
+  std::vector<ScanPoint> points = cloud_points(msg);
+  // Where the sensor and the robot were when the cloud was taken; a transform that does not come
+  // within the timeout drops the cloud (counted), rather than queueing it forever.
+  Transform sensor, root;
+  try {
+    const ros::Duration timeout(params_.cloud_transform_timeout);
+    sensor = msg.header.frame_id == params_.world_frame
+                 ? Transform::Identity()
+                 : to_transform(
+                       tf_buffer_.lookupTransform(params_.world_frame, msg.header.frame_id, msg.header.stamp, timeout)
+                           .transform);
+    root = root_pose(msg.header.stamp, timeout);
+  } catch (const std::exception& e) {  // tf2::TransformException or RequestError
+    ++clouds_.dropped_transform;
+    ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud dropped: no transform from '"
+                                      << msg.header.frame_id << "' at its stamp: " << e.what());
+    return;
+  }
+  for (ScanPoint& p : points) p = (sensor.R * p.cast<double>() + sensor.t).cast<float>();
+  const ScanPoint origin = sensor.t.cast<float>();
+
+  ScanOptions options;
+  options.max_range = params_.max_range;
+  const double half = checker_->reach() + kWorkspaceMargin;
+  options.workspace = params_.workspace_min
+                          ? ScanWorkspace{params_.workspace_min->cast<float>(), params_.workspace_max->cast<float>()}
+                          : ScanWorkspace{(root.t.array() - half).matrix().cast<float>(),
+                                          (root.t.array() + half).matrix().cast<float>()};
+  const std::vector<double> state = current_state();
+  const FilteredScan filtered = checker_->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
+  const ScanStats stats = store_->modify([&](Environment& env) {
+    return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
+  });
+  ++clouds_.inserted;
+  clouds_.points += stats.points;
+  clouds_.skipped_invalid += stats.skipped_invalid;
+  clouds_.skipped_outside += stats.skipped_outside;
+  clouds_.skipped_workspace += stats.skipped_workspace;
+  clouds_.on_robot += filtered.on_robot;
+  clouds_.shadowed += filtered.shadowed;
+  clouds_.last_insert_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool CollisionCheckerNode::clear_environment(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  const auto start = std::chrono::steady_clock::now();
+  store_->modify([](Environment& env) {
+    env.octree().clear();
+    env.clear_objects();
+  });
+  latency_.at("clear_environment")
+      .record(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), false);
+  return true;
+}
+
+bool CollisionCheckerNode::clear_box(ClearBox::Request& req, ClearBox::Response& res) {
+  return serve("clear_box", res, [&] {
+    const Vec3 lo(req.min.x, req.min.y, req.min.z), hi(req.max.x, req.max.y, req.max.z);
+    if (!lo.allFinite() || !hi.allFinite()) throw RequestError("box corners must be finite");
+    if ((lo.array() > hi.array()).any()) throw RequestError("box min exceeds max on some axis");
+    store_->modify([&](Environment& env) { env.octree().clear_box(lo, hi); });
+  });
+}
+
+bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req, SetCollisionObject::Response& res) {
+  return serve("set_collision_object", res, [&] {
+    if (req.id.empty()) throw RequestError("collision object id is empty");
+    if (req.id == "octree") throw RequestError("'octree' is reserved: it names the obstacle octree in contacts");
+    const Transform pose = frame_to_world(req.frame_id) * to_transform(req.pose);
+    // Meshes are read before the environment is locked: a slow file delays no other change.
+    const ObjectShape shape = to_object_shape(req.shape, resolver_);
+    store_->modify([&](Environment& env) { env.add_object(req.id, shape, pose); });
+  });
+}
+
+bool CollisionCheckerNode::remove_collision_object(RemoveCollisionObject::Request& req,
+                                                   RemoveCollisionObject::Response& res) {
+  return serve("remove_collision_object", res, [&] {
+    if (store_->snapshot()->find_object(req.id) == nullptr) {
+      throw RequestError("no collision object with id '" + req.id + "'");
+    }
+    if (!store_->modify([&](Environment& env) { return env.remove_object(req.id); })) {
+      throw RequestError("no collision object with id '" + req.id + "'");  // removed meanwhile
+    }
+  });
+}
+
+bool CollisionCheckerNode::save_octree(SaveOctree::Request& req, SaveOctree::Response& res) {
+  return serve("save_octree", res, [&] {
+    if (req.path.empty()) throw RequestError("path is empty");
+    try {
+      bvh_collision::save_octree(store_->snapshot()->octree(), req.path);
+    } catch (const std::runtime_error& e) {
+      throw RequestError(e.what());
+    }
+  });
+}
+
+}  // namespace bvh_collision

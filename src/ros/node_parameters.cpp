@@ -1,0 +1,101 @@
+// The node's private parameters: read, checked, and explained when wrong.
+#include <cmath>
+
+#include "bvh_collision/ros/collision_checker_node.h"
+
+namespace bvh_collision {
+
+namespace {
+
+// roscpp reads a parameter of the wrong type as "not set"; say so rather than ignore it.
+template <class T>
+void read(const ros::NodeHandle& nh, const std::string& name, T& value, const char* expected) {
+  if (!nh.param(name, value, value) && nh.hasParam(name)) {
+    throw NodeStartupError("parameter ~" + name + " must be " + expected);
+  }
+}
+
+double read_number(const ros::NodeHandle& nh, const std::string& name, double value, bool positive) {
+  read(nh, name, value, "a number");  // roscpp reads an int parameter as a double too
+  if (!std::isfinite(value) || (positive ? value <= 0.0 : value < 0.0)) {
+    throw NodeStartupError("parameter ~" + name + " must be a " + (positive ? "positive" : "non-negative") +
+                           " number, got " + std::to_string(value));
+  }
+  return value;
+}
+
+double read_probability(const ros::NodeHandle& nh, const std::string& name, double value) {
+  value = read_number(nh, name, value, true);
+  if (value >= 1.0) throw NodeStartupError("parameter ~" + name + " must be a probability in (0, 1)");
+  return value;
+}
+
+std::optional<Vec3> read_point(const ros::NodeHandle& nh, const std::string& name) {
+  if (!nh.hasParam(name)) return std::nullopt;
+  std::vector<double> v;
+  if (!nh.getParam(name, v) || v.size() != 3 || !Vec3(v[0], v[1], v[2]).allFinite()) {
+    throw NodeStartupError("parameter ~" + name + " must be a list of three finite numbers [x, y, z]");
+  }
+  return Vec3(v[0], v[1], v[2]);
+}
+
+void read_workspace(const ros::NodeHandle& nh, NodeParameters& p) {
+  p.workspace_min = read_point(nh, "workspace_min");
+  p.workspace_max = read_point(nh, "workspace_max");
+  if (p.workspace_min.has_value() != p.workspace_max.has_value()) {
+    throw NodeStartupError("parameters ~workspace_min and ~workspace_max must be set together");
+  }
+  if (p.workspace_min && (p.workspace_min->array() > p.workspace_max->array()).any()) {
+    throw NodeStartupError("parameter ~workspace_min must not exceed ~workspace_max on any axis");
+  }
+}
+
+void read_link_padding(const ros::NodeHandle& nh, NodeParameters& p) {
+  if (!nh.hasParam("link_padding")) return;
+  if (!nh.getParam("link_padding", p.link_padding)) {
+    throw NodeStartupError("parameter ~link_padding must be a map from link name to padding (m)");
+  }
+  for (const auto& [link, padding] : p.link_padding) {
+    if (!std::isfinite(padding) || padding < 0.0) {
+      throw NodeStartupError("parameter ~link_padding/" + link + " must be a non-negative number");
+    }
+  }
+}
+
+}  // namespace
+
+OccupancyModel NodeParameters::occupancy_model() const {
+  OccupancyModel m;
+  m.hit = log_odds(sensor_hit);
+  m.miss = log_odds(sensor_miss);
+  m.clamp_min = log_odds(sensor_min);
+  m.clamp_max = log_odds(sensor_max);
+  return m;
+}
+
+NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
+  NodeParameters p;
+  read(nh, "world_frame", p.world_frame, "a string");
+  p.resolution = read_number(nh, "resolution", p.resolution, true);
+  p.padding = read_number(nh, "padding", p.padding, false);
+  read_link_padding(nh, p);
+  p.tolerance = read_number(nh, "tolerance", p.tolerance, false);
+  read_workspace(nh, p);
+  p.max_range = read_number(nh, "max_range", p.max_range, true);
+  p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);
+  p.sensor_hit = read_probability(nh, "sensor_model/hit", p.sensor_hit);
+  p.sensor_miss = read_probability(nh, "sensor_model/miss", p.sensor_miss);
+  p.sensor_min = read_probability(nh, "sensor_model/min", p.sensor_min);
+  p.sensor_max = read_probability(nh, "sensor_model/max", p.sensor_max);
+  if (p.sensor_hit <= 0.5 || p.sensor_miss >= 0.5 || p.sensor_min >= p.sensor_max) {
+    throw NodeStartupError(
+        "parameters ~sensor_model: hit must be above 0.5, miss below 0.5, and min below max");
+  }
+  read(nh, "octree_file", p.octree_file, "a string (a .bt or .ot path)");
+  p.cloud_transform_timeout = read_number(nh, "cloud_transform_timeout", p.cloud_transform_timeout, false);
+  p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
+  p.service_threads = static_cast<int>(read_number(nh, "service_threads", p.service_threads, true));
+  return p;
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,246 @@
+// The query services: check_state, check_states, check_motion, cast_ray.
+#include <cmath>
+#include <limits>
+
+#include "bvh_collision/ros/collision_checker_node.h"
+
+namespace bvh_collision {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+geometry_msgs::Point point_msg(const Vec3& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
+
+geometry_msgs::Vector3 vector_msg(const Vec3& v) {
+  geometry_msgs::Vector3 m;
+  m.x = v.x();
+  m.y = v.y();
+  m.z = v.z();
+  return m;
+}
+
+struct Checks {
+  bool self, environment;
+};
+
+Checks read_checks(std::uint8_t checks) {
+  if (checks > 3) {
+    throw RequestError("checks must be SELF (1), ENVIRONMENT (2), both (3) or 0 for both, got " +
+                       std::to_string(int(checks)));
+  }
+  return {checks != CheckState::Request::ENVIRONMENT, checks != CheckState::Request::SELF};
+}
+
+}  // namespace
+
+double CollisionCheckerNode::request_tolerance(double requested) const {
+  if (std::isnan(requested) || std::isinf(requested)) {
+    throw RequestError("tolerance must be a finite number of metres (< 0 for the node's default)");
+  }
+  return requested < 0.0 ? params_.tolerance : requested;
+}
+
+bool CollisionCheckerNode::check_state(CheckState::Request& req, CheckState::Response& res) {
+  return serve("check_state", res, [&] { answer_check_state(req, res); });
+}
+
+void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, CheckState::Response& res) {
+  require_geometry();
+  const Checks checks = read_checks(req.checks);
+  const double tolerance = request_tolerance(req.tolerance);
+  if (req.state.position.size() != req.state.name.size()) {
+    throw RequestError("state has " + std::to_string(req.state.name.size()) + " joint names and " +
+                       std::to_string(req.state.position.size()) + " positions");
+  }
+  std::vector<std::string> warnings;
+  std::vector<double> state = current_state();
+  joint_map_->write(joint_map_->columns(req.state.name, warnings), req.state.position.data(), req.state.name,
+                    state, warnings);
+  // Contacts are reported in world_frame; a boolean or distance self check needs no pose.
+  const bool need_pose = checks.environment || req.max_contacts > 0;
+  const Transform root = need_pose ? root_pose(ros::Time(0)) : Transform::Identity();
+  res.min_distance = kNaN;
+  if (checks.self) self_part(state.data(), req, tolerance, root, res);
+  if (checks.environment) environment_part(state.data(), *store_->snapshot(), req, tolerance, root, res);
+  res.valid = !res.self_collision && !res.environment_collision;
+  res.warning = join_warnings(warnings);
+  if (!res.contacts.empty()) publish_contacts(res.contacts);
+}
+
+void CollisionCheckerNode::self_part(const double* state, const CheckState::Request& req, double tolerance,
+                                     const Transform& root, CheckState::Response& res) {
+  SelfCollisionRequest request;
+  request.tolerance = tolerance;
+  request.all_pairs = req.max_contacts > 0;
+  request.max_contacts = req.max_contacts;
+  request.distance = req.distance;
+  const SelfCollisionResult result = checker_->check_self(state, request);
+  const auto& links = checker_->model().links();
+  res.self_collision = result.collision;
+  for (const LinkContact& lc : result.contacts) {
+    if (res.contacts.size() >= req.max_contacts) break;
+    Contact c;
+    c.body_a = links[lc.link_a].name;
+    c.body_b = links[lc.link_b].name;
+    c.position = point_msg(root * lc.contact.position);
+    c.normal = vector_msg(root.R * lc.contact.normal);
+    c.depth = lc.contact.depth;
+    res.contacts.push_back(c);
+  }
+  if (req.distance && !std::isnan(result.min_distance)) {
+    res.min_distance = result.min_distance;
+    res.closest_pair.clear();
+    if (result.closest_a >= 0) res.closest_pair = {links[result.closest_a].name, links[result.closest_b].name};
+  }
+}
+
+void CollisionCheckerNode::environment_part(const double* state, const Environment& env,
+                                            const CheckState::Request& req, double tolerance, const Transform& root,
+                                            CheckState::Response& res) {
+  EnvironmentRequest request;
+  request.tolerance = tolerance;
+  request.all_links = req.max_contacts > 0;
+  request.distance = req.distance;
+  request.root_pose = root;
+  const EnvironmentResult result = checker_->check_environment(state, env, request);
+  const auto& links = checker_->model().links();
+  res.environment_collision = result.collision;
+  for (const EnvironmentContact& ec : result.contacts) {
+    if (res.contacts.size() >= req.max_contacts) break;
+    Contact c;
+    c.body_a = links[ec.link].name;
+    c.body_b = ec.object.empty() ? "octree" : ec.object;
+    // The normal points from the obstacle to the contact: from the voxel's nearest point (or its
+    // centre when the contact lies inside it), or from the object's origin.
+    const CollisionObject* object = ec.object.empty() ? nullptr : env.find_object(ec.object);
+    Vec3 away = object ? Vec3(ec.position - object->pose.t) : Vec3::Zero();
+    if (!object) {
+      const Octree& tree = env.octree();
+      const double edge = tree.cube_size(ec.voxel.depth);
+      const Vec3 lo = tree.cube_min(ec.voxel.key), hi = lo + Vec3::Constant(edge);
+      away = ec.position - ec.position.cwiseMax(lo).cwiseMin(hi);
+      if (away.norm() <= 1e-12) away = ec.position - (lo + Vec3::Constant(0.5 * edge));
+    }
+    c.position = point_msg(ec.position);
+    c.normal = vector_msg(away.norm() > 1e-12 ? Vec3(away.normalized()) : Vec3::UnitZ());
+    c.depth = 0.0;
+    res.contacts.push_back(c);
+  }
+  if (req.distance && !std::isnan(result.min_distance) &&
+      (std::isnan(res.min_distance) || result.min_distance < res.min_distance)) {
+    res.min_distance = result.min_distance;
+    res.closest_pair.clear();
+    if (result.closest_link >= 0) {
+      res.closest_pair = {links[result.closest_link].name,
+                          result.closest_object.empty() ? "octree" : result.closest_object};
+    }
+  }
+}
+
+bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::Response& res) {
+  return serve("check_states", res, [&] {
+    require_geometry();
+    const Checks checks = read_checks(req.checks);
+    const double tolerance = request_tolerance(req.tolerance);
+    const std::size_t n = req.joint_names.size();
+    if (n == 0) {
+      if (!req.positions.empty()) throw RequestError("positions are given but joint_names is empty");
+      return;
+    }
+    if (req.positions.size() % n != 0) {
+      throw RequestError("positions holds " + std::to_string(req.positions.size()) + " values, not a multiple of " +
+                         std::to_string(n) + " (the number of joint names)");
+    }
+    std::vector<std::string> warnings;
+    const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
+    const std::vector<double> base = current_state();
+    const std::size_t rows = req.positions.size() / n, vars = base.size();
+    std::vector<double> states(rows * vars);
+    std::size_t rows_warned = 0;
+    for (std::size_t r = 0; r < rows; ++r) {
+      std::vector<double> row = base;
+      std::vector<std::string> row_warnings;
+      try {
+        joint_map_->write(columns, &req.positions[r * n], req.joint_names, row, row_warnings);
+      } catch (const RequestError& e) {
+        throw RequestError("configuration " + std::to_string(r) + ": " + e.what());
+      }
+      std::copy(row.begin(), row.end(), states.begin() + r * vars);
+      if (!row_warnings.empty() && rows_warned++ < 3) {
+        warnings.push_back("configuration " + std::to_string(r) + ": " + join_warnings(row_warnings, 2));
+      }
+    }
+    if (rows_warned > 3) warnings.push_back(std::to_string(rows_warned) + " configurations have such values");
+    BatchRequest request;
+    request.self = checks.self;
+    request.environment = checks.environment;
+    request.tolerance = tolerance;
+    std::shared_ptr<const Environment> env;
+    if (checks.environment) {
+      request.root_pose = root_pose(ros::Time(0));
+      env = store_->snapshot();
+    }
+    const std::vector<char> colliding = checker_->check_batch(states.data(), rows, env.get(), request);
+    res.valid.resize(rows);
+    for (std::size_t r = 0; r < rows; ++r) res.valid[r] = !colliding[r];
+    res.warning = join_warnings(warnings, 4);
+  });
+}
+
+bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::Response& res) {
+  return serve("check_motion", res, [&] {
+    require_geometry();
+    const Checks checks = read_checks(req.checks);
+    const std::size_t n = req.joint_names.size();
+    if (req.start.size() != n || req.goal.size() != n) {
+      throw RequestError("start has " + std::to_string(req.start.size()) + " values and goal " +
+                         std::to_string(req.goal.size()) + " for " + std::to_string(n) + " joint names");
+    }
+    if (!std::isfinite(req.resolution) || req.resolution < 0.0) {
+      throw RequestError("resolution must be 0 (certified) or a positive joint step, got " +
+                         std::to_string(req.resolution));
+    }
+    std::vector<std::string> warnings;
+    const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
+    std::vector<double> start = current_state(), goal = start;
+    joint_map_->write(columns, req.start.data(), req.joint_names, start, warnings);
+    joint_map_->write(columns, req.goal.data(), req.joint_names, goal, warnings);
+    MotionRequest request;
+    request.self = checks.self;
+    request.environment = checks.environment;
+    request.resolution = req.resolution;
+    request.tolerance = params_.tolerance;
+    if (checks.environment) request.root_pose = root_pose(ros::Time(0));
+    const MotionResult result = checker_->check_motion(start.data(), goal.data(), *store_->snapshot(), request);
+    res.valid = result.valid;
+    res.last_valid_fraction = result.last_valid_fraction;
+    res.states_checked = static_cast<std::uint32_t>(result.states_checked);
+    if (!result.message.empty()) warnings.push_back(result.message);
+    res.warning = join_warnings(warnings);
+  });
+}
+
+bool CollisionCheckerNode::cast_ray(CastRay::Request& req, CastRay::Response& res) {
+  return serve("cast_ray", res, [&] {
+    if (std::isnan(req.max_range)) throw RequestError("max_range is NaN");
+    const Vec3 origin(req.origin.x, req.origin.y, req.origin.z);
+    const Vec3 direction(req.direction.x, req.direction.y, req.direction.z);
+    const std::vector<double> state = current_state();
+    const RayCastResult hit =
+        checker_->cast_ray(state.data(), *store_->snapshot(), origin, direction, req.max_range, root_pose(ros::Time(0)));
+    res.hit = hit.hit;
+    if (!hit.hit) return;
+    res.body = hit.link >= 0 ? checker_->model().links()[hit.link].name : hit.octree ? "octree" : hit.object;
+    res.point = point_msg(hit.point);
+    res.distance = hit.distance;
+  });
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,74 @@
+// Helpers for launch tests that talk to a running collision_checker node as a client would.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "bvh_collision/CheckState.h"
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/allowed_collision_matrix.h"
+#include "bvh_collision/robot/robot_description.h"
+
+namespace bvh_collision::test {
+
+inline std::string node_service(const std::string& name, const std::string& node = "/collision_checker") {
+  return node + "/" + name;
+}
+
+// Calls a service and fails the test when the call itself fails (the node died or hung up).
+template <class Srv>
+Srv call(const std::string& name, const typename Srv::Request& request) {
+  Srv srv;
+  srv.request = request;
+  EXPECT_TRUE(ros::service::call(node_service(name), srv)) << "call to " << name << " failed";
+  return srv;
+}
+
+inline bool wait_for_node(double seconds = 60.0) {
+  return ros::service::waitForService(node_service("check_state"), ros::Duration(seconds));
+}
+
+// The checker the node builds, built here from the same files: answers must be the same.
+inline CollisionChecker library_checker(const std::string& urdf_path) {
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(urdf_path), PackageResolver::from_environment());
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  std::string srdf;
+  if (ros::param::get("/robot_description_semantic", srdf) && !srdf.empty()) {
+    apply_srdf(parse_srdf(srdf), model, acm);
+  }
+  return CollisionChecker(std::move(model), std::move(acm));
+}
+
+inline sensor_msgs::JointState joint_state(const std::vector<std::string>& names, const std::vector<double>& values) {
+  sensor_msgs::JointState s;
+  s.name = names;
+  s.position = values;
+  return s;
+}
+
+inline CheckState::Request state_request(const CollisionChecker& checker, const std::vector<double>& values,
+                                         std::uint8_t checks = 0) {
+  CheckState::Request r;
+  r.state = joint_state(checker.model().variable_names(), values);
+  r.checks = checks;
+  r.tolerance = 0.0;
+  return r;
+}
+
+// Random configurations until `want(state)` holds; fails after `tries`.
+template <class Want>
+std::vector<double> find_configuration(const CollisionChecker& checker, std::mt19937_64& rng, Want want,
+                                       int tries = 20000) {
+  for (int i = 0; i < tries; ++i) {
+    std::vector<double> q = random_configuration(checker.model(), rng);
+    if (want(q)) return q;
+  }
+  ADD_FAILURE() << "no configuration found in " << tries << " tries";
+  return std::vector<double>(checker.model().variable_count(), 0.0);
+}
+
+}  // namespace bvh_collision::test
