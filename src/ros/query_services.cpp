@@ -117,18 +117,20 @@ void CollisionCheckerNode::environment_part(const double* state, const Environme
     Contact c;
     c.body_a = links[ec.link].name;
     c.body_b = ec.object.empty() ? "octree" : ec.object;
-    // The normal points from the obstacle to the contact: from the voxel's nearest point (or its
-    // centre when the contact lies inside it), or from the object's origin.
+    // For the octree the library names the voxel and a point of the link's geometry that may lie
+    // a link's length away; the contact is reported on the voxel, at its point nearest to that
+    // one (within a voxel of the true contact), the normal pointing from there towards the link.
     const CollisionObject* object = ec.object.empty() ? nullptr : env.find_object(ec.object);
-    Vec3 away = object ? Vec3(ec.position - object->pose.t) : Vec3::Zero();
+    Vec3 position = ec.position, away = object ? Vec3(ec.position - object->pose.t) : Vec3::Zero();
     if (!object) {
       const Octree& tree = env.octree();
       const double edge = tree.cube_size(ec.voxel.depth);
       const Vec3 lo = tree.cube_min(ec.voxel.key), hi = lo + Vec3::Constant(edge);
-      away = ec.position - ec.position.cwiseMax(lo).cwiseMin(hi);
+      position = ec.position.cwiseMax(lo).cwiseMin(hi);
+      away = ec.position - position;
       if (away.norm() <= 1e-12) away = ec.position - (lo + Vec3::Constant(0.5 * edge));
     }
-    c.position = point_msg(ec.position);
+    c.position = point_msg(position);
     c.normal = vector_msg(away.norm() > 1e-12 ? Vec3(away.normalized()) : Vec3::UnitZ());
     c.depth = 0.0;
     res.contacts.push_back(c);

@@ -1,0 +1,302 @@
+// Launch test: the node's environment through tf2, as a robot's drivers feed it. The node runs
+// with world_frame "world"; this test is the robot's tf (world -> base_link, which it moves) and a
+// camera (world -> camera, static) that publishes obstacle clouds in its own frame.
+#include <mutex>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <std_srvs/Empty.h>
+
+#include "bvh_collision/CastRay.h"
+#include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/ClearBox.h"
+#include "bvh_collision/RemoveCollisionObject.h"
+#include "bvh_collision/SetCollisionObject.h"
+#include "bvh_collision/ros/conversions.h"
+#include "node_test_client.h"
+
+namespace bvh_collision::test {
+namespace {
+
+const Vec3 kCamera(1.5, -0.5, 0.8);  // the camera's origin in world (translation only)
+
+geometry_msgs::TransformStamped translation(const std::string& parent, const std::string& child, const Vec3& t) {
+  geometry_msgs::TransformStamped m;
+  m.header.stamp = ros::Time::now();
+  m.header.frame_id = parent;
+  m.child_frame_id = child;
+  m.transform.translation.x = t.x();
+  m.transform.translation.y = t.y();
+  m.transform.translation.z = t.z();
+  m.transform.rotation.w = 1.0;
+  return m;
+}
+
+// The robot's base in world, broadcast at 50 Hz as a localisation would.
+class BaseBroadcaster {
+ public:
+  BaseBroadcaster() : timer_(nh_.createWallTimer(ros::WallDuration(0.02), &BaseBroadcaster::tick, this)) {}
+  void move_to(const Vec3& t) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      base_ = t;
+    }
+    ros::WallDuration(0.3).sleep();  // the node's tf buffer has the new pose by then
+  }
+
+ private:
+  void tick(const ros::WallTimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    tf_.sendTransform(translation("world", "base_link", base_));
+  }
+  ros::NodeHandle nh_;
+  tf2_ros::TransformBroadcaster tf_;
+  std::mutex mutex_;
+  Vec3 base_ = Vec3::Zero();
+  ros::WallTimer timer_;
+};
+
+class NodeEnvironment : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    base_ = new BaseBroadcaster();
+    camera_tf_ = new tf2_ros::StaticTransformBroadcaster();
+    camera_tf_->sendTransform(translation("world", "camera", kCamera));
+    std::string urdf;
+    ASSERT_TRUE(ros::param::get("~urdf_file", urdf));
+    checker_ = new CollisionChecker(library_checker(urdf));
+    ASSERT_TRUE(wait_for_node());
+  }
+  void SetUp() override {
+    std_srvs::Empty empty;
+    ASSERT_TRUE(ros::service::call(node_service("clear_environment"), empty));
+    base_->move_to(Vec3::Zero());
+  }
+  const CollisionChecker& checker() const { return *checker_; }
+  std::vector<double> arm(double j1, double j2) const {
+    std::vector<double> q(checker().model().variable_count(), 0.0);
+    q[0] = j1;
+    q[1] = j2;
+    return q;
+  }
+  CheckState::Response check(const std::vector<double>& q, std::uint32_t max_contacts = 0) const {
+    CheckState::Request r = state_request(checker(), q);
+    r.max_contacts = max_contacts;
+    return call<CheckState>("check_state", r).response;
+  }
+
+  static BaseBroadcaster* base_;
+  static tf2_ros::StaticTransformBroadcaster* camera_tf_;
+  static CollisionChecker* checker_;
+};
+BaseBroadcaster* NodeEnvironment::base_ = nullptr;
+tf2_ros::StaticTransformBroadcaster* NodeEnvironment::camera_tf_ = nullptr;
+CollisionChecker* NodeEnvironment::checker_ = nullptr;
+
+// A wall of points 1 cm apart at x = 0.55 (world), y in [-0.25, 0.25], z in [0.3, 1.0], expressed
+// in the camera's frame.
+sensor_msgs::PointCloud2 wall_cloud() {
+  std::vector<ScanPoint> points;
+  for (double y = -0.25; y <= 0.25; y += 0.01) {
+    for (double z = 0.3; z <= 1.0; z += 0.01) points.push_back((Vec3(0.55, y, z) - kCamera).cast<float>());
+  }
+  return to_cloud_msg(points, "camera");
+}
+
+template <class Predicate>
+bool eventually(Predicate p, double seconds = 5.0) {
+  for (const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds); ros::WallTime::now() < end;) {
+    if (p()) return true;
+    ros::WallDuration(0.05).sleep();
+  }
+  return p();
+}
+
+TEST_F(NodeEnvironment, CloudInACameraFrameCollidesAndClearBoxFreesIt) {
+  const auto reach = arm(0.0, 1.0), home = arm(0.0, 0.0);
+  ASSERT_TRUE(check(reach).valid) << "nothing to hit yet";
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 1, true);
+  sensor_msgs::PointCloud2 cloud = wall_cloud();
+  cloud.header.stamp = ros::Time::now();
+  pub.publish(cloud);
+  ASSERT_TRUE(eventually([&] { return !check(reach).valid; })) << "the cloud never made the reach collide";
+  const CheckState::Response hit = check(reach, 5);
+  EXPECT_TRUE(hit.environment_collision);
+  EXPECT_FALSE(hit.self_collision);
+  ASSERT_FALSE(hit.contacts.empty());
+  for (const Contact& c : hit.contacts) {
+    EXPECT_EQ(c.body_b, "octree");
+    // Contacts are in world: at the wall, not where the wall is in the camera's frame.
+    EXPECT_NEAR(c.position.x, 0.55, 0.1) << c.body_a;
+  }
+  EXPECT_TRUE(check(home).valid) << "the arm upright stays clear of the wall";
+
+  ClearBox::Request box;
+  box.min.x = 0.5, box.min.y = -0.3, box.min.z = 0.25;
+  box.max.x = 0.6, box.max.y = 0.3, box.max.z = 1.05;
+  EXPECT_EQ(call<ClearBox>("clear_box", box).response.error, "");
+  EXPECT_TRUE(check(reach).valid) << "clear_box left the wall in place";
+}
+
+TEST_F(NodeEnvironment, MarkersAndDiagnosticsShowTheCloud) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  visualization_msgs::MarkerArray cells;
+  std::map<std::string, std::string> values;
+  ros::Subscriber cells_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      "/collision_checker/occupied_cells", 1, [&](const visualization_msgs::MarkerArray::ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        cells = *m;
+      });
+  ros::Subscriber diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& status : m->status) {
+          for (const auto& kv : status.values) values[kv.key] = kv.value;
+        }
+      });
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 1, true);
+  sensor_msgs::PointCloud2 cloud = wall_cloud();
+  cloud.header.stamp = ros::Time::now();
+  pub.publish(cloud);
+  ASSERT_TRUE(eventually([&] { return !check(arm(0.0, 1.0)).valid; }));
+  const auto cube_count = [&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    std::size_t n = 0;
+    for (const auto& m : cells.markers) {
+      if (m.type == visualization_msgs::Marker::CUBE_LIST) n += m.points.size();
+    }
+    return n;
+  };
+  EXPECT_TRUE(eventually([&] { return cube_count() > 100; })) << cube_count() << " voxels drawn";
+  const auto value = [&](const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex);
+    return values.count(key) ? std::stoll(values[key]) : -1LL;
+  };
+  EXPECT_TRUE(eventually([&] { return value("clouds inserted") >= 1; }));
+  EXPECT_GE(value("clouds received"), 1);
+  EXPECT_GT(value("points received"), 3000);
+  EXPECT_GT(value("octree nodes"), 100);
+  EXPECT_GT(value("octree memory (bytes)"), 0);
+  EXPECT_TRUE(eventually([&] { return value("check_state requests") >= 1; }));
+}
+
+TEST_F(NodeEnvironment, TheBasePoseComesFromTf) {
+  SetCollisionObject::Request object;
+  object.id = "crate";
+  object.shape.type = CollisionShape::BOX;
+  object.shape.dimensions = {0.3, 0.3, 0.3};
+  object.pose.position.x = 2.0;
+  object.pose.position.z = 0.6;
+  object.pose.orientation.w = 1.0;
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+  const auto home = arm(0.0, 0.0);
+  EXPECT_TRUE(check(home).valid);
+  base_->move_to(Vec3(2.0, 0.0, 0.0));  // the crate is now where the arm stands
+  const CheckState::Response moved = check(home, 1);
+  EXPECT_FALSE(moved.valid);
+  ASSERT_EQ(moved.contacts.size(), 1u);
+  EXPECT_EQ(moved.contacts[0].body_b, "crate");
+  EXPECT_NEAR(moved.contacts[0].position.x, 2.0, 0.2) << "contact not in world_frame";
+  base_->move_to(Vec3(0.0, 0.0, 0.0));
+  EXPECT_TRUE(check(home).valid);
+  // An object given in another frame is placed through tf: (-1.5, 0.5, -0.2) from the camera is
+  // (0, 0, 0.6) in world, onto the arm.
+  object.frame_id = "camera";
+  object.pose.position.x = -1.5;
+  object.pose.position.y = 0.5;
+  object.pose.position.z = -0.2;
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+  EXPECT_FALSE(check(home).valid) << "an object given in the camera frame was not moved into world";
+  RemoveCollisionObject::Request remove;
+  remove.id = "crate";
+  EXPECT_EQ(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
+  EXPECT_TRUE(check(home).valid);
+}
+
+TEST_F(NodeEnvironment, CertifiedMotionFindsAThinObstacleThatACoarseStepMisses) {
+  // A 2 mm plate in the plane y = 0 that the arm, leaning forward, sweeps through when joint1
+  // turns from -0.75 to 0.85 rad.
+  SetCollisionObject::Request plate;
+  plate.id = "plate";
+  plate.shape.type = CollisionShape::BOX;
+  plate.shape.dimensions = {0.6, 0.002, 0.7};
+  plate.pose.position.x = 0.6;
+  plate.pose.position.z = 0.65;
+  plate.pose.orientation.w = 1.0;
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", plate).response.error, "");
+  CheckMotion::Request motion;
+  motion.joint_names = {"joint1", "joint2"};
+  motion.start = {-0.75, 1.0};
+  motion.goal = {0.85, 1.0};
+  ASSERT_TRUE(check(arm(-0.75, 1.0)).valid);
+  ASSERT_TRUE(check(arm(0.85, 1.0)).valid);
+  ASSERT_FALSE(check(arm(0.0, 1.0)).valid) << "the plate must block the middle of the motion";
+
+  // The library on the same scene: the coarse step misses the plate, the certified check does not.
+  Environment env(0.02);
+  env.add_object("plate", ObjectShape::box(Vec3(0.6, 0.002, 0.7)), Transform::Translation(Vec3(0.6, 0.0, 0.65)));
+  const auto start = arm(-0.75, 1.0), goal = arm(0.85, 1.0);
+  MotionRequest coarse_lib;
+  coarse_lib.resolution = 0.7;
+  ASSERT_TRUE(checker().check_motion(start.data(), goal.data(), env, coarse_lib).valid)
+      << "the test's premise: a 0.7 rad step steps over the plate";
+
+  motion.resolution = 0.7;
+  const auto coarse = call<CheckMotion>("check_motion", motion).response;
+  EXPECT_EQ(coarse.error, "");
+  EXPECT_TRUE(coarse.valid) << "same answer as the library at resolution 0.7";
+  EXPECT_EQ(coarse.states_checked, 4u);
+
+  motion.resolution = 0.0;
+  const auto certified = call<CheckMotion>("check_motion", motion).response;
+  EXPECT_EQ(certified.error, "");
+  EXPECT_FALSE(certified.valid) << "the certified check missed the plate";
+  EXPECT_GT(certified.last_valid_fraction, 0.2);
+  EXPECT_LT(certified.last_valid_fraction, 0.5) << "the plate is at joint1 = 0, fraction 0.47";
+  const MotionResult lib = checker().check_motion(start.data(), goal.data(), env, MotionRequest{});
+  EXPECT_NEAR(certified.last_valid_fraction, lib.last_valid_fraction, 1e-9);
+}
+
+TEST_F(NodeEnvironment, CastRayHitsLinksObjectsAndVoxels) {
+  CastRay::Request ray;
+  ray.origin.x = 1.0;
+  ray.origin.z = 0.5;
+  ray.direction.x = -1.0;
+  auto r = call<CastRay>("cast_ray", ray).response;
+  EXPECT_EQ(r.error, "");
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.body.rfind("link", 0), 0u) << "the upright arm is hit first, not " << r.body;
+  EXPECT_NEAR(r.point.x, 0.05, 0.02);
+
+  SetCollisionObject::Request ball;
+  ball.id = "ball";
+  ball.shape.type = CollisionShape::SPHERE;
+  ball.shape.dimensions = {0.1};
+  ball.pose.position.x = 0.6;
+  ball.pose.position.z = 0.5;
+  ball.pose.orientation.w = 1.0;
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", ball).response.error, "");
+  r = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.body, "ball");
+  EXPECT_NEAR(r.distance, 0.3, 1e-6);
+  ray.max_range = 0.2;
+  EXPECT_FALSE(call<CastRay>("cast_ray", ray).response.hit) << "max_range ends the ray before the ball";
+}
+
+}  // namespace
+}  // namespace bvh_collision::test
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_node_environment");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(2);  // tf broadcasts and subscriptions run while tests wait
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
