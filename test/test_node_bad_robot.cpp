@@ -52,6 +52,20 @@ TEST(NodeBadRobot, NegativeResolution) {
   expect_startup_failure("bad_resolution", "~resolution must be a positive number");
 }
 
+TEST(NodeBadRobot, UnreadableOctreeFile) {
+  expect_startup_failure("bad_octree", "cannot open octree file '/nonexistent/start.bt'");
+}
+
+TEST(NodeBadRobot, SensorModelHitBelowHalf) { expect_startup_failure("bad_sensor_model", "hit must be above 0.5"); }
+
+TEST(NodeBadRobot, WorkspaceWithOneCorner) {
+  expect_startup_failure("bad_workspace", "~workspace_min and ~workspace_max must be set together");
+}
+
+TEST(NodeBadRobot, PaddingForAnUnknownLink) {
+  expect_startup_failure("bad_padding", "~link_padding names unknown link 'elbow'");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

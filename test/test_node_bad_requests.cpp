@@ -1,0 +1,271 @@
+// Launch test: every kind of bad input of DESIGN.md section 4 gets an error that names what is
+// wrong, changes nothing, and leaves the node serving: unknown joints, wrong array lengths, NaN
+// and Inf, values outside joint limits (answered, with a warning), unknown frames, bad shapes,
+// unwritable octree paths, malformed clouds and clouds whose transform never comes, a robot
+// without collision geometry.
+#include <gmock/gmock.h>
+
+#include <filesystem>
+#include <limits>
+#include <mutex>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <sensor_msgs/PointField.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
+#include "bvh_collision/CastRay.h"
+#include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/CheckStates.h"
+#include "bvh_collision/ClearBox.h"
+#include "bvh_collision/RemoveCollisionObject.h"
+#include "bvh_collision/SaveOctree.h"
+#include "bvh_collision/SetCollisionObject.h"
+#include "bvh_collision/ros/conversions.h"
+#include "node_test_client.h"
+
+namespace bvh_collision::test {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+MATCHER_P(Says, text, "") { return arg.find(text) != std::string::npos; }
+
+class NodeBadRequests : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    static tf2_ros::StaticTransformBroadcaster tf;
+    geometry_msgs::TransformStamped base;
+    base.header.frame_id = "world";
+    base.child_frame_id = "base_link";
+    base.transform.rotation.w = 1.0;
+    tf.sendTransform(base);
+    ASSERT_TRUE(wait_for_node());
+    // Until the node has the transform, environment checks say that they cannot place the robot.
+    std::string error = "no answer";
+    for (int i = 0; i < 100 && !error.empty(); ++i, ros::WallDuration(0.1).sleep()) {
+      error = call<CheckState>("check_state", CheckState::Request()).response.error;
+    }
+    ASSERT_EQ(error, "") << "the node never got world -> base_link";
+  }
+  // After every bad request: the node still answers, with the state it had.
+  void TearDown() override {
+    CheckState::Request r;
+    r.state = joint_state({"joint2"}, {1.2});
+    const auto res = call<CheckState>("check_state", r).response;
+    EXPECT_EQ(res.error, "") << "the node stopped answering good requests";
+    EXPECT_EQ(res.valid, !keeper_set_) << "a bad request changed the environment";
+  }
+  // An object the arm meets when leaning forward: bad requests must leave it in place.
+  void set_keeper() {
+    SetCollisionObject::Request object;
+    object.id = "keeper";
+    object.shape.type = CollisionShape::BOX;
+    object.shape.dimensions = {0.2, 0.4, 0.2};
+    object.pose.position.x = 0.6;
+    object.pose.position.z = 0.5;
+    object.pose.orientation.w = 1.0;
+    ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+    keeper_set_ = true;
+  }
+  static bool keeper_set_;
+};
+bool NodeBadRequests::keeper_set_ = false;
+
+CheckState::Request state(const std::vector<std::string>& names, const std::vector<double>& values) {
+  CheckState::Request r;
+  r.state = joint_state(names, values);
+  return r;
+}
+
+TEST_F(NodeBadRequests, CheckStateNamesWhatIsWrong) {
+  set_keeper();
+  const auto error = [](const CheckState::Request& r) { return call<CheckState>("check_state", r).response.error; };
+  EXPECT_THAT(error(state({"joint1", "elbow"}, {0.0, 0.0})), Says("unknown joint 'elbow'"));
+  EXPECT_THAT(error(state({"joint1", "joint2"}, {0.0})), Says("2 joint names and 1 positions"));
+  EXPECT_THAT(error(state({"joint1"}, {kNaN})), Says("'joint1' has value nan"));
+  EXPECT_THAT(error(state({"joint1"}, {kInf})), Says("'joint1' has value inf"));
+  EXPECT_THAT(error(state({"joint1", "joint1"}, {0.0, 0.1})), Says("named twice"));
+  EXPECT_THAT(error(state({"hand_joint"}, {0.0})), Says("fixed"));
+  CheckState::Request checks = state({}, {});
+  checks.checks = 7;
+  EXPECT_THAT(error(checks), Says("checks must be"));
+  CheckState::Request tolerance = state({}, {});
+  tolerance.tolerance = kNaN;
+  EXPECT_THAT(error(tolerance), Says("tolerance"));
+}
+
+TEST_F(NodeBadRequests, ValuesOutsideLimitsAreAnsweredWithAWarning) {
+  const auto res = call<CheckState>("check_state", state({"joint2"}, {2.5})).response;
+  EXPECT_EQ(res.error, "");
+  EXPECT_THAT(res.warning, Says("'joint2' = 2.5 is outside its limits [-2, 2]"));
+  CheckStates::Request batch;
+  batch.joint_names = {"joint2"};
+  batch.positions = {0.0, 2.5};
+  const auto b = call<CheckStates>("check_states", batch).response;
+  EXPECT_EQ(b.error, "");
+  EXPECT_EQ(b.valid.size(), 2u);
+  EXPECT_THAT(b.warning, Says("configuration 1"));
+}
+
+TEST_F(NodeBadRequests, CheckStatesAndCheckMotion) {
+  const auto batch_error = [](const std::vector<std::string>& names, const std::vector<double>& positions) {
+    CheckStates::Request r;
+    r.joint_names = names;
+    r.positions = positions;
+    const auto res = call<CheckStates>("check_states", r).response;
+    EXPECT_TRUE(res.valid.empty()) << "no answers with an error";
+    return res.error;
+  };
+  EXPECT_THAT(batch_error({"joint1", "joint2"}, {0, 0, 0}), Says("not a multiple of 2"));
+  EXPECT_THAT(batch_error({"joint1"}, {0, 0, kNaN}), Says("configuration 2"));
+  EXPECT_THAT(batch_error({"joint9"}, {0}), Says("unknown joint 'joint9'"));
+  EXPECT_THAT(batch_error({}, {0.0}), Says("joint_names is empty"));
+
+  const auto motion_error = [](std::vector<double> start, std::vector<double> goal, double resolution) {
+    CheckMotion::Request r;
+    r.joint_names = {"joint1"};
+    r.start = start;
+    r.goal = goal;
+    r.resolution = resolution;
+    return call<CheckMotion>("check_motion", r).response.error;
+  };
+  EXPECT_THAT(motion_error({0.0}, {0.0, 1.0}, 0.1), Says("goal 2 for 1 joint names"));
+  EXPECT_THAT(motion_error({0.0}, {1.0}, -0.1), Says("resolution"));
+  EXPECT_THAT(motion_error({0.0}, {1.0}, kNaN), Says("resolution"));
+  EXPECT_THAT(motion_error({0.0}, {kInf}, 0.1), Says("'joint1' has value inf"));
+}
+
+TEST_F(NodeBadRequests, RaysAndBoxes) {
+  CastRay::Request ray;
+  ray.origin.z = 0.5;
+  EXPECT_THAT(call<CastRay>("cast_ray", ray).response.error, Says("direction"));
+  ray.direction.x = 1.0;
+  ray.origin.x = kNaN;
+  EXPECT_THAT(call<CastRay>("cast_ray", ray).response.error, Says("origin"));
+  ClearBox::Request box;
+  box.min.x = 1.0;
+  EXPECT_THAT(call<ClearBox>("clear_box", box).response.error, Says("min exceeds max"));
+  box.min.x = kNaN;
+  EXPECT_THAT(call<ClearBox>("clear_box", box).response.error, Says("finite"));
+}
+
+TEST_F(NodeBadRequests, CollisionObjects) {
+  set_keeper();
+  SetCollisionObject::Request object;
+  object.id = "bad";
+  object.pose.orientation.w = 1.0;
+  object.pose.position.z = 0.5;  // onto the arm: had any of these been added, the arm would collide
+  const auto error = [&](auto edit) {
+    SetCollisionObject::Request r = object;
+    edit(r);
+    return call<SetCollisionObject>("set_collision_object", r).response.error;
+  };
+  EXPECT_THAT(error([](auto& r) { r.shape.type = 9; }), Says("unknown shape type 9"));
+  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::BOX, r.shape.dimensions = {1, 1}; }),
+              Says("BOX needs 3 dimensions"));
+  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {-1}; }),
+              Says("positive and finite"));
+  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::MESH_FILE, r.shape.mesh_uri = "/no/such/mesh.stl"; }),
+              Says("mesh '/no/such/mesh.stl'"));
+  EXPECT_THAT(error([](auto& r) {
+                r.shape.type = CollisionShape::TRIANGLES;
+                r.shape.vertices.resize(2);
+                r.shape.triangles = {0, 1, 2};
+              }),
+              Says("out of range"));
+  EXPECT_THAT(error([](auto& r) {
+                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+                r.pose.orientation.w = 2.0;
+              }),
+              Says("unit quaternion"));
+  EXPECT_THAT(error([](auto& r) {
+                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+                r.frame_id = "nowhere";
+              }),
+              Says("unknown frame 'nowhere'"));
+  EXPECT_THAT(error([](auto& r) {
+                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+                r.id = "";
+              }),
+              Says("id is empty"));
+  RemoveCollisionObject::Request remove;
+  remove.id = "ghost";
+  EXPECT_THAT(call<RemoveCollisionObject>("remove_collision_object", remove).response.error,
+              Says("no collision object with id 'ghost'"));
+}
+
+TEST_F(NodeBadRequests, SaveOctree) {
+  SaveOctree::Request save;
+  save.path = "/nonexistent_dir/octree.bt";
+  EXPECT_THAT(call<SaveOctree>("save_octree", save).response.error, Says("cannot write"));
+  save.path = "/tmp/octree.txt";
+  EXPECT_THAT(call<SaveOctree>("save_octree", save).response.error, Says(".bt or .ot"));
+  save.path = "";
+  EXPECT_THAT(call<SaveOctree>("save_octree", save).response.error, Says("path is empty"));
+  const std::string good = "/tmp/bvh_collision_test_" + std::to_string(getpid()) + ".ot";
+  save.path = good;
+  EXPECT_EQ(call<SaveOctree>("save_octree", save).response.error, "");
+  EXPECT_TRUE(std::filesystem::exists(good));
+  std::filesystem::remove(good);
+}
+
+TEST_F(NodeBadRequests, BadCloudsAreCountedNotInserted) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  std::map<std::string, long long> values;
+  ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& s : m->status)
+          for (const auto& kv : s.values)
+            if (kv.key.rfind("clouds", 0) == 0) values[kv.key] = std::stoll(kv.value);
+      });
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 10);
+  for (int i = 0; i < 50 && pub.getNumSubscribers() == 0; ++i) ros::WallDuration(0.1).sleep();
+  std::vector<ScanPoint> wall;
+  for (int i = 0; i < 100; ++i) wall.emplace_back(0.5f, 0.01f * i, 0.5f);
+  std::vector<sensor_msgs::PointCloud2> bad(4, to_cloud_msg(wall, "world"));
+  bad[0].fields.pop_back();                                         // no z
+  bad[1].fields[0].datatype = sensor_msgs::PointField::INT32;       // x is not a float
+  bad[2].data.resize(bad[2].data.size() / 2);                       // data shorter than promised
+  bad[3].fields[2].offset = 10;                                     // z beyond point_step
+  sensor_msgs::PointCloud2 lost = to_cloud_msg(wall, "nowhere");    // no transform will come
+  for (auto& c : bad) {
+    c.header.stamp = ros::Time::now();
+    pub.publish(c);
+    ros::WallDuration(0.2).sleep();  // the node keeps one cloud in its queue
+  }
+  lost.header.stamp = ros::Time::now();
+  pub.publish(lost);
+  const auto get = [&](const char* key) {
+    std::lock_guard<std::mutex> lock(mutex);
+    return values.count(key) ? values[key] : -1LL;
+  };
+  for (int i = 0; i < 60 && (get("clouds rejected (malformed)") < 4 || get("clouds dropped (no transform)") < 1); ++i) {
+    ros::WallDuration(0.1).sleep();
+  }
+  EXPECT_EQ(get("clouds rejected (malformed)"), 4);
+  EXPECT_EQ(get("clouds dropped (no transform)"), 1);
+  EXPECT_EQ(get("clouds inserted"), 0);
+  EXPECT_EQ(get("clouds received"), 5);
+}
+
+TEST_F(NodeBadRequests, ARobotWithoutGeometryIsAnError) {
+  ASSERT_TRUE(ros::service::waitForService("/empty_robot/collision_checker/check_state", ros::Duration(30)));
+  CheckState srv;
+  ASSERT_TRUE(ros::service::call("/empty_robot/collision_checker/check_state", srv));
+  EXPECT_THAT(srv.response.error, Says("has no collision geometry"));
+}
+
+}  // namespace
+}  // namespace bvh_collision::test
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_node_bad_requests");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
