@@ -44,8 +44,10 @@ bench: deps build
 	$(MAKE) -C $(BUILD) -j$(JOBS) benchmarks
 	@mkdir -p $(BUILD)/bench
 	@for b in devel/lib/bvh_collision/bench_*; do \
+	  [[ $$b == */bench_node ]] && continue; \
 	  echo "== $$b"; $$b $(BUILD)/bench | tee $(BUILD)/bench/$$(basename $$b).md || exit 1; \
 	done
+	@echo "== bench_node (the node's services)"; bash scripts/bench_node.sh $(BUILD)/bench
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel

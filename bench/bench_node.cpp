@@ -1,0 +1,156 @@
+// bench_node: the service round trip against the library in-process, on the same robot and
+// scene (bench/node_bench.launch starts the node and this client; scripts/bench_node.sh runs it).
+//   - check_state, boolean, SELF and ENVIRONMENT: round-trip latency (median, p99) against one
+//     in-process check_self / check_environment call;
+//   - check_states with 1, 100 and 10,000 configurations: time per configuration against
+//     CollisionChecker::check_batch in-process.
+// Targets (issue 6): a single call under 300 us round trip; batches within 1.5x of in-process.
+// Figures go to stdout (a markdown table) and to <dir>/bench_node.json.
+#include <cstdio>
+#include <random>
+
+#include <ros/ros.h>
+
+#include "bench_util.h"
+#include "bvh_collision/CheckState.h"
+#include "bvh_collision/CheckStates.h"
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/ros/conversions.h"
+
+namespace bvh_collision {
+namespace {
+
+constexpr double kTargetSingleUs = 300.0, kTargetBatchRatio = 1.5;
+
+CollisionChecker load_checker(const std::string& urdf) {
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(urdf), PackageResolver::from_environment());
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  std::string srdf;
+  if (ros::param::get("/robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf), model, acm);
+  return CollisionChecker(std::move(model), std::move(acm));
+}
+
+// The obstacle the node and the in-process copy both hold: a wall of points in front of the robot.
+std::vector<ScanPoint> wall() {
+  std::vector<ScanPoint> points;
+  for (int i = 0; i < 80; ++i) {
+    for (int j = 0; j < 60; ++j) points.emplace_back(0.6f, -0.8f + 0.02f * i, 0.02f * j);
+  }
+  return points;
+}
+
+struct Bench {
+  const CollisionChecker& checker;
+  Environment env;
+  ros::ServiceClient single, batch;
+  bench::FigureFile figures{"bench_node"};
+  bool targets_met = true;
+
+  void single_call(const char* label, std::uint8_t checks, const std::vector<double>& q, int calls) {
+    CheckState srv;
+    srv.request.state.name = checker.model().variable_names();
+    srv.request.state.position = q;
+    srv.request.checks = checks;
+    std::vector<double> service, library;
+    EnvironmentRequest env_request;
+    for (int i = 0; i < 200; ++i) single.call(srv);  // warm-up: connection, caches, the node's threads
+    for (int i = 0; i < calls; ++i) {
+      service.push_back(bench::time_us([&] { single.call(srv); }));
+      if (!srv.response.error.empty()) throw std::runtime_error(srv.response.error);
+      library.push_back(bench::time_us([&] {
+        if (checks == CheckState::Request::SELF) checker.check_self(q.data());
+        else checker.check_environment(q.data(), env, env_request);
+      }));
+    }
+    const double ours = bench::median(service), base = bench::median(library);
+    const bool met = ours < kTargetSingleUs;
+    targets_met = targets_met && met;
+    std::printf("| check_state %-11s | %8.1f us (p99 %.1f) | %8.2f us | %6.3f | < %.0f us: %s |\n", label, ours,
+                bench::percentile(service, 0.99), base, base / ours, kTargetSingleUs, met ? "met" : "MISSED");
+    figures.add(std::string("check_state ") + label + " round trip (median)", "us", ours, base);
+    figures.add(std::string("check_state ") + label + " round trip (p99)", "us", bench::percentile(service, 0.99));
+  }
+
+  void batch_call(std::size_t rows, std::mt19937_64& rng) {
+    CheckStates srv;
+    srv.request.joint_names = checker.model().variable_names();
+    for (std::size_t r = 0; r < rows; ++r) {
+      const auto q = random_configuration(checker.model(), rng);
+      srv.request.positions.insert(srv.request.positions.end(), q.begin(), q.end());
+    }
+    BatchRequest request;
+    const int repeats = rows >= 10000 ? 7 : rows >= 100 ? 50 : 500;
+    std::vector<double> service, library;
+    for (int i = 0; i < repeats; ++i) {
+      service.push_back(bench::time_us([&] { batch.call(srv); }) / double(rows));
+      if (!srv.response.error.empty()) throw std::runtime_error(srv.response.error);
+      library.push_back(bench::time_us([&] {
+                          checker.check_batch(srv.request.positions.data(), rows, &env, request);
+                        }) /
+                        double(rows));
+    }
+    const double ours = bench::median(service), base = bench::median(library);
+    const bool met = ours <= kTargetBatchRatio * base || rows == 1;  // one state: the latency target applies
+    if (rows > 1) targets_met = targets_met && met;
+    std::printf("| check_states %5zu       | %8.2f us/state   | %8.2f us/state | %6.3f | %s |\n", rows, ours, base,
+                base / ours, rows == 1 ? "(latency)" : met ? "within 1.5x: met" : "within 1.5x: MISSED");
+    figures.add("check_states " + std::to_string(rows) + " per configuration (median)", "us", ours, base);
+  }
+};
+
+}  // namespace
+}  // namespace bvh_collision
+
+int main(int argc, char** argv) {
+  using namespace bvh_collision;
+  ros::init(argc, argv, "bench_node");
+  ros::NodeHandle nh, pnh("~");
+  const std::string urdf = pnh.param<std::string>("urdf_file", "");
+  const std::string out_dir = pnh.param<std::string>("output_dir", "build/bench");
+  const std::string node = pnh.param<std::string>("node", "/collision_checker");
+  if (!ros::service::waitForService(node + "/check_state", ros::Duration(60))) {
+    std::fprintf(stderr, "bench_node: %s/check_state never came up\n", node.c_str());
+    return 1;
+  }
+  const CollisionChecker checker = load_checker(urdf);
+  Bench b{checker, Environment(pnh.param("resolution", 0.02)), nh.serviceClient<CheckState>(node + "/check_state", true),
+          nh.serviceClient<CheckStates>(node + "/check_states", true)};
+  // The same wall in the node (published in the root link's frame, so the sensor is at the root's
+  // origin; waited for) and in-process, through the same self filter and workspace.
+  const std::vector<ScanPoint> points = wall();
+  const ScanPoint origin(0.0f, 0.0f, 0.0f);
+  const std::vector<double> neutral = neutral_state(checker.model());
+  const FilteredScan filtered = checker.filter_scan(neutral.data(), points, origin, 0.02);
+  const float half = float(checker.reach() + 0.5);
+  const ScanOptions options{5.0, ScanWorkspace{ScanPoint::Constant(-half), ScanPoint::Constant(half)}, 0};
+  insert_scan(b.env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("obstacle_cloud", 1, true);
+  sensor_msgs::PointCloud2 cloud = to_cloud_msg(points, checker.model().links()[checker.model().root_link()].name);
+  std::mt19937_64 rng(1);
+  std::vector<double> free_q;
+  for (int i = 0; i < 10000 && free_q.empty(); ++i) {
+    auto q = random_configuration(checker.model(), rng);
+    if (!checker.check_self(q.data()).collision) free_q = q;
+  }
+  cloud.header.stamp = ros::Time::now();
+  pub.publish(cloud);
+  ros::WallDuration(1.5).sleep();  // inserted by then (a few ms of work)
+
+  std::printf("# Service round trip against in-process (%s)\n\n", bench::machine_description().c_str());
+  std::printf("robot: %s, %zu checked pairs; environment: %zu points in a wall, resolution %.3f m\n\n",
+              checker.model().name().c_str(), checker.checked_pairs().size(), points.size(), b.env.octree().resolution());
+  std::printf("| query | service (median) | in-process (median) | in-process / service | target |\n|---|---|---|---|---|\n");
+  try {
+    b.single_call("SELF", CheckState::Request::SELF, free_q, 3000);
+    b.single_call("ENVIRONMENT", CheckState::Request::ENVIRONMENT, free_q, 3000);
+    for (std::size_t rows : {std::size_t(1), std::size_t(100), std::size_t(10000)}) b.batch_call(rows, rng);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_node: %s\n", e.what());
+    return 1;
+  }
+  b.figures.write(out_dir);
+  std::printf("\ntargets: %s\n", b.targets_met ? "all met" : "some MISSED (see above)");
+  std::fflush(stdout);
+  return 0;
+}
