@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bvh_collision/CheckState.h"
+#include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -56,6 +57,19 @@ inline CheckState::Request state_request(const CollisionChecker& checker, const 
   r.state = joint_state(checker.model().variable_names(), values);
   r.checks = checks;
   r.tolerance = 0.0;
+  return r;
+}
+
+// A box object of edge lengths `size` centred at `centre` in world_frame.
+inline SetCollisionObject::Request box_object(const std::string& id, const Vec3& size, const Vec3& centre) {
+  SetCollisionObject::Request r;
+  r.id = id;
+  r.shape.type = CollisionShape::BOX;
+  r.shape.dimensions = {size.x(), size.y(), size.z()};
+  r.pose.position.x = centre.x();
+  r.pose.position.y = centre.y();
+  r.pose.position.z = centre.z();
+  r.pose.orientation.w = 1.0;
   return r;
 }
 

@@ -186,13 +186,7 @@ TEST_F(NodeEnvironment, MarkersAndDiagnosticsShowTheCloud) {
 }
 
 TEST_F(NodeEnvironment, TheBasePoseComesFromTf) {
-  SetCollisionObject::Request object;
-  object.id = "crate";
-  object.shape.type = CollisionShape::BOX;
-  object.shape.dimensions = {0.3, 0.3, 0.3};
-  object.pose.position.x = 2.0;
-  object.pose.position.z = 0.6;
-  object.pose.orientation.w = 1.0;
+  SetCollisionObject::Request object = box_object("crate", Vec3(0.3, 0.3, 0.3), Vec3(2.0, 0.0, 0.6));
   ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
   const auto home = arm(0.0, 0.0);
   EXPECT_TRUE(check(home).valid);
@@ -221,13 +215,7 @@ TEST_F(NodeEnvironment, TheBasePoseComesFromTf) {
 TEST_F(NodeEnvironment, CertifiedMotionFindsAThinObstacleThatACoarseStepMisses) {
   // A 2 mm plate in the plane y = 0 that the arm, leaning forward, sweeps through when joint1
   // turns from -0.75 to 0.85 rad.
-  SetCollisionObject::Request plate;
-  plate.id = "plate";
-  plate.shape.type = CollisionShape::BOX;
-  plate.shape.dimensions = {0.6, 0.002, 0.7};
-  plate.pose.position.x = 0.6;
-  plate.pose.position.z = 0.65;
-  plate.pose.orientation.w = 1.0;
+  const auto plate = box_object("plate", Vec3(0.6, 0.002, 0.7), Vec3(0.6, 0.0, 0.65));
   ASSERT_EQ(call<SetCollisionObject>("set_collision_object", plate).response.error, "");
   CheckMotion::Request motion;
   motion.joint_names = {"joint1", "joint2"};

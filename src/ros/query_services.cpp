@@ -10,21 +10,17 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-geometry_msgs::Point point_msg(const Vec3& p) {
-  geometry_msgs::Point m;
-  m.x = p.x();
-  m.y = p.y();
-  m.z = p.z();
-  return m;
-}
-
-geometry_msgs::Vector3 vector_msg(const Vec3& v) {
-  geometry_msgs::Vector3 m;
+// geometry_msgs::Point or Vector3 from a vector.
+template <class Msg>
+Msg xyz_msg(const Vec3& v) {
+  Msg m;
   m.x = v.x();
   m.y = v.y();
   m.z = v.z();
   return m;
 }
+const auto point_msg = xyz_msg<geometry_msgs::Point>;
+const auto vector_msg = xyz_msg<geometry_msgs::Vector3>;
 
 struct Checks {
   bool self, environment;
