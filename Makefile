@@ -21,7 +21,7 @@ DEB_PACKAGES := \
   libdiagnostic-msgs-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev ros-robot-state-publisher \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev liboctomap-dev \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
-  libkdl-parser-dev liborocos-kdl-dev
+  libkdl-parser-dev liborocos-kdl-dev python3-matplotlib
 
 .PHONY: all deps build test demo bench clean
 all: build

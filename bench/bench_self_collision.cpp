@@ -1,9 +1,11 @@
-// Self-collision benchmark: microseconds per configuration for boolean, all-pairs and distance
-// queries, against an FCL pipeline built as MoveIt builds it (BVHModel<OBBRSS> per mesh,
-// fcl::Sphere for spheres, DynamicAABBTreeCollisionManager, the same allowed-collision matrix
-// applied in the callbacks), on the same uniform random configurations; and FK on its own.
+// Self-collision benchmark, sections 1, 2 and 5 of the report (make bench): per robot, time per
+// configuration against the tolerance with the false positives and negatives it costs; distance
+// time against the allowed error; and what modelling only what the scene needs saves (the
+// allowed-collision matrix, sampled never-colliding pairs, checking only the pairs a motion
+// moves). FCL runs as MoveIt runs it (BVHModel<OBBRSS> per mesh, fcl::Sphere for spheres,
+// DynamicAABBTreeCollisionManager, the same allowed-collision matrix applied in the callbacks) on
+// the same uniform random configurations, FK included in both.
 // Usage: bench_self_collision [OUTPUT_DIR] [--quick]
-#include <cstring>
 #include <functional>
 #include <fstream>
 #include <iostream>
@@ -13,6 +15,7 @@
 
 #include "../test/fcl_oracle.h"
 #include "bench_util.h"
+#include "bvh_collision/checker/acm_sampling.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"
@@ -20,32 +23,34 @@
 namespace bvh_collision {
 namespace {
 
-using bench::mean;
-using bench::median;
-using bench::time_us;
+using bench::Spread;
+using bench::Table;
+using Query = std::function<void(std::size_t)>;  // runs one query on state i
 
-constexpr int kRepeats = 3;  // repetitions of the cheap (boolean) blocks
+const double kTolerancesMm[] = {0, 1, 2, 5, 10, 20};
 
-using Query = std::function<void(int, const double*)>;
+struct Sizes {
+  std::size_t states, distance_states, runs, samples;
+};
 
-// Per-state times of queries, each run over every state in a block, as a planner calls it (warm
-// caches for both libraries). The blocks are interleaved and repeated, so that drift in this
-// shared machine's load reaches every query alike; a state's time is its median over repeats.
-std::vector<std::vector<double>> per_state(const std::vector<std::vector<double>>& states,
-                                           const std::vector<Query>& queries, int repeats) {
-  const int n = static_cast<int>(states.size());
-  std::vector<std::vector<std::vector<double>>> t(queries.size(), std::vector<std::vector<double>>(n));
-  for (int r = 0; r < repeats; ++r) {
+// Time per state of each query, as the median over `runs` runs with the spread. In each run
+// every query runs over all states in turn (warm caches for both libraries, as a planner calls
+// them), so that drift in the machine's load reaches every query alike.
+std::vector<Spread> timed_runs(std::size_t n, const std::vector<Query>& queries, std::size_t runs) {
+  std::vector<std::vector<double>> t(queries.size());
+  for (std::size_t r = 0; r < runs; ++r) {
     for (std::size_t q = 0; q < queries.size(); ++q) {
-      for (int i = 0; i < n; ++i) t[q][i].push_back(time_us([&] { queries[q](i, states[i].data()); }));
+      t[q].push_back(bench::us_per_item(n, [&] {
+        for (std::size_t i = 0; i < n; ++i) queries[q](i);
+      }));
     }
   }
-  std::vector<std::vector<double>> out(queries.size());
-  for (std::size_t q = 0; q < queries.size(); ++q) {
-    for (int i = 0; i < n; ++i) out[q].push_back(median(t[q][i]));
-  }
+  std::vector<Spread> out;
+  for (const auto& runs_of_q : t) out.push_back(bench::spread(runs_of_q));
   return out;
 }
+
+// ------------------------------------------------------------------------------ FCL pipeline
 
 struct FclPipeline {
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
@@ -56,12 +61,10 @@ struct FclPipeline {
 };
 
 struct CallbackData {
-  explicit CallbackData(const FclPipeline* p, bool every_pair = false) : pipeline(p), all_pairs(every_pair) {}
-  const FclPipeline* pipeline;
+  const FclPipeline* pipeline = nullptr;
   bool hit = false;
   double distance = std::numeric_limits<double>::infinity();
-  bool all_pairs = false;                      // collision: keep going, collect every pair
-  std::set<std::pair<int, int>> pairs;         // colliding link pairs (a < b) when all_pairs
+  fcl::DistanceRequestd distance_request;
 };
 
 int link_of(const FclPipeline& p, fcl::CollisionObjectd* o) { return p.link[reinterpret_cast<std::intptr_t>(o->getUserData())]; }
@@ -74,21 +77,17 @@ bool collision_callback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, vo
   fcl::CollisionResultd result;
   fcl::collide(o1, o2, request, result);
   d->hit = d->hit || result.isCollision();
-  if (d->all_pairs && result.isCollision()) d->pairs.insert({std::min(a, b), std::max(a, b)});
-  return d->hit && !d->all_pairs;  // boolean: stop at the first collision
+  return d->hit;  // boolean: stop at the first collision
 }
 
 bool distance_callback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* raw, double& dist) {
   auto* d = static_cast<CallbackData*>(raw);
   const int a = link_of(*d->pipeline, o1), b = link_of(*d->pipeline, o2);
-  if (a == b || d->pipeline->acm->allowed(a, b)) {
-    dist = d->distance;
-    return false;
+  if (a != b && !d->pipeline->acm->allowed(a, b)) {
+    fcl::DistanceResultd result;
+    fcl::distance(o1, o2, d->distance_request, result);
+    d->distance = std::min(d->distance, std::max(0.0, result.min_distance));
   }
-  fcl::DistanceRequestd request;
-  fcl::DistanceResultd result;
-  fcl::distance(o1, o2, request, result);
-  d->distance = std::min(d->distance, std::max(0.0, result.min_distance));
   dist = d->distance;
   return d->distance <= 0.0;
 }
@@ -116,7 +115,9 @@ void build_pipeline(const RobotModel& m, const AllowedCollisionMatrix& acm, FclP
   p.manager.setup();
 }
 
-void move_pipeline(FclPipeline& p, const std::vector<Transform>& poses) {
+void move_pipeline(FclPipeline& p, const RobotModel& m, const double* state) {
+  thread_local std::vector<Transform> poses;
+  forward_kinematics(m, state, poses);
   for (std::size_t i = 0; i < p.objects.size(); ++i) {
     p.objects[i]->setTransform(test::fcl_transform(poses[p.link[i]] * p.origin[i]));
     p.objects[i]->computeAABB();
@@ -124,129 +125,304 @@ void move_pipeline(FclPipeline& p, const std::vector<Transform>& poses) {
   p.manager.update();
 }
 
-std::vector<std::vector<double>> random_states(const RobotModel& m, int n, std::mt19937_64& rng) {
+// ---------------------------------------------------------------------------------- robots
+
+struct Robot {
+  std::string name, urdf, srdf;  // file contents (srdf may be empty)
+  std::string dir;
+};
+
+Robot robot_files(const std::string& name) {
+  Robot r{name, "", "", name == "demo" ? test::source_dir() + "/urdf" : test::robots_dir() + "/" + name};
+  auto read = [](const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  r.urdf = read(name == "demo" ? r.dir + "/demo_arm.urdf" : r.dir + "/robot.urdf");
+  if (name != "demo") r.srdf = read(r.dir + "/robot.srdf");
+  return r;
+}
+
+enum class Matrix { kAdjacent, kSrdf };
+
+CollisionChecker make_checker(const Robot& r, Matrix matrix, const SampledPairs* sampled = nullptr) {
+  RobotModel model = RobotModel::from_urdf(*parse_robot_description(r.urdf), PackageResolver({r.dir}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  if (matrix == Matrix::kSrdf && !r.srdf.empty()) apply_srdf(parse_srdf(r.srdf), model, acm);
+  if (sampled) apply_sampled_pairs(*sampled, acm);
+  return CollisionChecker(std::move(model), std::move(acm));
+}
+
+std::vector<std::vector<double>> random_states(const RobotModel& m, std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::vector<std::vector<double>> out;
-  for (int i = 0; i < n; ++i) out.push_back(random_configuration(m, rng));
+  for (std::size_t i = 0; i < n; ++i) out.push_back(random_configuration(m, rng));
   return out;
 }
 
-// Boolean self-collision at a tolerance (DESIGN.md section 2: "collision" may be answered for
-// states up to `tolerance` apart, never "free" for a colliding one), against the exact answers.
-void tolerance_rows(const std::string& robot, const CollisionChecker& checker,
-                    const std::vector<std::vector<double>>& states, const std::vector<SelfCollisionResult>& exact,
-                    double fcl_mean, bench::FigureFile& figures) {
-  std::cout << "\n| tolerance | ours median us | ours mean us | FCL/ours (mean, FCL exact) | false positives |"
-               " largest true distance of a false positive | false negatives |\n|---|---|---|---|---|---|---|\n";
-  for (const double tolerance : {0.0, 0.01, 0.02}) {
-    SelfCollisionRequest request;
-    request.solids = false;
-    request.tolerance = tolerance;
-    std::vector<char> hit(states.size());
-    const auto t = per_state(
-        states, {[&](int i, const double* s) { hit[i] = checker.check_self(s, request).collision; }}, kRepeats)[0];
-    int false_positive = 0, false_negative = 0;
+
+// ------------------------------------------------------------------ section 1: tolerance
+
+// Boolean self-collision at each tolerance (DESIGN.md section 2: "collision" may be answered up
+// to `tolerance` apart, never "free" for a colliding state), against the exact distances.
+// Meshes as surfaces, as FCL sees them, so that both answer the same question.
+void tolerance_section(const Robot& robot, const CollisionChecker& checker, FclPipeline& fcl_pipeline,
+                       const std::vector<std::vector<double>>& states, const std::vector<double>& truth,
+                       const Sizes& sizes, const std::string& dir) {
+  const std::size_t n = states.size();
+  const std::size_t t_count = std::size(kTolerancesMm);
+  std::vector<std::vector<char>> hits(t_count, std::vector<char>(n));
+  std::vector<Query> queries;
+  for (std::size_t t = 0; t < t_count; ++t) {
+    queries.push_back([&, t](std::size_t i) {
+      SelfCollisionRequest request;
+      request.solids = false;
+      request.tolerance = kTolerancesMm[t] * 1e-3;
+      hits[t][i] = checker.check_self(states[i].data(), request).collision;
+    });
+  }
+  std::vector<char> fcl_hits(n);
+  queries.push_back([&](std::size_t i) {
+    move_pipeline(fcl_pipeline, checker.model(), states[i].data());
+    CallbackData data;
+    data.pipeline = &fcl_pipeline;
+    fcl_pipeline.manager.collide(&data, collision_callback);
+    fcl_hits[i] = data.hit;
+  });
+  const std::vector<Spread> times = timed_runs(n, queries, sizes.runs);
+  std::size_t colliding = 0, fcl_disagree = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    colliding += truth[i] <= 0.0;
+    fcl_disagree += (truth[i] <= 0.0) != static_cast<bool>(fcl_hits[i]);
+  }
+  Table table("self_tolerance_" + robot.name, robot.name + ": boolean self-collision against tolerance",
+              {"tolerance mm", "ours us/config", "ours min", "ours max", "FCL us/config", "FCL min", "FCL max",
+               "FCL / ours", "false positives %", "largest true distance of a false positive mm", "false negatives"});
+  for (std::size_t t = 0; t < t_count; ++t) {
+    std::size_t fp = 0, fn = 0;
     double worst = 0.0;
-    for (std::size_t i = 0; i < states.size(); ++i) {
-      const bool truth = exact[i].min_distance <= 0.0;
-      false_negative += truth && !hit[i];
-      if (hit[i] && !truth) {
-        ++false_positive;
-        worst = std::max(worst, exact[i].min_distance);
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool colliding_truly = truth[i] <= 0.0;
+      fn += colliding_truly && !hits[t][i];
+      if (hits[t][i] && !colliding_truly) {
+        ++fp;
+        worst = std::max(worst, truth[i]);
       }
     }
-    const double rate = 100.0 * false_positive / states.size();
-    std::cout << "| " << tolerance * 1000 << " mm | " << median(t) << " | " << mean(t) << " | " << fcl_mean / mean(t)
-              << "x | " << false_positive << " (" << rate << " %) | " << worst * 1000 << " mm | " << false_negative << " |\n";
-    const std::string name = robot + " boolean tolerance " + std::to_string(static_cast<int>(tolerance * 1000)) + " mm";
-    figures.add(name + " mean", "us", mean(t), fcl_mean);
-    figures.add(name + " false positives", "%", rate);
-    figures.add(name + " false negatives", "count", false_negative);
+    std::vector<Table::Cell> row = {kTolerancesMm[t]};
+    for (const auto& c : Table::cells(times[t])) row.push_back(c);
+    for (const auto& c : Table::cells(times.back())) row.push_back(c);
+    row.insert(row.end(), {times.back().median / times[t].median, 100.0 * fp / n, worst * 1000, static_cast<double>(fn)});
+    table.row(row);
   }
+  table.note(std::to_string(n) + " uniform random configurations, " + std::to_string(colliding) + " in collision; " +
+             std::to_string(checker.checked_pairs().size()) + " checked link pairs; medians of " +
+             std::to_string(sizes.runs) + " runs (min and max beside them). Meshes as surfaces, as FCL sees them; "
+             "the exact answer is our distance query at tolerance 0. FCL (exact) disagreed with it on " +
+             std::to_string(fcl_disagree) + " configurations.");
+  table.write(dir);
 }
 
-void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
-  const std::string dir = test::robots_dir() + "/" + robot;
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  if (std::ifstream in(dir + "/robot.srdf"); in) {
-    std::ostringstream s;
-    s << in.rdbuf();
-    apply_srdf(parse_srdf(s.str()), model, acm);
+// ------------------------------------------------------------------- section 2: distance
+
+void distance_section(const Robot& robot, const CollisionChecker& checker, FclPipeline& fcl_pipeline,
+                      const std::vector<std::vector<double>>& states, const std::vector<double>& truth,
+                      const Sizes& sizes, const std::string& dir) {
+  const std::size_t n = std::min(states.size(), sizes.distance_states);
+  const std::size_t t_count = std::size(kTolerancesMm);
+  std::vector<std::vector<double>> ours(t_count, std::vector<double>(n)), theirs = ours;
+  std::vector<Query> queries;
+  for (std::size_t t = 0; t < t_count; ++t) {
+    queries.push_back([&, t](std::size_t i) {
+      SelfCollisionRequest request;
+      request.solids = false;
+      request.distance = true;
+      request.tolerance = kTolerancesMm[t] * 1e-3;
+      ours[t][i] = checker.check_self(states[i].data(), request).min_distance;
+    });
+    queries.push_back([&, t](std::size_t i) {
+      move_pipeline(fcl_pipeline, checker.model(), states[i].data());
+      CallbackData data;
+      data.pipeline = &fcl_pipeline;
+      data.distance_request.abs_err = kTolerancesMm[t] * 1e-3;
+      fcl_pipeline.manager.distance(&data, distance_callback);
+      theirs[t][i] = data.distance;
+    });
   }
-  const CollisionChecker checker(model, acm);
+  // FCL's distance takes up to 20 ms a configuration on pr2: at most three runs here.
+  const std::vector<Spread> times = timed_runs(n, queries, std::min<std::size_t>(sizes.runs, 3));
+  Table table("self_distance_" + robot.name, robot.name + ": minimum self distance against the allowed error",
+              {"allowed error mm", "ours us/config", "ours min", "ours max", "FCL us/config", "FCL min", "FCL max",
+               "FCL / ours", "ours largest error mm", "FCL largest error mm", "ours beyond the bound"});
+  for (std::size_t t = 0; t < t_count; ++t) {
+    double worst_ours = 0.0, worst_fcl = 0.0;
+    std::size_t beyond = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double e = ours[t][i] - truth[i];
+      worst_ours = std::max(worst_ours, std::abs(e));
+      worst_fcl = std::max(worst_fcl, std::abs(theirs[t][i] - truth[i]));
+      beyond += e < -1e-12 || e > kTolerancesMm[t] * 1e-3 + 1e-12;
+    }
+    std::vector<Table::Cell> row = {kTolerancesMm[t]};
+    for (const auto& c : Table::cells(times[2 * t])) row.push_back(c);
+    for (const auto& c : Table::cells(times[2 * t + 1])) row.push_back(c);
+    row.insert(row.end(), {times[2 * t + 1].median / times[2 * t].median, worst_ours * 1000, worst_fcl * 1000,
+                           static_cast<double>(beyond)});
+    table.row(row);
+  }
+  table.note(std::to_string(n) + " uniform random configurations; the error is against our exact distance (tolerance 0, "
+             "meshes as surfaces). FCL runs with DistanceRequest::abs_err set to the allowed error. Medians of " +
+             std::to_string(std::min<std::size_t>(sizes.runs, 3)) + " runs. Ours never reports less than the true distance, nor more than it plus the "
+             "allowed error (the last column counts violations).");
+  table.write(dir);
+}
+
+// ----------------------------------------------- section 5: model only what the scene needs
+
+// The variables a typical request moves: a wrist, or one arm of the PR2.
+std::vector<int> moving_group(const RobotModel& m, const std::string& robot, std::string& label) {
+  std::vector<std::string> names;
+  if (robot == "panda") names = {"panda_joint5", "panda_joint6", "panda_joint7"}, label = "the wrist (joints 5-7)";
+  if (robot == "ur5e") names = {"wrist_1_joint", "wrist_2_joint", "wrist_3_joint"}, label = "the wrist (3 joints)";
+  if (robot == "pr2") {
+    names = {"r_shoulder_pan_joint", "r_shoulder_lift_joint", "r_upper_arm_roll_joint", "r_elbow_flex_joint",
+             "r_forearm_roll_joint", "r_wrist_flex_joint", "r_wrist_roll_joint"};
+    label = "the right arm (7 joints)";
+  }
+  if (robot == "demo") names = {"joint5", "joint6"}, label = "the wrist (joints 5-6)";
+  std::vector<int> out;
+  for (std::size_t v = 0; v < m.variable_count(); ++v) {
+    if (std::find(names.begin(), names.end(), m.variable_names()[v]) != names.end()) out.push_back(static_cast<int>(v));
+  }
+  return out;
+}
+
+struct SceneRow {
+  std::string setting, compared_with;
+  std::size_t pairs;
+  Spread time;
+  const Spread* base;
+  double missed;  // NaN: not applicable
+};
+
+void scene_model_section(const Robot& robot, const std::vector<std::vector<double>>& states, const Sizes& sizes,
+                         const std::string& dir) {
+  const std::size_t n = states.size();
+  const CollisionChecker adjacent = make_checker(robot, Matrix::kAdjacent);
+  const CollisionChecker srdf = make_checker(robot, Matrix::kSrdf);
+  SamplingOptions sampling;
+  sampling.samples = sizes.samples;
+  sampling.seed = 7;  // not the test states' seed
+  const SampledPairs sampled = sample_collision_pairs(srdf, sampling);
+  const CollisionChecker reduced = make_checker(robot, Matrix::kSrdf, &sampled);
+  // The moving group: states that differ from a base state only in the group's variables.
+  std::string label;
+  const std::vector<int> group = moving_group(srdf.model(), robot.name, label);
+  const std::vector<std::size_t> moved = srdf.pairs_moved_by(group);
+  std::vector<std::vector<double>> group_states;
+  std::mt19937_64 rng(13);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto s = states[i / 10 * 10];  // ten variations of every tenth state
+    const auto fresh = random_configuration(srdf.model(), rng);
+    for (const int v : group) s[v] = fresh[v];
+    group_states.push_back(s);
+  }
+  SelfCollisionRequest moved_only;
+  moved_only.only_pairs = &moved;
+  std::vector<char> full_answer(n), srdf_answer(n), reduced_answer(n);
+  const std::vector<Spread> t = timed_runs(
+      n,
+      {[&](std::size_t i) { adjacent.check_self(states[i].data()); },
+       [&](std::size_t i) { srdf_answer[i] = srdf.check_self(states[i].data()).collision; },
+       [&](std::size_t i) { reduced_answer[i] = reduced.check_self(states[i].data()).collision; },
+       [&](std::size_t i) { full_answer[i] = srdf.check_self(group_states[i].data()).collision; },
+       [&](std::size_t i) { srdf.check_self(group_states[i].data(), moved_only); }},
+      sizes.runs);
+  std::size_t missed = 0;
+  for (std::size_t i = 0; i < n; ++i) missed += srdf_answer[i] && !reduced_answer[i];
+  const double na = std::numeric_limits<double>::quiet_NaN();
+  const bool has_srdf = !robot.srdf.empty();
+  std::vector<SceneRow> rows = {
+      {"adjacent links only", "-", adjacent.checked_pairs().size(), t[0], nullptr, na},
+      {has_srdf ? "the SRDF's disabled pairs" : "the SRDF's disabled pairs (no SRDF: same matrix)", "adjacent links only",
+       srdf.checked_pairs().size(), t[1], &t[0], na},
+      {"sampled never-colliding pairs (" + std::to_string(sampled.samples) + " samples, " +
+           std::to_string(sampled.never.size()) + " pairs)",
+       "the SRDF's matrix", reduced.checked_pairs().size(), t[2], &t[1], static_cast<double>(missed)},
+      {"moving " + label + ": every pair", "-", srdf.checked_pairs().size(), t[3], nullptr, na},
+      {"moving " + label + ": only the pairs it moves", "every pair", moved.size(), t[4], &t[3], 0.0},
+  };
+  Table table("scene_model_" + robot.name, robot.name + ": modelling only what the scene needs (boolean self-collision)",
+              {"setting", "compared with", "checked pairs", "us/config", "min", "max", "saved per query us", "saved %",
+               "collisions missed"});
+  for (const SceneRow& r : rows) {
+    const double saved = r.base ? r.base->median - r.time.median : na;
+    table.row({r.setting, r.compared_with, static_cast<double>(r.pairs), r.time.median, r.time.low, r.time.high, saved,
+               r.base ? 100.0 * saved / r.base->median : na, r.missed});
+  }
+  // The rigid pairs are checked once (their answer cannot change while only the group moves).
+  std::vector<std::size_t> rigid;
+  for (std::size_t p = 0; p < srdf.checked_pairs().size(); ++p) {
+    if (!std::binary_search(moved.begin(), moved.end(), p)) rigid.push_back(p);
+  }
+  SelfCollisionRequest rigid_only;
+  rigid_only.only_pairs = &rigid;
+  std::size_t disagree = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool split = srdf.check_self(states[i / 10 * 10].data(), rigid_only).collision ||
+                       srdf.check_self(group_states[i].data(), moved_only).collision;
+    disagree += split != static_cast<bool>(full_answer[i]);
+  }
+  table.note(std::to_string(n) + " uniform random configurations (the moving-group rows: every tenth of them, with the "
+             "group's joints drawn anew ten times); the node's default semantics (closed meshes are solids); medians of " +
+             std::to_string(sizes.runs) + " runs. Sampled pairs can hide rare collisions: 'collisions missed' counts "
+             "configurations the SRDF's matrix finds colliding and the sampled one calls free. Only-moved-pairs plus the "
+             "rigid pairs checked once disagreed with the full check on " + std::to_string(disagree) + " configurations.");
+  table.write(dir);
+}
+
+// ------------------------------------------------------------------------ other queries
+
+void queries_section(const Robot& robot, const CollisionChecker& checker, const std::vector<std::vector<double>>& states,
+                     const Sizes& sizes, const std::string& dir) {
+  std::vector<Transform> poses;
+  SelfCollisionRequest all, contacts;
+  all.all_pairs = true;
+  contacts.all_pairs = true;
+  contacts.max_contacts = 4;
+  const std::vector<Spread> t = timed_runs(
+      states.size(),
+      {[&](std::size_t i) { forward_kinematics(checker.model(), states[i].data(), poses); },
+       [&](std::size_t i) { checker.check_self(states[i].data()); },
+       [&](std::size_t i) { checker.check_self(states[i].data(), all); },
+       [&](std::size_t i) { checker.check_self(states[i].data(), contacts); }},
+      sizes.runs);
+  Table table("self_queries_" + robot.name, robot.name + ": other self-collision queries (the node's defaults)",
+              {"query", "us/config", "min", "max"});
+  const char* names[] = {"forward kinematics alone", "boolean, solids (check_state default)", "all colliding pairs",
+                         "all pairs with up to 4 contacts each"};
+  for (std::size_t q = 0; q < t.size(); ++q) table.row({names[q], t[q].median, t[q].low, t[q].high});
+  table.write(dir);
+}
+
+void run_robot(const std::string& name, const Sizes& sizes, const std::string& dir) {
+  const Robot robot = robot_files(name);
+  const CollisionChecker checker = make_checker(robot, Matrix::kSrdf);
   FclPipeline fcl_pipeline;
   build_pipeline(checker.model(), checker.acm(), fcl_pipeline);
-  std::mt19937_64 rng(99);
-  const auto states = random_states(checker.model(), n, rng);
-  std::vector<Transform> poses;
-  SelfCollisionRequest boolean, all, dist;
-  boolean.solids = all.solids = dist.solids = false;  // FCL's semantics for the comparison
-  all.all_pairs = true;
-  dist.distance = true;
-  // Boolean queries are cheap: kRepeats interleaved repetitions; distance once.
-  std::vector<SelfCollisionResult> ours_bool(n), ours_dist(n);
-  std::vector<CallbackData> fcl_bool(n, CallbackData(&fcl_pipeline)), fcl_dist(n, CallbackData(&fcl_pipeline));
-  const Query fk = [&](int, const double* s) { forward_kinematics(checker.model(), s, poses); };
-  const Query ours_boolean = [&](int i, const double* s) { ours_bool[i] = checker.check_self(s, boolean); };
-  const Query ours_solids = [&](int, const double* s) { checker.check_self(s); };
-  std::vector<SelfCollisionResult> ours_all_pairs(n);
-  std::vector<CallbackData> fcl_all(n, CallbackData(&fcl_pipeline));
-  const Query ours_all = [&](int i, const double* s) { ours_all_pairs[i] = checker.check_self(s, all); };
-  const Query fcl_all_pairs = [&](int i, const double* s) {
-    forward_kinematics(checker.model(), s, poses);
-    move_pipeline(fcl_pipeline, poses);
-    fcl_all[i] = CallbackData(&fcl_pipeline, true);
-    fcl_pipeline.manager.collide(&fcl_all[i], collision_callback);
-  };
-  const Query fcl_boolean = [&](int i, const double* s) {
-    forward_kinematics(checker.model(), s, poses);
-    move_pipeline(fcl_pipeline, poses);
-    fcl_bool[i] = CallbackData(&fcl_pipeline);
-    fcl_pipeline.manager.collide(&fcl_bool[i], collision_callback);
-  };
-  const auto cheap =
-      per_state(states, {fk, ours_boolean, fcl_boolean, ours_solids, ours_all, fcl_all_pairs}, kRepeats);
-  const auto& [t_fk, t_bool, f_bool, t_bool_solids, t_all, f_all] =
-      std::tie(cheap[0], cheap[1], cheap[2], cheap[3], cheap[4], cheap[5]);
-  const auto costly = per_state(
-      states, {[&](int i, const double* s) { ours_dist[i] = checker.check_self(s, dist); },
-       [&](int i, const double* s) {
-         forward_kinematics(checker.model(), s, poses);
-         move_pipeline(fcl_pipeline, poses);
-         fcl_pipeline.manager.distance(&fcl_dist[i], distance_callback);
-       }},
-      1);
-  const auto& [t_dist, f_dist] = std::tie(costly[0], costly[1]);
-  int disagree_bool = 0, disagree_dist = 0, disagree_all = 0, colliding = 0;
-  for (int i = 0; i < n; ++i) {
-    colliding += ours_bool[i].collision;
-    const auto& found = ours_all_pairs[i].colliding_pairs;
-    disagree_all += std::set<std::pair<int, int>>(found.begin(), found.end()) != fcl_all[i].pairs;
-    disagree_bool += ours_bool[i].collision != fcl_bool[i].hit;
-    disagree_dist += std::abs(ours_dist[i].min_distance - fcl_dist[i].distance) > 1e-6;
-  }
-  std::cout << "\n## " << robot << ": " << checker.checked_pairs().size() << " checked pairs, " << n
-            << " uniform random states (" << colliding << " in collision)\n"
-            << "| query | ours median us | ours mean us | FCL median us | FCL mean us | FCL/ours (mean) | disagreements |\n"
-            << "|---|---|---|---|---|---|---|\n"
-            << std::fixed << std::setprecision(2);
-  auto row = [&](const std::string& name, const std::vector<double>& ours, const std::vector<double>* fcl, int disagreements) {
-    std::cout << "| " << name << " | " << median(ours) << " | " << mean(ours) << " | ";
-    if (fcl) {
-      std::cout << median(*fcl) << " | " << mean(*fcl) << " | " << mean(*fcl) / mean(ours) << "x | " << disagreements << " |\n";
-      figures.add(robot + " " + name + " mean", "us", mean(ours), mean(*fcl));
-      figures.add(robot + " " + name + " median", "us", median(ours), median(*fcl));
-    } else {
-      std::cout << "- | - | - | - |\n";
-      figures.add(robot + " " + name + " mean", "us", mean(ours));
-    }
-  };
-  row("boolean", t_bool, &f_bool, disagree_bool);
-  row("distance", t_dist, &f_dist, disagree_dist);
-  row("boolean, solids", t_bool_solids, nullptr, 0);
-  row("all pairs", t_all, &f_all, disagree_all);
-  row("forward kinematics", t_fk, nullptr, 0);
-  tolerance_rows(robot, checker, states, ours_dist, mean(f_bool), figures);
+  const auto states = random_states(checker.model(), sizes.states, 99);
+  std::vector<double> truth(states.size());
+  SelfCollisionRequest exact;
+  exact.solids = false;
+  exact.distance = true;
+  for (std::size_t i = 0; i < states.size(); ++i) truth[i] = checker.check_self(states[i].data(), exact).min_distance;
+  std::cout << "\n## " << name << "\n";
+  tolerance_section(robot, checker, fcl_pipeline, states, truth, sizes, dir);
+  distance_section(robot, checker, fcl_pipeline, states, truth, sizes, dir);
+  scene_model_section(robot, states, sizes, dir);
+  queries_section(robot, checker, states, sizes, dir);
 }
 
 }  // namespace
@@ -254,11 +430,10 @@ void run_robot(const std::string& robot, int n, bench::FigureFile& figures) {
 
 int main(int argc, char** argv) {
   using namespace bvh_collision;
-  const bool quick = argc > 2 && std::strcmp(argv[2], "--quick") == 0;
-  std::cout << "# Self-collision per configuration, against FCL as MoveIt uses it (FK included in FCL's time,"
-            << " as in ours)\n# Machine: " << bench::machine_description() << "\n";
-  bench::FigureFile figures("self_collision");
-  for (const char* robot : {"panda", "ur5e", "pr2"}) run_robot(robot, quick ? 200 : 10000, figures);
-  figures.write(bench::output_dir(argc, argv));
+  const bool quick = bench::quick_mode(argc, argv);
+  const Sizes sizes = quick ? Sizes{60, 20, 2, 300} : Sizes{5000, 300, 5, 10000};
+  std::cout << "# Self-collision per configuration, against FCL as MoveIt uses it\n# Machine: "
+            << bench::machine_description() << "\n";
+  for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) run_robot(robot, sizes, bench::output_dir(argc, argv));
   return 0;
 }

@@ -1,6 +1,9 @@
-// Shared benchmark plumbing: per-query timing, medians, the machine description, and the JSON
-// figure files (build/bench/<name>.json: a list of {name, unit, ours, baseline, ratio}).
+// Shared benchmark plumbing: per-query timing, medians, the machine description, the JSON
+// figure files (build/bench/<name>.json: a list of {name, unit, ours, baseline, ratio}) and the
+// report's tables (build/bench/tables/<id>.json, rendered by scripts/bench_report.py).
 #pragma once
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -9,10 +12,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 namespace bvh_collision::bench {
@@ -101,5 +107,98 @@ class FigureFile {
 inline std::string output_dir(int argc, char** argv) {
   return argc > 1 ? std::string(argv[1]) : std::string("build/bench");
 }
+
+// `--quick` anywhere after the output folder: small inputs, for the report's test in make test.
+inline bool quick_mode(int argc, char** argv) {
+  for (int i = 2; i < argc; ++i) {
+    if (std::string(argv[i]) == "--quick") return true;
+  }
+  return false;
+}
+
+// The median of repeated runs of one measurement, with the spread (smallest and largest run).
+struct Spread {
+  double median = 0.0, low = 0.0, high = 0.0;
+};
+
+inline Spread spread(const std::vector<double>& runs) {
+  if (runs.empty()) return {};
+  return {bench::median(runs), *std::min_element(runs.begin(), runs.end()), *std::max_element(runs.begin(), runs.end())};
+}
+
+// Microseconds per item of `count` items: f() runs over all of them once.
+template <class F>
+double us_per_item(std::size_t count, F&& f) {
+  return time_us(std::forward<F>(f)) / static_cast<double>(std::max<std::size_t>(count, 1));
+}
+
+// One table of the report: columns, rows of numbers or text, notes. Written as
+// <dir>/tables/<id>.json ({id, title, machine, columns, rows, notes}; a number that is not
+// finite is null) and printed as markdown, so that a benchmark's console output reads alone.
+class Table {
+ public:
+  using Cell = std::variant<double, std::string>;
+  Table(std::string id, std::string title, std::vector<std::string> columns)
+      : id_(std::move(id)), title_(std::move(title)), columns_(std::move(columns)) {}
+
+  Table& row(std::vector<Cell> cells) {
+    if (cells.size() != columns_.size()) throw std::logic_error("table " + id_ + ": row of the wrong width");
+    rows_.push_back(std::move(cells));
+    return *this;
+  }
+  Table& note(std::string text) {
+    notes_.push_back(std::move(text));
+    return *this;
+  }
+  // A median and its spread as three cells (median, low, high).
+  static std::vector<Cell> cells(const Spread& s) { return {s.median, s.low, s.high}; }
+
+  void write(const std::string& dir) const {
+    std::filesystem::create_directories(dir + "/tables");
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& r : rows_) {
+      nlohmann::json row = nlohmann::json::array();
+      for (const Cell& c : r) {
+        if (const double* x = std::get_if<double>(&c)) {
+          row.push_back(std::isfinite(*x) ? nlohmann::json(*x) : nlohmann::json(nullptr));
+        } else {
+          row.push_back(std::get<std::string>(c));
+        }
+      }
+      rows.push_back(row);
+    }
+    const nlohmann::json out = {{"id", id_}, {"title", title_}, {"machine", machine_description()},
+                                {"columns", columns_}, {"rows", rows}, {"notes", notes_}};
+    std::ofstream(dir + "/tables/" + id_ + ".json") << out.dump(1) << "\n";
+    print();
+  }
+
+  void print() const {
+    std::cout << "\n### " << title_ << "\n|";
+    for (const auto& c : columns_) std::cout << " " << c << " |";
+    std::cout << "\n|";
+    for (std::size_t i = 0; i < columns_.size(); ++i) std::cout << "---|";
+    std::cout << "\n";
+    for (const auto& r : rows_) {
+      std::cout << "|";
+      for (const Cell& c : r) {
+        if (const double* x = std::get_if<double>(&c)) {
+          std::cout << " " << std::setprecision(4) << *x << " |";
+        } else {
+          std::cout << " " << std::get<std::string>(c) << " |";
+        }
+      }
+      std::cout << "\n";
+    }
+    for (const auto& n : notes_) std::cout << "\n" << n << "\n";
+    std::cout.flush();
+  }
+
+ private:
+  std::string id_, title_;
+  std::vector<std::string> columns_;
+  std::vector<std::vector<Cell>> rows_;
+  std::vector<std::string> notes_;
+};
 
 }  // namespace bvh_collision::bench

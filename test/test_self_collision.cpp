@@ -197,6 +197,123 @@ TEST_P(SelfCollision, BatchEqualsSingle) {
   }
 }
 
+// Distance with a tolerance: never below the exact distance, at most the tolerance above it.
+TEST_P(SelfCollision, DistanceToleranceBoundsTheError) {
+  BVH_REQUIRE_ROBOTS();
+  const Fixture f = make_fixture(GetParam());
+  std::mt19937_64 rng(31);
+  SelfCollisionRequest exact;
+  exact.distance = true;
+  for (int i = 0; i < 150; ++i) {
+    const auto s = random_configuration(f.checker->model(), rng);
+    const SelfCollisionResult truth = f.checker->check_self(s.data(), exact);
+    for (const double tolerance : {0.001, 0.005, 0.02, 0.1}) {
+      SelfCollisionRequest loose = exact;
+      loose.tolerance = tolerance;
+      const SelfCollisionResult r = f.checker->check_self(s.data(), loose);
+      ASSERT_GE(r.min_distance, truth.min_distance) << "state " << i << " tolerance " << tolerance;
+      ASSERT_LE(r.min_distance, truth.min_distance + tolerance) << "state " << i << " tolerance " << tolerance;
+      // The collision answer follows DESIGN.md section 2: never a miss, "collision" only within the tolerance.
+      if (truth.collision) {
+        ASSERT_TRUE(r.collision) << i;
+      }
+      if (r.collision) {
+        ASSERT_LE(truth.min_distance, tolerance) << i;
+      }
+      if (std::isfinite(r.min_distance) && r.min_distance > 0) {  // the witnesses are that far apart
+        ASSERT_NEAR((r.point_a - r.point_b).norm(), r.min_distance, 1e-9) << i;
+      }
+    }
+  }
+}
+
+// pairs_moved_by against brute force: a pair is left out exactly when random changes of the
+// variables never change the two links' relative pose.
+TEST_P(SelfCollision, PairsMovedByAreThePairsWhoseRelativePoseChanges) {
+  BVH_REQUIRE_ROBOTS();
+  const Fixture f = make_fixture(GetParam());
+  const RobotModel& m = f.checker->model();
+  std::mt19937_64 rng(37);
+  const auto& pairs = f.checker->checked_pairs();
+  for (int trial = 0; trial < 6; ++trial) {
+    std::vector<int> group;  // a random subset of the variables (the last ones on trial 0: a wrist)
+    for (int v = 0; v < static_cast<int>(m.variable_count()); ++v) {
+      if (trial == 0 ? v + 3 >= static_cast<int>(m.variable_count()) : rng() % 3 == 0) group.push_back(v);
+    }
+    const std::vector<std::size_t> moved = f.checker->pairs_moved_by(group);
+    const std::set<std::size_t> moved_set(moved.begin(), moved.end());
+    ASSERT_EQ(moved_set.size(), moved.size());
+    std::vector<char> changed(pairs.size(), 0);
+    for (int k = 0; k < 8; ++k) {
+      const auto base = random_configuration(m, rng);
+      auto other = base;
+      const auto fresh = random_configuration(m, rng);
+      for (const int v : group) other[v] = fresh[v];
+      std::vector<Transform> pa, pb;
+      forward_kinematics(m, base.data(), pa);
+      forward_kinematics(m, other.data(), pb);
+      for (std::size_t p = 0; p < pairs.size(); ++p) {
+        const auto [a, b] = pairs[p];
+        const Transform ra = pa[a].inverse() * pa[b], rb = pb[a].inverse() * pb[b];
+        const double gap = (ra.t - rb.t).norm() + (ra.R - rb.R).norm();
+        if (!moved_set.count(p)) {
+          ASSERT_LT(gap, 1e-9) << m.links()[a].name << ":" << m.links()[b].name;
+        }
+        changed[p] |= gap > 1e-9;
+      }
+    }
+    for (const std::size_t p : moved) {
+      EXPECT_TRUE(changed[p]) << m.links()[pairs[p].first].name << ":" << m.links()[pairs[p].second].name;
+    }
+  }
+  EXPECT_TRUE(f.checker->pairs_moved_by({}).empty());
+  EXPECT_THROW(f.checker->pairs_moved_by({static_cast<int>(m.variable_count())}), std::out_of_range);
+}
+
+// Checking only the moved pairs, plus the rigid pairs once, gives the full answer.
+TEST_P(SelfCollision, OnlyMovedPairsPlusRigidPairsOnceEqualsTheFullCheck) {
+  BVH_REQUIRE_ROBOTS();
+  const Fixture f = make_fixture(GetParam());
+  const RobotModel& m = f.checker->model();
+  std::mt19937_64 rng(41);
+  std::vector<int> group;
+  for (int v = static_cast<int>(m.variable_count()) / 2; v < static_cast<int>(m.variable_count()); ++v) group.push_back(v);
+  const std::vector<std::size_t> moved = f.checker->pairs_moved_by(group);
+  std::vector<std::size_t> rigid;
+  for (std::size_t p = 0, k = 0; p < f.checker->checked_pairs().size(); ++p) {
+    if (k < moved.size() && moved[k] == p) {
+      ++k;
+    } else {
+      rigid.push_back(p);
+    }
+  }
+  SelfCollisionRequest moved_only, rigid_only, distance;
+  moved_only.only_pairs = &moved;
+  rigid_only.only_pairs = &rigid;
+  distance.distance = true;
+  for (int i = 0; i < 20; ++i) {
+    const auto base = random_configuration(m, rng);
+    const bool rigid_hit = f.checker->check_self(base.data(), rigid_only).collision;
+    for (int k = 0; k < 6; ++k) {
+      auto s = base;
+      const auto fresh = random_configuration(m, rng);
+      for (const int v : group) s[v] = fresh[v];
+      const bool full = f.checker->check_self(s.data()).collision;
+      ASSERT_EQ(rigid_hit || f.checker->check_self(s.data(), moved_only).collision, full) << i << " " << k;
+      SelfCollisionRequest d = distance;
+      d.only_pairs = &moved;
+      SelfCollisionRequest dr = distance;
+      dr.only_pairs = &rigid;
+      const double split = std::min(f.checker->check_self(s.data(), d).min_distance, f.checker->check_self(base.data(), dr).min_distance);
+      ASSERT_EQ(split, f.checker->check_self(s.data(), distance).min_distance) << i << " " << k;
+    }
+  }
+  const std::vector<std::size_t> bad = {f.checker->checked_pairs().size()};
+  SelfCollisionRequest wrong;
+  wrong.only_pairs = &bad;
+  EXPECT_THROW(f.checker->check_self(std::vector<double>(m.variable_count(), 0.0).data(), wrong), std::out_of_range);
+}
+
 INSTANTIATE_TEST_SUITE_P(Robots, SelfCollision,
                          ::testing::Values("panda", "ur5e", "pr2", "abb_irb2400", "solo", "panda_capsules"));
 

@@ -10,6 +10,31 @@
 namespace bvh_collision {
 namespace {
 
+// The pair indices a self query visits: a request's own list (validated), or 0 .. count - 1.
+class PairIndices {
+ public:
+  PairIndices(const std::vector<std::size_t>* only, std::size_t count) : only_(only), count_(count) {
+    if (only_) {
+      for (const std::size_t p : *only_) {
+        if (p >= count_) throw std::out_of_range("only_pairs: pair index " + std::to_string(p) + " of " + std::to_string(count_));
+      }
+    }
+  }
+  struct Iterator {
+    const std::vector<std::size_t>* only;
+    std::size_t i;
+    std::size_t operator*() const { return only ? (*only)[i] : i; }
+    Iterator& operator++() { return ++i, *this; }
+    bool operator!=(const Iterator& o) const { return i != o.i; }
+  };
+  Iterator begin() const { return {only_, 0}; }
+  Iterator end() const { return {only_, only_ ? only_->size() : count_}; }
+
+ private:
+  const std::vector<std::size_t>* only_;
+  std::size_t count_;
+};
+
 // A sphere in the link frame that holds every shape of the link.
 template <class ShapeList, class MeshList>
 std::pair<Vec3, double> bounding_sphere(const ShapeList& shapes, const MeshList& meshes) {
@@ -138,8 +163,9 @@ bool CollisionChecker::shapes_collide(const ShapeRef& sa, const Transform& pa, c
 }
 
 double CollisionChecker::shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,
-                                         double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
-  if (sa.mesh && sb.mesh) return meshes_distance(sa, pa, sb, pb, best, solids, wa, wb, stats);
+                                         double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats,
+                                         double tolerance) const {
+  if (sa.mesh && sb.mesh) return meshes_distance(sa, pa, sb, pb, best, solids, wa, wb, stats, tolerance);
   if (!sa.mesh && !sb.mesh) {
     const Vec3 dir = (pb.t - pa.t).norm() > 0 ? Vec3((pb.t - pa.t).normalized()) : Vec3(Vec3::UnitZ());
     const double d = std::max(0.0, (pb.t - pa.t).norm() - sa.radius - sb.radius);
@@ -179,10 +205,11 @@ double CollisionChecker::shapes_distance(const ShapeRef& sa, const Transform& pa
 // points, so the two agree and no BVH traversal is needed. Robot links are mostly convex where
 // they face each other, so this settles most pairs; the rest take the exact BVH query.
 double CollisionChecker::meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
-                                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const {
+                                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) const {
   const Transform b_in_a = relative_transform(pa, pb);
   const ConvexDistance hull = convex_distance(*ma.hull, *mb.hull, b_in_a);
-  if (hull.lower_bound >= best) return hull.lower_bound;  // cannot improve on `best`
+  // Cannot improve on `best` (by more than the tolerance: then `best` stands).
+  if (hull.lower_bound >= best - tolerance) return std::max(hull.lower_bound, best);
   // Surface points near the hulls' witnesses: their distance bounds the meshes' from above.
   double upper = best;
   Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
@@ -198,7 +225,8 @@ double CollisionChecker::meshes_distance(const ShapeRef& ma, const Transform& pa
     const Vec3 qb = nearest_on_mesh(mb, b_in_a, hull.on_b, hull.vertex_b);
     const double apart = (qa - qb).norm();
     const double scale = ma.hull->extent + mb.hull->extent + b_in_a.t.norm();
-    if (apart - hull.lower_bound <= 1e-10 * scale) {  // certified: the hulls' distance is the meshes'
+    // Certified: the hulls' distance is the meshes' (or within the tolerance above it).
+    if (apart - hull.lower_bound <= std::max(1e-10 * scale, tolerance)) {
       wa = pa * qa;
       wb = pa * qb;
       return apart;
@@ -222,6 +250,7 @@ double CollisionChecker::meshes_distance(const ShapeRef& ma, const Transform& pa
   DistanceRequest request;
   request.solids = solids;
   request.upper_bound = upper;
+  request.tolerance = tolerance;
   const DistanceResult d = distance(*ma.mesh, pa, *mb.mesh, pb, request);
   stats += d.stats;
   if (d.distance < upper || upper >= best) {
@@ -254,13 +283,14 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   return hit;
 }
 
-double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform>& poses, double best, bool solids,
-                                       SelfCollisionResult& result) const {
+double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
+                                       const SelfCollisionRequest& request, SelfCollisionResult& result) const {
   for (const Shape& sa : shapes_[a]) {
     for (const Shape& sb : shapes_[b]) {
       Vec3 wa, wb;
       const double d =
-          shapes_distance(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, best, solids, wa, wb, result.stats);
+          shapes_distance(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
+                          result.stats, request.tolerance);
       if (d < best) {
         best = d;
         result.min_distance = d;
@@ -289,7 +319,7 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
   if (!request.distance) {
     // Collision only: the pairs whose spheres come within reach, deepest overlap (relative to
     // the reach) first, because those collide most often and a boolean query stops at the first.
-    for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+    for (const std::size_t p : PairIndices(request.only_pairs, checked_pairs_.size())) {
       const auto [a, b] = checked_pairs_[p];
       const double reach = bounds_[a].radius + bounds_[b].radius + padding_[a] + padding_[b] + request.tolerance;
       const double d2 = (centers[a] - centers[b]).squaredNorm();
@@ -307,7 +337,7 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
     return result;
   }
   // Distance: nearest pairs first, so that a small bound prunes the rest early.
-  for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+  for (const std::size_t p : PairIndices(request.only_pairs, checked_pairs_.size())) {
     const auto [a, b] = checked_pairs_[p];
     order.emplace_back((centers[a] - centers[b]).norm() - bounds_[a].radius - bounds_[b].radius, p);
   }
@@ -320,7 +350,7 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       result.collision = true;
       result.colliding_pairs.emplace_back(a, b);
     }
-    if (gap < best) best = pair_distance(a, b, poses, best, request.solids, result);
+    if (gap < best - request.tolerance) best = pair_distance(a, b, poses, best, request, result);
   }
   if (!std::isfinite(best)) result.min_distance = std::numeric_limits<double>::infinity();
   return result;
@@ -371,6 +401,38 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work);
   work();
   for (std::thread& t : threads) t.join();
+  return out;
+}
+
+}  // namespace bvh_collision
+
+namespace bvh_collision {
+
+std::vector<std::size_t> CollisionChecker::pairs_moved_by(const std::vector<int>& variables) const {
+  std::vector<char> moving(model_.variable_count(), 0);
+  for (const int v : variables) {
+    if (v < 0 || static_cast<std::size_t>(v) >= moving.size()) throw std::out_of_range("pairs_moved_by: variable " + std::to_string(v));
+    moving[v] = 1;
+  }
+  const auto& joints = model_.joints();
+  auto joint_moves = [&](const RobotJoint& j) {
+    if (j.type == JointType::kFixed) return false;
+    if (j.mimic >= 0) return joints[j.mimic].variable >= 0 && moving[joints[j.mimic].variable] != 0;
+    if (j.variable < 0) return true;  // floating or planar: posed by the request, not a variable
+    return moving[j.variable] != 0;
+  };
+  // Per link, its moving ancestor joints (root to link); a pair's path is what the two do not share.
+  std::vector<std::vector<int>> moved_above(model_.links().size());
+  for (const int j : model_.joint_order()) {
+    const RobotJoint& joint = joints[j];
+    moved_above[joint.child_link] = moved_above[joint.parent_link];
+    if (joint_moves(joint)) moved_above[joint.child_link].push_back(j);
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t p = 0; p < checked_pairs_.size(); ++p) {
+    const auto [a, b] = checked_pairs_[p];
+    if (moved_above[a] != moved_above[b]) out.push_back(p);
+  }
   return out;
 }
 

@@ -27,11 +27,16 @@ struct CheckerOptions {
 };
 
 struct SelfCollisionRequest {
-  double tolerance = 0.0;        // DESIGN.md section 2
+  // DESIGN.md section 2. With `distance`, the reported minimum distance may also exceed the true
+  // one by up to this much (never fall below it): the search prunes what cannot gain more.
+  double tolerance = 0.0;
   bool all_pairs = false;        // false: stop at the first colliding pair
   std::size_t max_contacts = 0;  // contacts per colliding pair (0: none)
   bool distance = false;         // also the minimum distance over checked pairs
   bool solids = true;            // closed meshes bound solids
+  // Only these checked pairs (indices into CollisionChecker::checked_pairs(), e.g. from
+  // pairs_moved_by); null: all of them. Not owned: it must outlive the query.
+  const std::vector<std::size_t>* only_pairs = nullptr;
 };
 
 struct LinkContact {
@@ -136,6 +141,12 @@ class CollisionChecker {
   // neither.
   const std::vector<std::pair<int, int>>& checked_pairs() const { return checked_pairs_; }
   double link_padding(int link) const { return padding_[link]; }
+  // The checked pairs (indices into checked_pairs()) whose relative pose can change when the
+  // state variables `variables` change: a joint on the path between the two links is one of them,
+  // mimics one, or is floating or planar. Every other pair is rigid while only these variables
+  // move, so its answer cannot change: a planner moving one group checks those pairs once and
+  // then only these (SelfCollisionRequest::only_pairs). Throws std::out_of_range for a bad index.
+  std::vector<std::size_t> pairs_moved_by(const std::vector<int>& variables) const;
 
   // `state` holds model().variable_count() values (variable_names() order).
   SelfCollisionResult check_self(const double* state, const SelfCollisionRequest& request = {}) const;
@@ -205,8 +216,8 @@ class CollisionChecker {
 
   bool pair_collides(int a, int b, const std::vector<Transform>& poses, const SelfCollisionRequest& request,
                      SelfCollisionResult& result) const;
-  double pair_distance(int a, int b, const std::vector<Transform>& poses, double best, bool solids,
-                       SelfCollisionResult& result) const;
+  double pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
+                       const SelfCollisionRequest& request, SelfCollisionResult& result) const;
   // One shape's geometry, whoever owns it (a link here, an environment object elsewhere).
   struct ShapeRef {
     const Bvh<Obb>* mesh = nullptr;  // null: an analytic sphere
@@ -218,10 +229,11 @@ class CollisionChecker {
   }
   bool shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double padding,
                       const SelfCollisionRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) const;
+  // Below `best` (else `best` or more); with a tolerance, at most that much above the true distance.
   double shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double best,
-                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
+                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance = 0.0) const;
   double meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
-                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats) const;
+                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) const;
 
   // A sphere shape and a mesh shape with their poses, whichever order they came in.
   struct SphereAndMesh {
