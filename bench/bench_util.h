@@ -116,6 +116,13 @@ inline bool quick_mode(int argc, char** argv) {
   return false;
 }
 
+// A number in a note: three significant digits.
+inline std::string format(double x) {
+  std::ostringstream s;
+  s << std::setprecision(3) << x;
+  return s.str();
+}
+
 // The median of repeated runs of one measurement, with the spread (smallest and largest run).
 struct Spread {
   double median = 0.0, low = 0.0, high = 0.0;
