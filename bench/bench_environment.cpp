@@ -1,6 +1,9 @@
-// Environment benchmark: scan insertion against octomap::OcTree::insertPointCloud on the same
-// depth-camera view of a table scene (identical trees required), and the robot against that
-// octree against FCL's OcTree collision (same poses, same octree, boolean answers compared).
+// Environment benchmark, section 4 and part of 5 of the report (make bench): scan insertion
+// against octomap::OcTree::insertPointCloud (identical trees required); the robot against the
+// octree against FCL's OcTree collision (same voxels, same states, answers compared); how time
+// and memory grow with occupied voxels and resolution; the voxelisation error against a known
+// surface; what workspace bounds save; and the self filter.
+// Usage: bench_environment [OUTPUT_DIR] [--quick]
 #include <fcl/fcl.h>
 #include <octomap/OcTree.h>
 
@@ -31,9 +34,9 @@ struct SceneBox {
 // nearer than `best`: the robot, for the self-filter figures.
 using ExtraHit = std::function<double(const Vec3& origin, const Vec3& direction, double best)>;
 
-// A depth camera (600 x 500 rays, 70 x 58 degrees) above and behind a robot, looking at a table
+// A depth camera (600 x 500 rays unless told, 70 x 58 degrees) above and behind a robot, looking at a table
 // with boxes on it, a floor and a wall; 2 mm depth noise; rays that hit nothing return NaN.
-std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr) {
+std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr, int width = 600, int height = 500) {
   const std::vector<SceneBox> boxes = {
       {{0.3, -0.6, 0.30}, {1.0, 0.6, 0.35}},   // table top
       {{0.5, -0.2, 0.35}, {0.6, -0.1, 0.50}},  // a box
@@ -45,7 +48,6 @@ std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = n
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.002);
   std::vector<ScanPoint> points;
-  const int width = 600, height = 500;
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
       const double x = std::tan(0.61) * (2.0 * (u + 0.5) / width - 1.0), y = std::tan(0.51) * (2.0 * (v + 0.5) / height - 1.0);
@@ -86,141 +88,316 @@ LeafMap leaves_of(const octomap::OcTree& tree) {
   return m;
 }
 
-void insertion(const std::vector<ScanPoint>& scan, const Vec3& camera, double resolution, bench::FigureFile& figures) {
-  octomap::Pointcloud cloud;
-  for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
-  const octomap::point3d origin(camera.x(), camera.y(), camera.z());
-  std::vector<double> ours, ours_one_core, theirs;
-  bool same = true;
-  ScanOptions one_core;
-  one_core.threads = 1;
-  for (int r = 0; r < 5; ++r) {
-    Octree tree(resolution), single(resolution);
-    octomap::OcTree reference(resolution);
-    ours.push_back(bench::time_us([&] { insert_scan(tree, scan, camera.cast<float>()); }) * 1e-6);
-    ours_one_core.push_back(bench::time_us([&] { insert_scan(single, scan, camera.cast<float>(), one_core); }) * 1e-6);
-    theirs.push_back(bench::time_us([&] { reference.insertPointCloud(cloud, origin); }) * 1e-6);
-    if (r == 0) same = leaves_of(tree) == leaves_of(reference);
-  }
-  const double a = bench::median(ours), b = bench::median(theirs);
-  const double points = static_cast<double>(scan.size());
-  std::printf("| insert %.2f m | %.3f s (%.2f Mpt/s) | %.3f s (%.2f Mpt/s) | %.1fx | %s |\n", resolution, a,
-              points / a * 1e-6, b, points / b * 1e-6, b / a, same ? "identical" : "DIFFERENT");
-  const double c = bench::median(ours_one_core);
-  std::printf("| insert %.2f m, one core | %.3f s (%.2f Mpt/s) | %.3f s (%.2f Mpt/s) | %.1fx | |\n", resolution, c,
-              points / c * 1e-6, b, points / b * 1e-6, b / c);
-  const std::string name = "insert_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
-  figures.add(name + "_one_core", "s", c, b);
-  figures.add(name, "s", a, b);
-  figures.add(name + "_points_per_second", "1/s", points / a, points / b);
-  figures.add(name + "_identical_to_octomap", "bool", same ? 1.0 : 0.0);
-  if (!same) std::exit(1);
-}
 
-struct FclLinks {
+using bench::Spread;
+using bench::Table;
+
+struct Sizes {
+  std::size_t runs, states;
+  int width, height;  // the camera's rays
+  std::vector<double> resolutions;
+  std::vector<int> clutter;  // box counts for the growth curve
+};
+
+// The robot's links as FCL objects (OBBRSS models of the same meshes) and FCL's octree of the
+// same voxels, for robot-against-octree collision as FCL computes it.
+struct FclScene {
   std::vector<std::shared_ptr<fcl::CollisionObjectd>> objects;
   std::vector<int> link;
   std::vector<Transform> origin;
+  std::shared_ptr<octomap::OcTree> octree;
+  std::unique_ptr<fcl::CollisionObjectd> octree_object;
+
+  FclScene(const CollisionChecker& checker, const Octree& tree) : octree(std::make_shared<octomap::OcTree>(tree.resolution())) {
+    for (std::size_t l = 0; l < checker.model().links().size(); ++l) {
+      for (const CollisionElement& e : checker.model().links()[l].collision) {
+        objects.push_back(std::make_shared<fcl::CollisionObjectd>(test::fcl_model<fcl::OBBRSSd>(*e.mesh)));
+        link.push_back(static_cast<int>(l));
+        origin.push_back(e.origin);
+      }
+    }
+    to_octomap(tree, *octree);
+    octree_object = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::OcTreed>(octree));
+    octree_object->computeAABB();
+  }
+
+  bool collides(const RobotModel& model, const double* state) {
+    thread_local std::vector<Transform> poses;
+    forward_kinematics(model, state, poses);
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      objects[k]->setTransform(test::fcl_transform(poses[link[k]] * origin[k]));
+      objects[k]->computeAABB();
+      fcl::CollisionRequestd r;
+      fcl::CollisionResultd result;
+      if (fcl::collide(objects[k].get(), octree_object.get(), r, result) > 0) return true;
+    }
+    return false;
+  }
 };
 
-void environment_check(const std::vector<ScanPoint>& scan, const Vec3& camera, double resolution,
-                       bench::FigureFile& figures) {
-  const CollisionChecker checker = test::load_checker("panda");
-  Environment env(resolution);
-  insert_scan(env.octree(), scan, camera.cast<float>());
-  auto reference = std::make_shared<octomap::OcTree>(resolution);
-  to_octomap(env.octree(), *reference);
-  fcl::CollisionObjectd fcl_octree(std::make_shared<fcl::OcTreed>(reference));
-  fcl_octree.computeAABB();
-  FclLinks links;
-  for (std::size_t l = 0; l < checker.model().links().size(); ++l) {
-    for (const CollisionElement& e : checker.model().links()[l].collision) {
-      links.objects.push_back(std::make_shared<fcl::CollisionObjectd>(test::fcl_model<fcl::OBBRSSd>(*e.mesh)));
-      links.link.push_back(static_cast<int>(l));
-      links.origin.push_back(e.origin);
-    }
-  }
-  std::mt19937_64 rng(5);
-  const int n = 2000;
-  std::vector<std::vector<double>> states;
-  for (int i = 0; i < n; ++i) states.push_back(random_configuration(checker.model(), rng));
-  std::vector<double> ours_us(n), fcl_us(n), dist_us(n);
-  std::vector<Transform> poses;
-  EnvironmentRequest request;
-  request.objects = false;
-  request.solids = false;  // FCL's semantics
-  EnvironmentRequest distance = request;
-  distance.distance = true;
-  EnvironmentRequest solids = request;  // the default: occupied cubes inside closed links count
-  solids.solids = true;
-  std::vector<double> solids_us(n);
-  int disagree = 0, colliding = 0;
-  // Each kind of query in its own pass over the states, so that none runs on caches another warmed.
-  std::vector<char> ours(n, 0), theirs(n, 0);
-  for (int i = 0; i < n; ++i) {
-    ours_us[i] = bench::time_us([&] { ours[i] = checker.check_environment(states[i].data(), env, request).collision; });
-  }
-  for (int i = 0; i < n; ++i) {
-    fcl_us[i] = bench::time_us([&] {
-      forward_kinematics(checker.model(), states[i].data(), poses);
-      for (std::size_t k = 0; k < links.objects.size() && !theirs[i]; ++k) {
-        links.objects[k]->setTransform(test::fcl_transform(poses[links.link[k]] * links.origin[k]));
-        links.objects[k]->computeAABB();
-        fcl::CollisionRequestd r;
-        fcl::CollisionResultd result;
-        theirs[i] = fcl::collide(links.objects[k].get(), &fcl_octree, r, result) > 0;
-      }
-    });
-  }
-  for (int i = 0; i < n; ++i) solids_us[i] = bench::time_us([&] { checker.check_environment(states[i].data(), env, solids); });
-  for (int i = 0; i < n; ++i) dist_us[i] = bench::time_us([&] { checker.check_environment(states[i].data(), env, distance); });
-  for (int i = 0; i < n; ++i) {
-    disagree += ours[i] != theirs[i];
-    colliding += ours[i];
-  }
-  // FCL's distance on a subset (it takes 50 to 150 ms a state): the same minimum over links, free states.
-  std::vector<double> fcl_dist_us, our_dist_us;
-  double worst_gap = 0.0;
-  for (int i = 0; i < n && fcl_dist_us.size() < 40; i += 7) {
-    EnvironmentResult mine;
-    const double t = bench::time_us([&] { mine = checker.check_environment(states[i].data(), env, distance); });
-    if (mine.collision) continue;
-    double theirs = std::numeric_limits<double>::infinity();
-    fcl_dist_us.push_back(bench::time_us([&] {
-      forward_kinematics(checker.model(), states[i].data(), poses);
-      for (std::size_t k = 0; k < links.objects.size(); ++k) {
-        links.objects[k]->setTransform(test::fcl_transform(poses[links.link[k]] * links.origin[k]));
-        links.objects[k]->computeAABB();
-        fcl::DistanceRequestd r;
-        fcl::DistanceResultd result;
-        fcl::distance(links.objects[k].get(), &fcl_octree, r, result);
-        theirs = std::min(theirs, result.min_distance);
-      }
-    }));
-    our_dist_us.push_back(t);
-    worst_gap = std::max(worst_gap, std::abs(theirs - mine.min_distance));
-  }
-  const double a = bench::median(ours_us), b = bench::median(fcl_us);
-  std::printf("| panda vs octree %.2f m (%zu nodes) | %.1f us (mean %.1f) | %.1f us (mean %.1f) | %.1fx | %d of %d colliding, %d disagreements |\n",
-              resolution, env.octree().node_count(), a, bench::mean(ours_us), b, bench::mean(fcl_us), b / a, colliding, n,
-              disagree);
-  std::printf("| panda vs octree %.2f m, solids (the default) | %.1f us (mean %.1f) | | | |\n", resolution,
-              bench::median(solids_us), bench::mean(solids_us));
-  std::printf("| panda distance to octree %.2f m | %.1f us (mean %.1f) | | | |\n", resolution, bench::median(dist_us),
-              bench::mean(dist_us));
-  const double da = bench::median(our_dist_us), db = bench::median(fcl_dist_us);
-  std::printf("| panda distance to octree %.2f m, %zu free states | %.1f us | %.1f us | %.1fx | largest difference %.1e m |\n",
-              resolution, our_dist_us.size(), da, db, db / da, worst_gap);
-  const std::string name = "panda_octree_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
-  figures.add(name + "_boolean_median", "us", a, b);
-  figures.add(name + "_boolean_mean", "us", bench::mean(ours_us), bench::mean(fcl_us));
-  figures.add(name + "_solids_median", "us", bench::median(solids_us));
-  figures.add(name + "_distance_median", "us", bench::median(dist_us));
-  figures.add(name + "_distance_free_states_median", "us", da, db);
-  figures.add(name + "_distance_largest_difference", "m", worst_gap);
-  figures.add(name + "_disagreements", "states", disagree);
+std::vector<std::vector<double>> random_states(const RobotModel& m, std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<double>> out;
+  for (std::size_t i = 0; i < n; ++i) out.push_back(random_configuration(m, rng));
+  return out;
 }
 
+// Robot against the octree, ours (surfaces, FCL's semantics; and the default, solids; and
+// distance) and FCL's, microseconds per state as medians of runs; answers compared.
+struct CheckTimes {
+  Spread ours, fcl, solids, distance;
+  std::size_t colliding = 0, disagreements = 0;
+};
+
+CheckTimes time_checks(const CollisionChecker& checker, const Environment& env, const std::vector<std::vector<double>>& states,
+                       std::size_t runs) {
+  FclScene fcl_scene(checker, env.octree());
+  EnvironmentRequest surfaces;
+  surfaces.objects = false;
+  surfaces.solids = false;
+  EnvironmentRequest solids = surfaces, distance = surfaces;
+  solids.solids = true;
+  distance.distance = true;
+  const std::size_t n = states.size();
+  std::vector<char> ours(n), theirs(n);
+  std::vector<double> t_ours, t_fcl, t_solids, t_distance;
+  for (std::size_t r = 0; r < runs; ++r) {
+    t_ours.push_back(bench::us_per_item(n, [&] {
+      for (std::size_t i = 0; i < n; ++i) ours[i] = checker.check_environment(states[i].data(), env, surfaces).collision;
+    }));
+    t_fcl.push_back(bench::us_per_item(n, [&] {
+      for (std::size_t i = 0; i < n; ++i) theirs[i] = fcl_scene.collides(checker.model(), states[i].data());
+    }));
+    t_solids.push_back(bench::us_per_item(n, [&] {
+      for (std::size_t i = 0; i < n; ++i) checker.check_environment(states[i].data(), env, solids);
+    }));
+    t_distance.push_back(bench::us_per_item(n, [&] {
+      for (std::size_t i = 0; i < n; ++i) checker.check_environment(states[i].data(), env, distance);
+    }));
+  }
+  CheckTimes out{bench::spread(t_ours), bench::spread(t_fcl), bench::spread(t_solids), bench::spread(t_distance)};
+  for (std::size_t i = 0; i < n; ++i) {
+    out.colliding += ours[i];
+    out.disagreements += ours[i] != theirs[i];
+  }
+  return out;
+}
+
+std::size_t occupied_voxels(const Octree& tree) {
+  std::size_t n = 0;
+  for (const Octree::Leaf& l : tree.leaves()) n += tree.occupied(l.log_odds);
+  return n;
+}
+
+// Every k-th point of the scan (a smaller cloud from the same camera).
+std::vector<ScanPoint> every(const std::vector<ScanPoint>& scan, std::size_t k) {
+  std::vector<ScanPoint> out;
+  for (std::size_t i = 0; i < scan.size(); i += k) out.push_back(scan[i]);
+  return out;
+}
+
+void insertion_table(const std::vector<ScanPoint>& scan, const Vec3& camera, const Sizes& sizes, const std::string& dir) {
+  Table table("env_insert", "Scan insertion against octomap::OcTree::insertPointCloud",
+              {"resolution m", "points", "ours s", "ours min", "ours max", "OctoMap s", "OctoMap min", "OctoMap max",
+               "ours Mpoints/s", "OctoMap Mpoints/s", "OctoMap / ours", "ours one core s", "identical trees"});
+  const octomap::point3d origin(camera.x(), camera.y(), camera.z());
+  ScanOptions one_core;
+  one_core.threads = 1;
+  for (const double res : sizes.resolutions) {
+    for (const std::size_t k : {9, 3, 1}) {
+      const std::vector<ScanPoint> cloud = every(scan, k);
+      octomap::Pointcloud reference_cloud;
+      for (const ScanPoint& p : cloud) reference_cloud.push_back(p.x(), p.y(), p.z());
+      std::vector<double> ours, theirs, single;
+      bool same = true;
+      for (std::size_t r = 0; r < sizes.runs; ++r) {
+        Octree tree(res), tree1(res);
+        octomap::OcTree reference(res);
+        ours.push_back(1e-6 * bench::time_us([&] { insert_scan(tree, cloud, camera.cast<float>()); }));
+        single.push_back(1e-6 * bench::time_us([&] { insert_scan(tree1, cloud, camera.cast<float>(), one_core); }));
+        theirs.push_back(1e-6 * bench::time_us([&] { reference.insertPointCloud(reference_cloud, origin); }));
+        if (r == 0) same = leaves_of(tree) == leaves_of(reference);
+      }
+      const Spread a = bench::spread(ours), b = bench::spread(theirs);
+      const double points = static_cast<double>(cloud.size());
+      table.row({res, points, a.median, a.low, a.high, b.median, b.low, b.high, 1e-6 * points / a.median,
+                 1e-6 * points / b.median, b.median / a.median, bench::median(single), same ? "yes" : "NO"});
+    }
+  }
+  table.note("A depth camera's view of a table scene (every 9th, 3rd and every point); ours on every core unless said; "
+             "medians of " + std::to_string(sizes.runs) + " runs. 'identical trees': every leaf, depth and log-odds value "
+             "equal to OctoMap's.");
+  table.write(dir);
+}
+
+void resolution_table(const std::vector<ScanPoint>& scan, const Vec3& camera, const CollisionChecker& checker,
+                      const std::vector<std::vector<double>>& states, const Sizes& sizes, const std::string& dir) {
+  Table table("env_resolution", "Robot against the octree, by resolution (table scene, panda)",
+              {"resolution m", "occupied voxels", "octree nodes", "memory KiB", "OctoMap memory KiB", "ours us/state",
+               "min", "max", "FCL us/state", "min", "max", "FCL / ours", "ours solids us/state", "ours distance us/state",
+               "colliding states", "disagreements with FCL"});
+  std::vector<double> resolutions = sizes.resolutions;
+  resolutions.insert(resolutions.begin(), resolutions.front() / 2);
+  resolutions.push_back(resolutions.back() * 2);
+  for (const double res : resolutions) {
+    Environment env(res);
+    insert_scan(env.octree(), scan, camera.cast<float>());
+    octomap::OcTree reference(res);
+    to_octomap(env.octree(), reference);
+    const CheckTimes t = time_checks(checker, env, states, sizes.runs);
+    table.row({res, static_cast<double>(occupied_voxels(env.octree())), static_cast<double>(env.octree().node_count()),
+               env.octree().memory_bytes() / 1024.0, reference.memoryUsage() / 1024.0, t.ours.median, t.ours.low,
+               t.ours.high, t.fcl.median, t.fcl.low, t.fcl.high, t.fcl.median / t.ours.median, t.solids.median,
+               t.distance.median, static_cast<double>(t.colliding), static_cast<double>(t.disagreements)});
+  }
+  table.note(std::to_string(states.size()) + " uniform random panda states; boolean checks as surfaces (FCL's semantics) "
+             "unless 'solids' (the default: occupied cubes inside closed links count); medians of " +
+             std::to_string(sizes.runs) + " runs.");
+  table.write(dir);
+}
+
+// Random boxes (5 to 20 cm) in front of the robot, their surfaces sampled at a quarter voxel.
+std::vector<ScanPoint> clutter(int boxes, double resolution, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<ScanPoint> points;
+  const double step = resolution / 4;
+  for (int b = 0; b < boxes; ++b) {
+    const Vec3 lo(-1.0 + 2.0 * u(rng), -1.0 + 2.0 * u(rng), 1.2 * u(rng));
+    const Vec3 size = Vec3::Constant(0.05) + 0.15 * Vec3(u(rng), u(rng), u(rng));
+    for (int axis = 0; axis < 3; ++axis) {
+      const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+      for (double s = 0; s <= size[i]; s += step) {
+        for (double t = 0; t <= size[j]; t += step) {
+          for (const double side : {0.0, size[axis]}) {
+            Vec3 p = lo;
+            p[axis] += side, p[i] += s, p[j] += t;
+            points.push_back(p.cast<float>());
+          }
+        }
+      }
+    }
+  }
+  return points;
+}
+
+void clutter_table(const CollisionChecker& checker, const std::vector<std::vector<double>>& states, const Sizes& sizes,
+                   const std::string& dir) {
+  Table table("env_clutter", "Growth with the number of occupied voxels (random boxes around panda, 2 cm)",
+              {"boxes", "occupied voxels", "octree nodes", "memory KiB", "OctoMap memory KiB", "ours us/state", "min", "max",
+               "FCL us/state", "min", "max", "FCL / ours", "ours distance us/state", "colliding states",
+               "disagreements with FCL"});
+  const double res = 0.02;
+  for (const int boxes : sizes.clutter) {
+    std::mt19937_64 rng(3);
+    Environment env(res);
+    insert_points(env.octree(), clutter(boxes, res, rng));
+    octomap::OcTree reference(res);
+    to_octomap(env.octree(), reference);
+    const CheckTimes t = time_checks(checker, env, states, sizes.runs);
+    table.row({static_cast<double>(boxes), static_cast<double>(occupied_voxels(env.octree())),
+               static_cast<double>(env.octree().node_count()), env.octree().memory_bytes() / 1024.0,
+               reference.memoryUsage() / 1024.0, t.ours.median, t.ours.low, t.ours.high, t.fcl.median, t.fcl.low,
+               t.fcl.high, t.fcl.median / t.ours.median, t.distance.median, static_cast<double>(t.colliding),
+               static_cast<double>(t.disagreements)});
+  }
+  table.note("Boxes of 5 to 20 cm placed at random within 1 m of the base, their surfaces inserted as end points; "
+             "the same " + std::to_string(states.size()) + " random states at every count; medians of " +
+             std::to_string(sizes.runs) + " runs.");
+  table.write(dir);
+}
+
+// Fibonacci-spiral points on a sphere, at most `spacing` apart.
+std::vector<ScanPoint> sphere_surface(const Vec3& centre, double radius, double spacing) {
+  const int n = static_cast<int>(4 * M_PI * radius * radius / (spacing * spacing)) + 1;
+  std::vector<ScanPoint> points;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1.0 - z * z);
+    points.push_back((centre + radius * Vec3(r * std::cos(golden * i), r * std::sin(golden * i), z)).cast<float>());
+  }
+  return points;
+}
+
+// The voxelisation error: a sphere known exactly (a collision object) against its surface
+// inserted into the octree; distances from panda's links to both, over states near it.
+void voxel_error_table(const CollisionChecker& checker, const Sizes& sizes, const std::string& dir) {
+  Table table("env_voxel_error", "Voxelisation error: distance to an octree of a sphere's surface against the sphere",
+              {"resolution m", "voxel diagonal mm", "largest error mm", "mean error mm", "smallest error mm",
+               "false collisions", "missed collisions", "ours us/state (octree distance)"});
+  const Vec3 centre(0.45, 0.0, 0.45);
+  const double radius = 0.15;
+  Environment exact(0.1);
+  exact.add_object("sphere", ObjectShape::sphere(radius), Transform::Translation(centre));
+  EnvironmentRequest to_object, to_octree;
+  to_object.distance = to_octree.distance = true;
+  to_object.octree = false;
+  to_octree.objects = false;
+  // States whose true distance is within 20 cm (near it, where the error matters).
+  std::mt19937_64 rng(17);
+  std::vector<std::vector<double>> states;
+  std::vector<double> truth;
+  while (states.size() < sizes.states / 4) {
+    const auto s = random_configuration(checker.model(), rng);
+    const EnvironmentResult r = checker.check_environment(s.data(), exact, to_object);
+    if (r.min_distance <= 0.2) states.push_back(s), truth.push_back(r.min_distance);
+  }
+  for (const double res : sizes.resolutions) {
+    Environment env(res);
+    insert_points(env.octree(), sphere_surface(centre, radius, res / 4));
+    std::vector<double> errors, times;
+    std::size_t false_hits = 0, missed = 0;
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      EnvironmentResult r;
+      times.push_back(bench::time_us([&] { r = checker.check_environment(states[i].data(), env, to_octree); }));
+      errors.push_back(truth[i] - r.min_distance);
+      false_hits += r.collision && truth[i] > 0;
+      missed += !r.collision && truth[i] <= 0;
+    }
+    table.row({res, 1000 * std::sqrt(3.0) * res, 1000 * *std::max_element(errors.begin(), errors.end()),
+               1000 * bench::mean(errors), 1000 * *std::min_element(errors.begin(), errors.end()),
+               static_cast<double>(false_hits), static_cast<double>(missed), bench::median(times)});
+  }
+  table.note("A 15 cm sphere 45 cm in front of panda: its surface sampled at a quarter voxel and inserted; " +
+             std::to_string(states.size()) + " random states within 20 cm of the true sphere. Error = true distance - "
+             "distance to the occupied voxels: the voxels hold the surface, so the octree can only be nearer (error >= 0), "
+             "by at most a voxel's diagonal. A false collision is a state that meets a voxel but not the sphere.");
+  table.write(dir);
+}
+
+// "Model only what the scene needs": obstacles beyond the robot's reach are not inserted.
+void workspace_table(const std::vector<ScanPoint>& scan, const Vec3& camera, const CollisionChecker& checker,
+                     const std::vector<std::vector<double>>& states, const Sizes& sizes, const std::string& dir) {
+  Table table("env_workspace", "Workspace bounds (the node's default: reach + 0.5 m around the base), table scene, 2 cm",
+              {"setting", "points inserted", "insert s", "min", "max", "octree nodes", "memory KiB", "us/state (solids)",
+               "saved per scan s", "saved per query us", "colliding states"});
+  const float half = static_cast<float>(checker.reach() + 0.5);
+  ScanOptions bounded;
+  bounded.workspace = ScanWorkspace{ScanPoint::Constant(-half), ScanPoint::Constant(half)};
+  double base_insert = 0, base_query = 0;
+  for (const bool use : {false, true}) {
+    const ScanOptions options = use ? bounded : ScanOptions{};
+    std::vector<double> insert_s;
+    Environment env(0.02);
+    ScanStats stats;
+    for (std::size_t r = 0; r < sizes.runs; ++r) {
+      Octree tree(0.02);
+      insert_s.push_back(1e-6 * bench::time_us([&] { stats = insert_scan(tree, scan, camera.cast<float>(), options); }));
+      env.octree() = std::move(tree);
+    }
+    const CheckTimes t = time_checks(checker, env, states, sizes.runs);
+    const Spread in = bench::spread(insert_s);
+    if (!use) base_insert = in.median, base_query = t.solids.median;
+    const double na = std::numeric_limits<double>::quiet_NaN();
+    table.row({use ? "workspace box" : "no bounds", static_cast<double>(stats.points - stats.skipped_workspace - stats.skipped_invalid),
+               in.median, in.low, in.high, static_cast<double>(env.octree().node_count()), env.octree().memory_bytes() / 1024.0,
+               t.solids.median, use ? base_insert - in.median : na, use ? base_query - t.solids.median : na,
+               static_cast<double>(t.colliding)});
+  }
+  table.note("The box is the node's default workspace (panda's reach " + bench::format(checker.reach()) +
+             " m + 0.5 m); the floor and wall beyond it are dropped. Colliding states must be equal: nothing the robot "
+             "can reach is lost.");
+  table.write(dir);
+}
 // Occupied leaves that meet the robot (centre within half the cube's diagonal of a link).
 int voxels_on_robot(const Octree& tree, const std::vector<Bvh<Obb>>& meshes, const std::vector<Transform>& poses) {
   int n = 0;
@@ -242,7 +419,7 @@ int voxels_on_robot(const Octree& tree, const std::vector<Bvh<Obb>>& meshes, con
 // the robot, and the filter keeps its points and shadows out of the octree. Timed: the filter
 // alone, and filter plus insertion against inserting the raw scan; counted: points removed,
 // voxels left on the robot, and whether the robot collides with the octree it built.
-void self_filter(const Vec3& camera, double resolution, double padding, bench::FigureFile& figures) {
+void self_filter(const Vec3& camera, double resolution, double padding, const Sizes& sizes, const std::string& dir) {
   const CollisionChecker checker = test::load_checker("panda");
   std::vector<double> state(checker.model().variable_count(), 0.0);
   const std::map<std::string, double> reach_over_table = {
@@ -260,18 +437,21 @@ void self_filter(const Vec3& camera, double resolution, double padding, bench::F
       poses.push_back(link_poses[l] * e.origin);
     }
   }
-  const auto scan = table_scene(camera, [&](const Vec3& origin, const Vec3& direction, double best) {
-    for (std::size_t m = 0; m < meshes.size(); ++m) {
-      const RayHit hit = raycast(meshes[m], poses[m], origin, direction, std::min(best, 10.0));
-      if (hit.hit) best = std::min(best, hit.distance);
-    }
-    return best;
-  });
+  const auto scan = table_scene(
+      camera,
+      [&](const Vec3& origin, const Vec3& direction, double best) {
+        for (std::size_t m = 0; m < meshes.size(); ++m) {
+          const RayHit hit = raycast(meshes[m], poses[m], origin, direction, std::min(best, 10.0));
+          if (hit.hit) best = std::min(best, hit.distance);
+        }
+        return best;
+      },
+      sizes.width, sizes.height);
   const ScanPoint sensor = camera.cast<float>();
   std::vector<double> filter_s, filtered_insert_s, raw_insert_s;
   FilteredScan filtered;
   Octree raw(resolution), clean(resolution);
-  for (int r = 0; r < 5; ++r) {
+  for (std::size_t r = 0; r < sizes.runs; ++r) {
     raw = Octree(resolution);
     clean = Octree(resolution);
     filter_s.push_back(bench::time_us([&] { filtered = checker.filter_scan(state.data(), scan, sensor, padding); }) * 1e-6);
@@ -290,21 +470,18 @@ void self_filter(const Vec3& camera, double resolution, double padding, bench::F
   const auto clean_hit = checker.check_environment(state.data(), clean_env, all);
   const double f = bench::median(filter_s), fi = bench::median(filtered_insert_s), ri = bench::median(raw_insert_s);
   const double points = static_cast<double>(scan.size());
-  std::printf("| self filter %.2f m, padding %.2f m (%zu on robot, %zu shadowed) | %.3f s (%.2f Mpt/s) | | | |\n",
-              resolution, padding, filtered.on_robot, filtered.shadowed, f, points / f * 1e-6);
-  std::printf("| filter + insert %.2f m | %.3f s | %.3f s (raw insert) | %.2fx | occupied voxels on the robot: %d raw, %d filtered |\n",
-              resolution, fi, ri, ri / fi, raw_on, clean_on);
-  std::printf("| panda against the octree it built | %zu links collide (filtered) | %zu links collide (raw) | | |\n",
-              clean_hit.contacts.size(), raw_hit.contacts.size());
-  const std::string name = "self_filter_" + std::to_string(static_cast<int>(std::lround(resolution * 100))) + "cm";
-  figures.add(name, "s", f);
-  figures.add(name + "_points_per_second", "1/s", points / f);
-  figures.add(name + "_with_insert", "s", fi, ri);
-  figures.add(name + "_points_on_robot", "points", static_cast<double>(filtered.on_robot));
-  figures.add(name + "_points_shadowed", "points", static_cast<double>(filtered.shadowed));
-  figures.add(name + "_voxels_on_robot", "voxels", clean_on, raw_on);
-  figures.add(name + "_links_colliding", "links", static_cast<double>(clean_hit.contacts.size()),
-              static_cast<double>(raw_hit.contacts.size()));
+  Table table("env_self_filter", "Self filter: panda reaching over the table, seen by the camera",
+              {"step", "s", "Mpoints/s", "points on the robot", "points shadowed", "occupied voxels on the robot",
+               "links colliding with the octree"});
+  table.row({"raw insertion (no filter)", ri, points / ri * 1e-6, 0.0, 0.0, static_cast<double>(raw_on),
+             static_cast<double>(raw_hit.contacts.size())});
+  table.row({"self filter alone", f, points / f * 1e-6, static_cast<double>(filtered.on_robot),
+             static_cast<double>(filtered.shadowed), std::nan(""), std::nan("")});
+  table.row({"self filter + insertion", fi, points / fi * 1e-6, static_cast<double>(filtered.on_robot),
+             static_cast<double>(filtered.shadowed), static_cast<double>(clean_on), static_cast<double>(clean_hit.contacts.size())});
+  table.note("Resolution " + bench::format(resolution) + " m, padding " + bench::format(padding) + " m; medians of " +
+             std::to_string(sizes.runs) + " runs.");
+  table.write(dir);
 }
 
 }  // namespace
@@ -312,16 +489,20 @@ void self_filter(const Vec3& camera, double resolution, double padding, bench::F
 
 int main(int argc, char** argv) {
   using namespace bvh_collision;
-  std::printf("# Environment: %s\n\n", bench::machine_description().c_str());
+  const bool quick = bench::quick_mode(argc, argv);
+  const Sizes sizes = quick ? Sizes{1, 40, 120, 100, {0.05, 0.1}, {4, 16}}
+                            : Sizes{5, 1000, 600, 500, {0.02, 0.05, 0.1}, {4, 16, 64, 256, 1024}};
+  const std::string dir = bench::output_dir(argc, argv);
+  std::printf("# Environment: %s\n", bench::machine_description().c_str());
   const Vec3 camera(-0.4, 0.0, 1.4);
-  const std::vector<ScanPoint> scan = table_scene(camera);
-  std::printf("Table scene: %zu points from a depth camera at (%.1f, %.1f, %.1f); medians of 5 runs.\n\n", scan.size(),
-              camera.x(), camera.y(), camera.z());
-  std::printf("| query | ours | baseline (OctoMap / FCL) | speed-up | agreement |\n|---|---|---|---|---|\n");
-  bench::FigureFile figures("environment");
-  for (const double res : {0.02, 0.05}) insertion(scan, camera, res, figures);
-  for (const double res : {0.02, 0.05}) environment_check(scan, camera, res, figures);
-  self_filter(camera, 0.02, 0.04, figures);  // padding above the voxel diagonal: no cube reaches a link
-  figures.write(bench::output_dir(argc, argv));
+  const std::vector<ScanPoint> scan = table_scene(camera, nullptr, sizes.width, sizes.height);
+  const CollisionChecker checker = test::load_checker("panda");
+  const auto states = random_states(checker.model(), sizes.states, 5);
+  insertion_table(scan, camera, sizes, dir);
+  resolution_table(scan, camera, checker, states, sizes, dir);
+  clutter_table(checker, states, sizes, dir);
+  voxel_error_table(checker, sizes, dir);
+  workspace_table(scan, camera, checker, states, sizes, dir);
+  self_filter(camera, 0.02, 0.04, sizes, dir);  // padding above the voxel diagonal: no cube reaches a link
   return 0;
 }
