@@ -5,7 +5,7 @@
 #                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
 #                CI=true: both
 #   make demo    start the node on the demo robot and report what it does
-#   make bench   build and run the benchmarks (Release); tables on stdout and in build/bench/
+#   make bench   build and run the benchmarks (Release); build/bench/report.md with its plots
 SHELL := /bin/bash
 # catkin needs Debian's own python3 (with catkin_pkg) ahead of any other interpreter.
 export PATH := /usr/bin:$(PATH)
@@ -42,12 +42,14 @@ demo: deps build
 
 bench: deps build
 	$(MAKE) -C $(BUILD) -j$(JOBS) benchmarks
-	@mkdir -p $(BUILD)/bench
-	@for b in devel/lib/bvh_collision/bench_*; do \
-	  [[ $$b == */bench_node ]] && continue; \
-	  echo "== $$b"; $$b $(BUILD)/bench | tee $(BUILD)/bench/$$(basename $$b).md || exit 1; \
+	@rm -rf $(BUILD)/bench && mkdir -p $(BUILD)/bench
+	@for b in self_collision mesh_pair environment stability; do \
+	  echo "== bench_$$b"; \
+	  devel/lib/bvh_collision/bench_$$b $(BUILD)/bench | tee $(BUILD)/bench/bench_$$b.md; \
+	  [[ $${PIPESTATUS[0]} == 0 ]] || exit 1; \
 	done
 	@echo "== bench_node (the node's services)"; bash scripts/bench_node.sh $(BUILD)/bench
+	@python3 scripts/bench_report.py $(BUILD)/bench
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel

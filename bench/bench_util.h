@@ -1,6 +1,5 @@
-// Shared benchmark plumbing: per-query timing, medians, the machine description, the JSON
-// figure files (build/bench/<name>.json: a list of {name, unit, ours, baseline, ratio}) and the
-// report's tables (build/bench/tables/<id>.json, rendered by scripts/bench_report.py).
+// Shared benchmark plumbing: per-query timing, medians and spreads, the machine description, and
+// the report's tables (build/bench/tables/<id>.json, rendered by scripts/bench_report.py).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -64,45 +63,6 @@ inline std::string machine_description() {
   out << model << ", " << std::thread::hardware_concurrency() << " cores, g++ " << __VERSION__;
   return out.str();
 }
-
-struct Figure {
-  std::string name, unit;
-  double ours = 0.0;
-  std::optional<double> baseline;
-};
-
-// Collects the figures a benchmark prints and writes them as JSON for run-to-run tracking.
-class FigureFile {
- public:
-  explicit FigureFile(std::string name) : name_(std::move(name)) {}
-  void add(const std::string& name, const std::string& unit, double ours, std::optional<double> baseline = {}) {
-    figures_.push_back({name, unit, ours, baseline});
-  }
-  // ratio = baseline / ours (for times: how many times faster we are).
-  void write(const std::string& dir) const {
-    std::filesystem::create_directories(dir);
-    std::ofstream out(dir + "/" + name_ + ".json");
-    out << "[\n" << std::setprecision(6);
-    for (std::size_t i = 0; i < figures_.size(); ++i) {
-      const Figure& f = figures_[i];
-      out << "  {\"name\": \"" << f.name << "\", \"unit\": \"" << f.unit << "\", \"ours\": " << number(f.ours);
-      if (f.baseline) out << ", \"baseline\": " << number(*f.baseline) << ", \"ratio\": " << number(*f.baseline / f.ours);
-      out << "}" << (i + 1 < figures_.size() ? "," : "") << "\n";
-    }
-    out << "]\n";
-  }
-
- private:
-  // JSON has no infinity or NaN (a ratio against 0 voxels, say): those are written as null.
-  static std::string number(double x) {
-    if (!std::isfinite(x)) return "null";
-    std::ostringstream s;
-    s << std::setprecision(6) << x;
-    return s.str();
-  }
-  std::string name_;
-  std::vector<Figure> figures_;
-};
 
 inline std::string output_dir(int argc, char** argv) {
   return argc > 1 ? std::string(argv[1]) : std::string("build/bench");

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The service benchmark (make bench): starts the node on panda (from ../shared/robots, or
 # $BVH_COLLISION_ROBOTS) on a private ROS master, runs bench_node against it, and writes
-# <dir>/bench_node.md and <dir>/bench_node.json.
+# <dir>/bench_node.md and <dir>/tables/service.json. BENCH_QUICK=true: fewer calls (make test).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="/usr/bin:$PATH"
@@ -23,4 +23,5 @@ roslaunch --port "$port" bvh_collision collision_checker.launch \
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null; wait $launch_pid 2>/dev/null || true' EXIT
 devel/lib/bvh_collision/bench_node _urdf_file:="$robots/panda/robot.urdf" _output_dir:="$out" \
+  _quick:="${BENCH_QUICK:-false}" \
   | tee "$out/bench_node.md"

@@ -1,0 +1,131 @@
+// The report generator on small inputs, so that `make bench`'s report cannot silently rot: every
+// benchmark with --quick, the service benchmark on a private master, then scripts/bench_report.py.
+// The report must have its seven sections and every plot it links; and the generator must refuse
+// figures that break DESIGN.md section 2 (a false negative, a distance beyond its allowed error).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string report_command(const fs::path& dir) {
+  return "PATH=/usr/bin:$PATH python3 " + test::source_dir() + "/scripts/bench_report.py " + dir.string() + " --quick";
+}
+
+class BenchReport : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("bvh_collision_report_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY}) {
+      const std::string log = (dir_ / (fs::path(bench).filename().string() + ".md")).string();
+      statuses_.push_back(run(std::string(bench) + " " + dir_.string() + " --quick > " + log + " 2>&1"));
+    }
+    statuses_.push_back(run("BENCH_QUICK=true bash " + test::source_dir() + "/scripts/bench_node.sh " + dir_.string() +
+                            " > " + (dir_ / "bench_node.log").string() + " 2>&1"));
+    report_status_ = run(report_command(dir_) + " > " + (dir_ / "report.log").string() + " 2>&1");
+  }
+  static void TearDownTestSuite() {
+    if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
+  }
+  static fs::path dir_;
+  static std::vector<int> statuses_;
+  static int report_status_;
+};
+
+fs::path BenchReport::dir_;
+std::vector<int> BenchReport::statuses_;
+int BenchReport::report_status_ = -1;
+
+TEST_F(BenchReport, EveryBenchmarkRunsOnSmallInputs) {
+  BVH_REQUIRE_ROBOTS();
+  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "node"};
+  ASSERT_EQ(statuses_.size(), 5u);
+  for (std::size_t i = 0; i < statuses_.size(); ++i) EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
+}
+
+TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
+  BVH_REQUIRE_ROBOTS();
+  ASSERT_EQ(report_status_, 0) << read(dir_ / "report.log");
+  const std::string report = read(dir_ / "report.md");
+  EXPECT_NE(report.find("Measured "), std::string::npos);
+  EXPECT_LT(report.find(" cores, g++ "), report.find("## 1.")) << "the machine's description is on top";
+  for (const char* section : {"## 1. Self-collision", "## 2. Distance", "## 3. Volume types", "## 4. Environment",
+                              "## 5. Model only what the scene needs", "## 6. Service", "## 7. Numerical stability"}) {
+    EXPECT_NE(report.find(section), std::string::npos) << section;
+  }
+  for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) {
+    EXPECT_NE(report.find(std::string("**") + robot + ": boolean self-collision against tolerance**"), std::string::npos)
+        << robot;
+  }
+  EXPECT_EQ(report.find("nan"), std::string::npos) << "a figure that is not a number";
+  const std::regex link(R"(\]\((plots/[a-z_]+\.png)\))");
+  int plots = 0;
+  for (auto it = std::sregex_iterator(report.begin(), report.end(), link); it != std::sregex_iterator(); ++it, ++plots) {
+    const fs::path png = dir_ / (*it)[1].str();
+    ASSERT_TRUE(fs::exists(png)) << png;
+    EXPECT_GT(fs::file_size(png), 10000u) << png;
+    EXPECT_EQ(read(png).substr(1, 3), "PNG") << png;
+  }
+  EXPECT_EQ(plots, 6);
+}
+
+// A copy of the run's tables with one figure changed: the generator must refuse it.
+void expect_refused(const fs::path& dir, const std::string& table, const std::string& column, double value,
+                    const std::string& reason) {
+  const fs::path copy = dir.string() + "_" + table;
+  fs::remove_all(copy);
+  fs::create_directories(copy);
+  fs::copy(dir / "tables", copy / "tables");
+  const fs::path file = copy / "tables" / (table + ".json");
+  nlohmann::json t = nlohmann::json::parse(read(file));
+  const auto& columns = t["columns"];
+  const auto at = std::find(columns.begin(), columns.end(), column) - columns.begin();
+  ASSERT_LT(at, static_cast<long>(columns.size())) << column;
+  t["rows"][1][at] = value;
+  std::ofstream(file) << t.dump();
+  const fs::path log = copy / "report.log";
+  EXPECT_NE(run(report_command(copy) + " > " + log.string() + " 2>&1"), 0) << table << " " << column;
+  EXPECT_NE(read(log).find(reason), std::string::npos) << read(log);
+  EXPECT_FALSE(fs::exists(copy / "report.md"));
+  fs::remove_all(copy);
+}
+
+TEST_F(BenchReport, GeneratorRefusesFiguresThatBreakTheSemantics) {
+  BVH_REQUIRE_ROBOTS();
+  ASSERT_EQ(report_status_, 0);
+  expect_refused(dir_, "self_tolerance_ur5e", "false negatives", 1, "false negatives");
+  expect_refused(dir_, "self_distance_pr2", "ours beyond the bound", 2, "allowed error");
+  expect_refused(dir_, "stability_scale", "ours wrong answers", 1, "scale sweep");
+}
+
+}  // namespace
+}  // namespace bvh_collision
