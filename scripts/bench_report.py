@@ -67,6 +67,9 @@ def fmt(x):
     if x == 0:
         return "0"
     a = abs(x)
+    if x == int(x) and a < 1e7:  # counts
+        return f"{int(x):,}"
+
     if a >= 1e5 or a < 1e-3:
         return f"{x:.3g}"
     if a >= 1000:
@@ -223,8 +226,9 @@ def plot_environment(tables, plots_dir):
     for ax, t, x_name, title in [(axes[0][1], clu, "occupied voxels", "Growth with occupied voxels (2 cm)"),
                                  (axes[1][0], res, "resolution m", "Growth with resolution (table scene)")]:
         x = column(t, x_name)
-        ax.plot(x, column(t, "ours us/state"), marker="o", label="ours check us/state")
-        ax.plot(x, column(t, "FCL us/state"), "k--", marker="x", label="FCL check us/state")
+        per = "us/free state" if "ours us/free state" in t["columns"] else "us/state"
+        ax.plot(x, column(t, f"ours {per}"), marker="o", label=f"ours check {per}")
+        ax.plot(x, column(t, f"FCL {per}"), "k--", marker="x", label=f"FCL check {per}")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(x_name)
@@ -348,16 +352,28 @@ def bv_choice(t):
             f"- Least memory: {smallest[0]} / {smallest[1]} ({fmt(smallest[mem])} KiB for these meshes).",
             f"- The node uses {NODE_DEFAULT[0]} / {NODE_DEFAULT[1]} with two triangles per leaf: "
             f"{fmt(default[col])} us collision, {fmt(default[dist])} us distance in this run, "
-            f"{fmt(default[col] / best_col[col])}x and {fmt(default[dist] / best_dist[dist])}x the fastest."]
+            f"{default[col] / best_col[col]:.2f}x and {default[dist] / best_dist[dist]:.2f}x the fastest."]
     if tuple(best_col[:2]) == NODE_DEFAULT and tuple(best_dist[:2]) == NODE_DEFAULT:
         text.append("- These figures confirm the default: it is the fastest for both queries.")
     else:
         text.append("- This run ranks another combination first for at least one query (see the table); the default "
                     "is kept where it is within noise (10-20 % on this machine) of the fastest for both queries "
                     "together.")
-    text.append("- Which for what: OBB or RSS (SAH) for robot links, where queries are near contact; AABB builds "
-                "fastest and suits meshes that are rebuilt often; spheres and k-DOPs test many more volumes here "
-                "(Nv, Np) and are slower for both queries on these meshes.")
+    build = c.index("build ms")
+    # Among the combinations whose queries stay within 4x of the fastest: a quick build is no use otherwise.
+    fastest_build = min((r for r in rows if r[col] <= 4 * best_col[col]), key=lambda r: r[build])
+    fcl_build = min(r[build] for r in t["rows"] if r[0].startswith("FCL"))
+    runner_up = min((r for r in rows if r is not best_col), key=lambda r: r[col])
+    nv = c.index("Nv collision")
+    text.append(f"- Which for what: {best_col[0]} / {best_col[1]} for robot links and objects, queried near contact "
+                f"again and again; {runner_up[0]} / {runner_up[1]} is next ({fmt(runner_up[col])} us). "
+                f"{fastest_build[0]} / {fastest_build[1]} builds fastest ({fmt(fastest_build[build])} ms against "
+                f"{fmt(default[build])} ms for the default, {fmt(fastest_build[col])} us a collision query): for meshes "
+                f"rebuilt often. Spheres and k-DOPs test "
+                f"{fmt(min(r[nv] for r in rows if r[0] in ('sphere', '14-DOP', '18-DOP', '26-DOP')) / default[nv])}x or more "
+                f"the volumes of the default here (Nv) and are slower for both queries.")
+    text.append(f"- Building costs more than FCL's ({fmt(default[build])} ms against {fmt(fcl_build)} ms for these "
+                "meshes: hulls, closedness and triangle planes are prepared too); it happens once, at start-up.")
     return "\n".join(text)
 
 
