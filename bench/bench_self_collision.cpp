@@ -100,6 +100,8 @@ void build_pipeline(const RobotModel& m, const AllowedCollisionMatrix& acm, FclP
       std::shared_ptr<fcl::CollisionGeometryd> g;
       if (e.shape == CollisionElement::Shape::kSphere) {
         g = std::make_shared<fcl::Sphered>(e.radius);
+      } else if (e.shape == CollisionElement::Shape::kCylinder) {
+        g = std::make_shared<fcl::Cylinderd>(e.radius, e.length);  // exact on both sides
       } else if (auto it = shared.find(e.mesh.get()); it != shared.end()) {
         g = it->second;
       } else {

@@ -244,7 +244,10 @@ TEST(Environment, ObjectsAddMoveRemoveAndBadInput) {
   env.add_object("can", ObjectShape::cylinder(0.04, 0.12), Transform::Translation(Vec3(0.4, -0.2, 0.5)));
   env.add_object("blob", ObjectShape::triangles(test::bumpy_sphere(rng(), 0.05, 6, 8, 0.1)), Transform::Identity());
   EXPECT_EQ(env.objects().size(), 4u);
-  EXPECT_TRUE(env.find_object("can")->mesh->closed());
+  // Cylinders stay exact primitives (no prism); boxes are exact as triangles.
+  EXPECT_EQ(env.find_object("can")->mesh, nullptr);
+  EXPECT_EQ(env.find_object("can")->primitive.kind, Primitive::Kind::kCylinder);
+  EXPECT_TRUE(env.find_object("table")->mesh->closed());
   EXPECT_TRUE(env.move_object("ball", Transform::Translation(Vec3(0, 0, 2))));
   EXPECT_EQ(env.find_object("ball")->pose.t.z(), 2.0);
   EXPECT_FALSE(env.move_object("nothing", Transform::Identity()));
@@ -284,8 +287,15 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
   env.add_object("post", ObjectShape::cylinder(0.05, 1.0), Transform::Translation(Vec3(0.0, 0.5, 0.5)));
   env.add_object("ball", ObjectShape::sphere(0.1), Transform::Translation(Vec3(0.5, -0.3, 0.6)));
   const Exploded boxes = explode(env.octree());
-  const Bvh<Obb> post = Bvh<Obb>::build(cylinder_mesh(0.05, 1.0, kObjectCylinderMaxError));
-  int colliding = 0, free = 0;
+  // The post is an exact cylinder: prisms inside it and around it (1e-6 m apart) bound it, and a
+  // link that meets the inner one or misses the outer one has a known answer.
+  TriangleMesh outer_mesh = cylinder_mesh(0.05, 1.0, 1e-6), inner_mesh = outer_mesh;
+  for (Vec3& v : inner_mesh.vertices) {
+    const double r = std::hypot(v.x(), v.y());
+    if (r > 0) v.head<2>() *= 0.05 / r;  // the polygon's corners on the circle: inscribed
+  }
+  const Bvh<Obb> post_outer = Bvh<Obb>::build(outer_mesh), post_inner = Bvh<Obb>::build(inner_mesh);
+  int colliding = 0, free = 0, undecided = 0;
   for (int i = 0; i < 60; ++i) {
     const std::vector<double> state = random_configuration(checker.model(), rng());
     std::vector<Transform> poses;
@@ -299,7 +309,9 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
         const Transform pose = poses[l] * e.origin;
         CollisionRequest r;
         r.padding = padding;
-        bool hit = collide(link, pose, post, env.find_object("post")->pose, r).collision;
+        const Transform post_pose = env.find_object("post")->pose;
+        bool hit = collide(link, pose, post_inner, post_pose, r).collision;
+        if (!hit && collide(link, pose, post_outer, post_pose, r).collision) ++undecided;
         hit = hit || point_distance(link, pose, Vec3(0.5, -0.3, 0.6)).distance <= 0.1 + padding ||
               contains_point(link, pose.inverse() * Vec3(0.5, -0.3, 0.6));
         for (std::size_t b = 0; b < boxes.boxes.size() && !hit; ++b) {
@@ -320,6 +332,7 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
   }
   EXPECT_GT(colliding, 5);
   EXPECT_GT(free, 5);
+  EXPECT_EQ(undecided, 0) << "a link passed within 1e-6 m of the post's surface: the prisms cannot tell";
 }
 
 }  // namespace

@@ -217,16 +217,12 @@ TEST(RobotModel, ProjectUrdfEdgeCases) {
   ASSERT_EQ(m.links()[m.link_index("a")].collision.size(), 3u);
   EXPECT_EQ(m.links()[m.link_index("b")].collision[0].mesh->triangles.size(), 12u);
   EXPECT_EQ(m.mesh_files_read(), 2u) << "box.stl is read once for links a and c";
-  // The cylinder prism contains the true cylinder and stays within the documented error.
+  // The cylinder stays the exact shape: no polygon stands in for it.
   const CollisionElement& cyl = m.links()[m.link_index("a")].collision[2];
-  for (const Vec3& v : cyl.mesh->vertices) {
-    const double r = std::hypot(v.x(), v.y());
-    if (r > 0) {
-      EXPECT_GE(r, 0.1);
-      EXPECT_LE(r, 0.1 + kCylinderMaxError + 1e-12);
-    }
-  }
-  EXPECT_TRUE(is_closed(*cyl.mesh));
+  EXPECT_EQ(cyl.shape, CollisionElement::Shape::kCylinder);
+  EXPECT_EQ(cyl.mesh, nullptr);
+  EXPECT_EQ(cyl.radius, 0.1);
+  EXPECT_EQ(cyl.length, 0.5);
 }
 
 TEST(RobotModel, NegativeScaleMirrorsAndKeepsOutwardWinding) {

@@ -25,8 +25,11 @@ std::mt19937_64& rng() {
 // The robot's collision geometry in the scan frame, element by element, for the oracle.
 struct WorldElement {
   int link = -1;
-  std::vector<Triangle> triangles;  // empty for a sphere
+  std::vector<Triangle> triangles;  // empty for a sphere or a cylinder
   bool closed = false;
+  bool cylinder = false;            // radius `cylinder_radius`, length 2 `half_length` along z of `pose`
+  double cylinder_radius = 0.0, half_length = 0.0;
+  Transform pose;
   Vec3 centre = Vec3::Zero();  // bounding ball (the sphere itself for a sphere)
   double radius = 0.0;
 };
@@ -43,6 +46,13 @@ std::vector<WorldElement> world_elements(const RobotModel& model, const std::vec
       if (e.shape == CollisionElement::Shape::kSphere) {
         w.centre = pose.t;
         w.radius = e.radius;
+      } else if (e.shape == CollisionElement::Shape::kCylinder) {
+        w.cylinder = true;
+        w.cylinder_radius = e.radius;
+        w.half_length = 0.5 * e.length;
+        w.pose = pose;
+        w.centre = pose.t;
+        w.radius = std::hypot(e.radius, 0.5 * e.length);
       } else {
         w.closed = is_closed(*e.mesh);
         for (const auto& f : e.mesh->triangles) {
@@ -64,8 +74,18 @@ double segment_ball_distance(const Vec3& a, const Vec3& b, const Vec3& c) {
   return (closest_point_on_segment(c, a, b) - c).norm();
 }
 
+// A solid cylinder is a disc times an interval: the distance is the hypotenuse of how far p is
+// outside each.
+double cylinder_distance(const WorldElement& e, const Vec3& p) {
+  const Vec3 q = e.pose.inverse() * p;
+  const double radial = std::max(0.0, std::hypot(q.x(), q.y()) - e.cylinder_radius);
+  const double axial = std::max(0.0, std::abs(q.z()) - e.half_length);
+  return std::hypot(radial, axial);
+}
+
 // Brute force: the distance from p to the element (0 inside a closed one, by ray parity).
 double element_distance(const WorldElement& e, const Vec3& p) {
+  if (e.cylinder) return cylinder_distance(e, p);
   if (e.triangles.empty()) return std::max(0.0, (p - e.centre).norm() - e.radius);
   double d = std::numeric_limits<double>::infinity();
   for (const Triangle& t : e.triangles) d = std::min(d, (closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm());
@@ -76,8 +96,24 @@ double element_distance(const WorldElement& e, const Vec3& p) {
   return crossings % 2 ? 0.0 : d;
 }
 
+// The distance to a convex set along a segment is convex in the segment parameter: a ternary
+// search finds its minimum (a ray grazing the cylinder within 1e-10 m counts as meeting it).
+bool segment_meets_cylinder(const WorldElement& e, const Vec3& a, const Vec3& b) {
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 200; ++i) {
+    const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+    if (cylinder_distance(e, a + m1 * (b - a)) <= cylinder_distance(e, a + m2 * (b - a))) {
+      hi = m2;
+    } else {
+      lo = m1;
+    }
+  }
+  return cylinder_distance(e, a + 0.5 * (lo + hi) * (b - a)) <= 1e-10;
+}
+
 bool segment_meets_element(const WorldElement& e, const Vec3& a, const Vec3& b) {
   if (segment_ball_distance(a, b, e.centre) > e.radius) return false;
+  if (e.cylinder) return segment_meets_cylinder(e, a, b);
   if (e.triangles.empty()) return true;
   for (const Triangle& t : e.triangles) {
     if (segment_intersects_triangle(a, b, t[0], t[1], t[2])) return true;
@@ -158,6 +194,27 @@ std::vector<ScanPoint> camera_scan(const std::vector<WorldElement>& elements, co
       if (dir.x() < 0) t = std::min(t, (-0.7 - sensor.x()) / dir.x());
       for (const WorldElement& e : elements) {
         if (segment_ball_distance(sensor, sensor + dir * 5.0, e.centre) > e.radius) continue;
+        if (e.cylinder) {
+          // The ray's nearest point to the cylinder (ternary search: the distance is convex along
+          // the ray); when that point is inside, the entry is bisected between it and the sensor.
+          double a = 0.0, b = 5.0;
+          for (int k = 0; k < 200; ++k) {
+            const double m1 = a + (b - a) / 3, m2 = b - (b - a) / 3;
+            if (cylinder_distance(e, sensor + dir * m1) <= cylinder_distance(e, sensor + dir * m2)) {
+              b = m2;
+            } else {
+              a = m1;
+            }
+          }
+          double lo = 0.0, hi = 0.5 * (a + b);
+          if (cylinder_distance(e, sensor + dir * hi) == 0.0 && cylinder_distance(e, sensor) > 0.0) {
+            for (int i = 0; i < 100; ++i) {
+              const double mid = 0.5 * (lo + hi);
+              (cylinder_distance(e, sensor + dir * mid) > 0.0 ? lo : hi) = mid;
+            }
+            t = std::min(t, hi);
+          }
+        }
         for (const Triangle& tri : e.triangles) {
           if (!segment_intersects_triangle(sensor, sensor + dir * t, tri[0], tri[1], tri[2])) continue;
           // The hit's distance along the ray: the triangle's plane.
@@ -209,7 +266,7 @@ FilteredScan expect_filter_matches_oracle(const CollisionChecker& checker, const
   return got;
 }
 
-// panda's meshes; panda_capsules' spheres (the analytic path) and cylinder prisms.
+// panda's meshes; panda_capsules' spheres and cylinders (exact primitives).
 TEST(SelfFilter, AgainstBruteForce) {
   BVH_REQUIRE_ROBOTS();
   struct Case {

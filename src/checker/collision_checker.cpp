@@ -41,8 +41,9 @@ std::pair<Vec3, double> bounding_sphere(const ShapeList& shapes, const MeshList&
   Aabb box;
   for (const auto& s : shapes) {
     if (s.mesh < 0) {
-      box.extend(s.origin.t - Vec3::Constant(s.radius));
-      box.extend(s.origin.t + Vec3::Constant(s.radius));
+      const double r = bounding_radius(s.primitive);
+      box.extend(s.origin.t - Vec3::Constant(r));
+      box.extend(s.origin.t + Vec3::Constant(r));
       continue;
     }
     for (const Triangle& t : meshes[s.mesh].triangles()) {
@@ -53,7 +54,7 @@ std::pair<Vec3, double> bounding_sphere(const ShapeList& shapes, const MeshList&
   double r = 0.0;
   for (const auto& s : shapes) {
     if (s.mesh < 0) {
-      r = std::max(r, (s.origin.t - c).norm() + s.radius);
+      r = std::max(r, (s.origin.t - c).norm() + bounding_radius(s.primitive));
       continue;
     }
     for (const Triangle& t : meshes[s.mesh].triangles()) {
@@ -96,7 +97,9 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
       Shape s;
       s.origin = e.origin;
       if (e.shape == CollisionElement::Shape::kSphere) {
-        s.radius = e.radius;
+        s.primitive = Primitive::sphere(e.radius);
+      } else if (e.shape == CollisionElement::Shape::kCylinder) {
+        s.primitive = Primitive::cylinder(e.radius, e.length);
       } else {
         auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
         if (fresh) {
@@ -115,164 +118,20 @@ CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm,
   compute_motion_rates();
 }
 
-bool CollisionChecker::shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,
-                                      double padding, const SelfCollisionRequest& request,
-                                      std::vector<MeshContact>* contacts, QueryStats& stats) const {
-  if (sa.mesh && sb.mesh) {
-    CollisionRequest r;
-    r.padding = padding;
-    r.tolerance = request.tolerance;
-    r.max_contacts = contacts ? request.max_contacts : 0;
-    r.solids = request.solids;
-    CollisionResult c = collide(*sa.mesh, pa, *sb.mesh, pb, r);
-    stats += c.stats;
-    if (contacts) contacts->insert(contacts->end(), c.contacts.begin(), c.contacts.end());
-    return c.collision;
-  }
-  if (!sa.mesh && !sb.mesh) {
-    const Vec3 d = pa.t - pb.t;
-    const bool hit = d.norm() <= sa.radius + sb.radius + padding;
-    if (hit && contacts && request.max_contacts > 0) {
-      const Vec3 normal = d.norm() > 0 ? Vec3(d.normalized()) : Vec3(Vec3::UnitZ());
-      contacts->push_back({pb.t + normal * sb.radius, normal, std::max(0.0, sa.radius + sb.radius - d.norm()), -1, -1});
-    }
-    return hit;
-  }
-  // A sphere against a mesh: the mesh's closest point to the centre, or the centre inside it.
-  const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
-  const bool a_is_sphere = sm.sphere_first;
-  const ShapeRef& sphere = sm.sphere;
-  const ShapeRef& mesh = sm.mesh;
-  const Transform& ps = sm.sphere_pose;
-  const Transform& pm = sm.mesh_pose;
-  const double reach = sphere.radius + padding;
-  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, reach * (1 + 1e-12) + 1e-15);
-  stats += d.stats;
-  bool hit = d.distance <= reach;
-  if (!hit && request.solids) hit = contains_point(*mesh.mesh, pm.inverse() * ps.t, &stats);
-  if (hit && contacts && request.max_contacts > 0) {
-    MeshContact c;
-    c.position = std::isfinite(d.distance) ? d.point_b : ps.t;
-    const Vec3 away = ps.t - c.position;  // from the mesh towards the sphere centre
-    const Vec3 n = away.norm() > 0 ? Vec3(away.normalized()) : Vec3(Vec3::UnitZ());
-    c.normal = a_is_sphere ? n : Vec3(-n);
-    c.depth = std::isfinite(d.distance) ? std::max(0.0, sphere.radius - d.distance) : sphere.radius;
-    contacts->push_back(c);
-  }
-  return hit;
-}
-
-double CollisionChecker::shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb,
-                                         double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats,
-                                         double tolerance) const {
-  if (sa.mesh && sb.mesh) return meshes_distance(sa, pa, sb, pb, best, solids, wa, wb, stats, tolerance);
-  if (!sa.mesh && !sb.mesh) {
-    const Vec3 dir = (pb.t - pa.t).norm() > 0 ? Vec3((pb.t - pa.t).normalized()) : Vec3(Vec3::UnitZ());
-    const double d = std::max(0.0, (pb.t - pa.t).norm() - sa.radius - sb.radius);
-    wa = pa.t + dir * sa.radius;
-    wb = pb.t - dir * sb.radius;
-    if (d == 0.0) {  // overlapping: the middle of the centre line's stretch inside both
-      const double gap = (pb.t - pa.t).norm();
-      const double lo = std::max(-sa.radius, gap - sb.radius), hi = std::min(sa.radius, gap + sb.radius);
-      wa = wb = pa.t + dir * (0.5 * (lo + hi));
-    }
-    return d;
-  }
-  const SphereAndMesh sm = sphere_and_mesh(sa, pa, sb, pb);
-  const bool a_is_sphere = sm.sphere_first;
-  const ShapeRef& sphere = sm.sphere;
-  const ShapeRef& mesh = sm.mesh;
-  const Transform& ps = sm.sphere_pose;
-  const Transform& pm = sm.mesh_pose;
-  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, best + sphere.radius);
-  stats += d.stats;
-  double dist = std::max(0.0, d.distance - sphere.radius);
-  Vec3 on_mesh = d.point_b, on_sphere = ps.t;
-  if (std::isfinite(d.distance) && d.distance > 0) on_sphere = ps.t + (d.point_b - ps.t) * (sphere.radius / d.distance);
-  if (dist == 0.0) on_sphere = on_mesh;  // the mesh point is inside the sphere: common to both
-  if (solids && contains_point(*mesh.mesh, pm.inverse() * ps.t, &stats)) {
-    dist = 0.0;
-    on_mesh = on_sphere = ps.t;
-  }
-  wa = a_is_sphere ? on_sphere : on_mesh;
-  wb = a_is_sphere ? on_mesh : on_sphere;
-  return dist;
-}
-
-// The distance between two link meshes, settled by their convex hulls when it can be: the hulls'
-// distance is a certified lower bound on the meshes' (each mesh lies in its hull), and when the
-// hulls' closest points lie on the meshes' surfaces, the meshes are no further apart than those
-// points, so the two agree and no BVH traversal is needed. Robot links are mostly convex where
-// they face each other, so this settles most pairs; the rest take the exact BVH query.
-double CollisionChecker::meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
-                                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) const {
-  const Transform b_in_a = relative_transform(pa, pb);
-  const ConvexDistance hull = convex_distance(*ma.hull, *mb.hull, b_in_a);
-  // Cannot improve on `best` (by more than the tolerance: then `best` stands).
-  if (hull.lower_bound >= best - tolerance) return std::max(hull.lower_bound, best);
-  // Surface points near the hulls' witnesses: their distance bounds the meshes' from above.
-  double upper = best;
-  Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
-  if (hull.lower_bound > 0.0) {
-    // Disjoint hulls: neither solid holds the other, so surface and solid distances agree.
-    auto nearest_on_mesh = [&](const ShapeRef& mesh, const Transform& pose, const Vec3& p, int vertex) {
-      if (vertex >= 0) return p;  // hull vertices are mesh vertices
-      const DistanceResult d = point_distance(*mesh.mesh, pose, p);
-      stats += d.stats;
-      return d.point_b;
-    };
-    const Vec3 qa = nearest_on_mesh(ma, Transform::Identity(), hull.on_a, hull.vertex_a);
-    const Vec3 qb = nearest_on_mesh(mb, b_in_a, hull.on_b, hull.vertex_b);
-    const double apart = (qa - qb).norm();
-    const double scale = ma.hull->extent + mb.hull->extent + b_in_a.t.norm();
-    // Certified: the hulls' distance is the meshes' (or within the tolerance above it).
-    if (apart - hull.lower_bound <= std::max(1e-10 * scale, tolerance)) {
-      wa = pa * qa;
-      wb = pa * qb;
-      return apart;
-    }
-    if (apart < upper) upper = apart, upper_a = pa * qa, upper_b = pa * qb;
-  }
-  if (hull.intersecting) {
-    // Overlapping hulls often mean touching meshes: a depth-first collision query finds a
-    // contact far sooner than the distance query, whose bounds are all 0 there.
-    CollisionRequest touch;
-    touch.max_contacts = 1;
-    touch.solids = solids;
-    const CollisionResult c = collide(*ma.mesh, pa, *mb.mesh, pb, touch);
-    stats += c.stats;
-    if (c.collision) {
-      wa = wb = c.contacts.empty() ? pa.t : c.contacts.front().position;
-      return 0.0;
-    }
-  }
-  // The exact query, only for what beats `upper`: a close upper bound prunes most of it.
-  DistanceRequest request;
-  request.solids = solids;
-  request.upper_bound = upper;
-  request.tolerance = tolerance;
-  const DistanceResult d = distance(*ma.mesh, pa, *mb.mesh, pb, request);
-  stats += d.stats;
-  if (d.distance < upper || upper >= best) {
-    wa = d.point_a;
-    wb = d.point_b;
-    return d.distance;
-  }
-  wa = upper_a;
-  wb = upper_b;
-  return upper;
-}
-
 bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,
                                      const SelfCollisionRequest& request, SelfCollisionResult& result) const {
-  const double padding = padding_[a] + padding_[b];
+  detail::PairRequest pair;
+  pair.padding = padding_[a] + padding_[b];
+  pair.tolerance = request.tolerance;
+  pair.max_contacts = request.max_contacts;
+  pair.solids = request.solids;
   bool hit = false;
   std::vector<MeshContact> contacts;
   for (const Shape& sa : shapes_[a]) {
     for (const Shape& sb : shapes_[b]) {
       const bool want_contacts = request.max_contacts > 0 && contacts.size() < request.max_contacts;
-      if (shapes_collide(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, padding, request,
-                         want_contacts ? &contacts : nullptr, result.stats)) {
+      if (detail::shapes_collide(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, pair,
+                                 want_contacts ? &contacts : nullptr, result.stats)) {
         hit = true;
         if (request.max_contacts == 0) return true;
       }
@@ -289,7 +148,7 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
     for (const Shape& sb : shapes_[b]) {
       Vec3 wa, wb;
       const double d =
-          shapes_distance(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
+          detail::shapes_distance(ref(sa), poses[a] * sa.origin, ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
                           result.stats, request.tolerance);
       if (d < best) {
         best = d;

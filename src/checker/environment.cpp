@@ -22,11 +22,6 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
         throw std::invalid_argument(what + "box sizes must be positive and finite");
       }
       return box_mesh(shape.size);
-    case ObjectShape::Kind::kCylinder:
-      if (!(positive(shape.radius) && positive(shape.length))) {
-        throw std::invalid_argument(what + "cylinder radius and length must be positive and finite");
-      }
-      return cylinder_mesh(shape.radius, shape.length, kObjectCylinderMaxError);
     case ObjectShape::Kind::kMesh: {
       if (!shape.mesh || shape.mesh->empty()) throw std::invalid_argument(what + "the mesh has no triangles");
       for (const Vec3& v : shape.mesh->vertices) {
@@ -41,7 +36,8 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
       }
       return *shape.mesh;
     }
-    case ObjectShape::Kind::kSphere: break;
+    case ObjectShape::Kind::kSphere:
+    case ObjectShape::Kind::kCylinder: break;
   }
   return {};
 }
@@ -49,10 +45,19 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
 CollisionObject make_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
   if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
   require_rigid(pose, id);
-  CollisionObject o{id, shape, pose, nullptr, nullptr, Vec3::Zero(), 0.0};
+  CollisionObject o{id, shape, pose, nullptr, nullptr, Primitive{}, Vec3::Zero(), 0.0};
   if (shape.kind == ObjectShape::Kind::kSphere) {
     if (!positive(shape.radius)) throw std::invalid_argument("object '" + id + "': sphere radius must be positive and finite");
-    o.bound_radius = shape.radius;
+    o.primitive = Primitive::sphere(shape.radius);
+  }
+  if (shape.kind == ObjectShape::Kind::kCylinder) {
+    if (!(positive(shape.radius) && positive(shape.length))) {
+      throw std::invalid_argument("object '" + id + "': cylinder radius and length must be positive and finite");
+    }
+    o.primitive = Primitive::cylinder(shape.radius, shape.length);
+  }
+  if (shape.kind == ObjectShape::Kind::kSphere || shape.kind == ObjectShape::Kind::kCylinder) {
+    o.bound_radius = bounding_radius(o.primitive);
     return o;
   }
   const TriangleMesh mesh = object_mesh(shape, id);

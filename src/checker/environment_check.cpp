@@ -19,7 +19,9 @@ bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const 
     bool hit = false;
     if (s.mesh >= 0) {
       hit = mesh_meets_octree(meshes_[s.mesh], p, tree, padding, request.tolerance, request.solids, &contact, &result.stats);
-    } else if (const auto cubes = tree.occupied_in_sphere(p.t, s.radius + padding, true); !cubes.empty()) {
+    } else if (s.primitive.kind != Primitive::Kind::kSphere) {
+      hit = primitive_meets_octree(s.primitive, p, tree, padding, &contact, &result.stats);
+    } else if (const auto cubes = tree.occupied_in_sphere(p.t, s.primitive.radius + padding, true); !cubes.empty()) {
       hit = true;
       const Vec3 lo = tree.cube_min(cubes.front().key), hi = lo + Vec3::Constant(tree.cube_size(cubes.front().depth));
       contact = {cubes.front(), p.t.cwiseMax(lo).cwiseMin(hi)};
@@ -37,14 +39,15 @@ bool CollisionChecker::link_meets_object(int link, const Transform& pose, const 
   const double padding = padding_[link];
   const double reach = bounds_[link].radius + object.bound_radius + padding + request.tolerance;
   if ((pose * bounds_[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
-  const ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.shape.radius};
-  SelfCollisionRequest r;
+  const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
+  detail::PairRequest r;
+  r.padding = padding;
   r.tolerance = request.tolerance;
   r.max_contacts = 1;
   r.solids = request.solids;
   for (const Shape& s : shapes_[link]) {
     std::vector<MeshContact> contacts;
-    if (shapes_collide(ref(s), pose * s.origin, obstacle, object.pose, padding, r, &contacts, result.stats)) {
+    if (detail::shapes_collide(ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
       EnvironmentContact c{link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position};
       result.contacts.push_back(c);
       return true;
@@ -60,12 +63,15 @@ double CollisionChecker::link_octree_distance(int link, const Transform& pose, c
     OctreeDistance d;
     if (s.mesh >= 0) {
       d = mesh_octree_distance(meshes_[s.mesh], p, tree, solids, best, &result.stats);
+    } else if (s.primitive.kind != Primitive::Kind::kSphere) {
+      d = primitive_octree_distance(s.primitive, p, tree, best, &result.stats);
     } else {
-      d = point_octree_distance(p.t, tree, best + s.radius);
+      const double radius = s.primitive.radius;
+      d = point_octree_distance(p.t, tree, best + radius);
       if (std::isfinite(d.distance)) {
         // The sphere's surface point towards the cube; inside the sphere the cube point itself.
-        const double gap = d.distance - s.radius;
-        d.on_link = gap > 0 ? Vec3(p.t + (d.on_cube - p.t) * (s.radius / d.distance)) : d.on_cube;
+        const double gap = d.distance - radius;
+        d.on_link = gap > 0 ? Vec3(p.t + (d.on_cube - p.t) * (radius / d.distance)) : d.on_cube;
         d.distance = std::max(0.0, gap);
       }
     }
@@ -84,10 +90,10 @@ double CollisionChecker::link_octree_distance(int link, const Transform& pose, c
 
 double CollisionChecker::link_object_distance(int link, const Transform& pose, const CollisionObject& object,
                                               double best, bool solids, EnvironmentResult& result) const {
-  const ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.shape.radius};
+  const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
   for (const Shape& s : shapes_[link]) {
     Vec3 wa, wb;
-    const double d = shapes_distance(ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
+    const double d = detail::shapes_distance(ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
     if (d < best) {
       best = d;
       result.min_distance = best;

@@ -4,6 +4,7 @@
 #include <array>
 
 #include "bvh_collision/bvh/traversal_stack.h"
+#include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
 
@@ -449,6 +450,102 @@ OctreeDistance point_octree_distance(const Vec3& p, const Octree& tree, double u
       const double d = (p - p.cwiseMax(frame.lo(child)).cwiseMin(frame.hi(child))).norm();
       if (d < bound) children.emplace_back(d, child);
     });
+    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    stack.insert(stack.end(), children.begin(), children.end());
+  }
+  return best;
+}
+
+namespace {
+
+// A primitive as the octree descent sees it: its box in world axes, and the cube against it.
+struct PrimitiveInWorld {
+  const Primitive& primitive;
+  const Transform& pose;
+  NodeInWorld box;
+  PrimitiveInWorld(const Primitive& p, const Transform& pose_) : primitive(p), pose(pose_) {
+    box.centre = pose.t;
+    box.axes = pose.R;
+    box.half = half_extents(p);
+    box.reach = pose.R.cwiseAbs() * box.half;
+    box.axis_spread = pose.R.cwiseAbs().colwise().sum().transpose();
+  }
+  // The cube (centre c, half side h, world) against the primitive, in the primitive's frame.
+  ConvexDistance against(const Vec3& c, double h, double decide_at) const {
+    const Transform cube_in_primitive{pose.R.transpose(), pose.R.transpose() * (c - pose.t)};
+    return convex_distance(ConvexShape::of(primitive), ConvexShape::of(Primitive::box(Vec3::Constant(2 * h))),
+                           cube_in_primitive, decide_at);
+  }
+};
+
+}  // namespace
+
+bool primitive_meets_octree(const Primitive& primitive, const Transform& pose, const Octree& tree, double padding,
+                            OctreeContact* contact, QueryStats* stats) {
+  const PrimitiveInWorld shape(primitive, pose);
+  const double margin = padding + 1e-9 * (1.0 + pose.t.cwiseAbs().maxCoeff());
+  const Vec3 lo = pose.t - shape.box.reach - Vec3::Constant(margin), hi = pose.t + shape.box.reach + Vec3::Constant(margin);
+  const auto start = start_cube(tree, lo, hi);
+  if (!start) return false;
+  const CubeFrame frame{tree, pose.inverse()};
+  const KeyRange range(tree.grid(), lo, hi);
+  const double slack = padding + rounding_slack(lo, hi, frame.lo(*start), frame.hi(*start));
+  TraversalStack<Cube> stack;
+  stack.push(*start);
+  while (!stack.empty()) {
+    const Cube c = stack.pop();
+    const double half = 0.5 * tree.cube_size(c.depth);
+    const Vec3 centre = frame.lo(c) + Vec3::Constant(half);
+    if (stats) ++stats->volume_tests;
+    if (!node_meets_cube(shape.box, centre, half, slack)) continue;
+    if (!tree.is_leaf(c.node)) {
+      frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
+      continue;
+    }
+    if (stats) ++stats->primitive_tests;
+    const ConvexDistance d = shape.against(centre, half, padding);
+    if (d.lower_bound > padding) continue;
+    if (contact) *contact = {frame.leaf(c), pose * (0.5 * (d.on_a + d.on_b))};
+    return true;
+  }
+  return false;
+}
+
+OctreeDistance primitive_octree_distance(const Primitive& primitive, const Transform& pose, const Octree& tree,
+                                         double upper_bound, QueryStats* stats) {
+  OctreeDistance best;
+  const auto root = root_cube(tree);
+  if (!root) return best;
+  const PrimitiveInWorld shape(primitive, pose);
+  const CubeFrame frame{tree, pose.inverse()};
+  const Vec3 half = half_extents(primitive);
+  const Obb own{Mat3::Identity(), Vec3::Zero(), half, half.norm()};
+  const RelativeFrame same = RelativeFrame::from(Transform::Identity());
+  double bound = upper_bound;
+  std::vector<std::pair<double, Cube>> stack{{0.0, *root}}, children;
+  while (!stack.empty()) {
+    const auto [lower, c] = stack.back();
+    stack.pop_back();
+    if (lower >= bound) continue;
+    if (tree.is_leaf(c.node)) {
+      if (stats) ++stats->primitive_tests;
+      const double h = 0.5 * tree.cube_size(c.depth);
+      const ConvexDistance d = shape.against(frame.lo(c) + Vec3::Constant(h), h, std::numeric_limits<double>::quiet_NaN());
+      const double dist = d.intersecting ? 0.0 : d.distance;
+      if (dist < bound) {
+        bound = dist;
+        const Vec3 on_link = pose * d.on_a, on_cube = d.intersecting ? on_link : Vec3(pose * d.on_b);
+        best = {dist, on_link, on_cube, frame.leaf(c)};
+      }
+      continue;
+    }
+    children.clear();
+    frame.for_children(c, [&](const Cube& child) {
+      if (stats) ++stats->volume_tests;
+      const double d = distance_lower_bound(own, frame.box(child), same);
+      if (d < bound) children.emplace_back(d, child);
+    });
+    // Nearest on top, so that a small bound comes early and prunes the rest.
     std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     stack.insert(stack.end(), children.begin(), children.end());
   }

@@ -9,7 +9,10 @@ namespace {
 
 // Where the ray first meets an object, or infinity.
 double ray_meets_object(const CollisionObject& object, const Vec3& origin, const Vec3& unit, double length) {
-  if (!object.mesh) return ray_ball_entry(origin, unit, length, object.pose.t, object.shape.radius);
+  if (!object.mesh) {
+    const Mat3 Rt = object.pose.R.transpose();
+    return ray_entry(object.primitive, Rt * (origin - object.pose.t), Rt * unit, length);
+  }
   const RayHit hit = raycast(*object.mesh, object.pose, origin, unit, length);
   return hit.hit ? hit.distance : std::numeric_limits<double>::infinity();
 }

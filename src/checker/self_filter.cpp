@@ -56,7 +56,8 @@ bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3
   for (const Shape& s : shapes_[link]) {
     const Transform sp = pose * s.origin;
     if (s.mesh < 0) {
-      if ((p - sp.t).norm() <= s.radius + padding) return true;
+      const Vec3 local = sp.R.transpose() * (p - sp.t);
+      if ((closest_point(s.primitive, local) - local).norm() <= padding) return true;
       continue;
     }
     const Bvh<Obb>& mesh = meshes_[s.mesh];
@@ -72,7 +73,8 @@ double CollisionChecker::ray_meets_link(int link, const Transform& pose, const V
   for (const Shape& s : shapes_[link]) {
     const Transform sp = pose * s.origin;
     if (s.mesh < 0) {
-      first = std::min(first, ray_ball_entry(origin, unit, length, sp.t, s.radius));
+      const Mat3 Rt = sp.R.transpose();
+      first = std::min(first, ray_entry(s.primitive, Rt * (origin - sp.t), Rt * unit, length));
       continue;
     }
     const RayHit hit = raycast(meshes_[s.mesh], sp, origin, unit, std::min(first, length));

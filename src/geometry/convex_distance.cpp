@@ -1,8 +1,11 @@
-// GJK distance between two convex vertex sets (see convex_hull.h).
+// GJK distance between convex sets: vertex sets (convex_hull.h) and primitives, triangles and
+// hulls (convex_distance.h).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/convex_distance.h"
+#include "bvh_collision/geometry/distance.h"
 
 namespace bvh_collision {
 namespace {
@@ -93,62 +96,81 @@ bool closest_on_tetrahedron(Simplex& s) {
   return true;
 }
 
-}  // namespace
 
-ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a) {
-  ConvexDistance out;
-  if (a.empty() || b.empty()) {
-    out.lower_bound = out.distance = std::numeric_limits<double>::infinity();
-    return out;
-  }
-  const Mat3 Rt = b_in_a.R.transpose();
-  auto support_a = [&](const Vec3& d) {
-    int best = 0;
-    double best_dot = -std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < a.vertices.size(); ++i) {
-      if (const double x = d.dot(a.vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
-    }
-    return best;
-  };
-  auto support_b = [&](const Vec3& d) {
-    const Vec3 local = Rt * d;
-    int best = 0;
-    double best_dot = -std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < b.vertices.size(); ++i) {
-      if (const double x = local.dot(b.vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
-    }
-    return best;
-  };
-  auto b_point = [&](int i) -> Vec3 { return b_in_a * b.vertices[i]; };
-  const double scale = a.extent + b.extent + b_in_a.t.norm();
+// A support point: the point, and its vertex index when the set is a vertex list (-1 otherwise).
+struct SupportPoint {
+  Vec3 p;
+  int index;
+};
+
+// What GJK ends with: the simplex, and whether the origin was found inside it.
+struct GjkEnd {
   Simplex s;
-  Vec3 v = a.vertices[0] - b_point(0);
+  bool intersecting = false;
+  bool separated = false;  // stopped because the gap along `v` exceeds decide_at
+  Vec3 v = Vec3::Zero();   // the last search direction
+  Vec3 support_a = Vec3::Zero(), support_b = Vec3::Zero();  // its support points
+};
+
+// GJK on the Minkowski difference a - b. `support_a(d)` and `support_b(d)` give the farthest
+// points along d, both in a's frame. With a finite `decide_at`, stops once |v| <= decide_at (the
+// sets are that close) or the gap along v exceeds decide_at + margin (they are farther).
+template <class SupportA, class SupportB>
+GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& start, double scale, double decide_at,
+           double margin) {
+  GjkEnd end;
+  Simplex& s = end.s;
+  Vec3 v = start;
+  const bool deciding = std::isfinite(decide_at);
   for (int iteration = 0; iteration < 128; ++iteration) {
-    const int ia = support_a(-v), ib = support_b(v);
-    const Vec3 pa = a.vertices[ia], pb = b_point(ib);
-    const Vec3 w = pa - pb;
+    const SupportPoint pa = support_a(-v), pb = support_b(v);
+    const Vec3 w = pa.p - pb.p;
     const double vv = v.squaredNorm();
+    if (deciding && vv > 0.0 && v.dot(w) / std::sqrt(vv) - margin > decide_at) {  // farther: decided
+      end.separated = true;
+      end.v = v;
+      end.support_a = pa.p;
+      end.support_b = pb.p;
+      break;
+    }
     if (s.n > 0 && vv - v.dot(w) <= 1e-15 * vv) break;  // w brings v no closer: converged
     bool repeated = false;
-    for (int k = 0; k < s.n; ++k) repeated = repeated || (s.ia[k] == ia && s.ib[k] == ib);
+    for (int k = 0; k < s.n; ++k) {
+      // Vertex sets repeat by index; a continuous support point only by value.
+      const bool indexed = pa.index >= 0 && pb.index >= 0;
+      repeated = repeated || (indexed ? s.ia[k] == pa.index && s.ib[k] == pb.index : s.w[k] == w);
+    }
     if (repeated) break;
-    s.w[s.n] = w, s.a[s.n] = pa, s.b[s.n] = pb, s.ia[s.n] = ia, s.ib[s.n] = ib, s.weight[s.n] = 0.0;
+    const Simplex before = s;
+    s.w[s.n] = w, s.a[s.n] = pa.p, s.b[s.n] = pb.p, s.ia[s.n] = pa.index, s.ib[s.n] = pb.index, s.weight[s.n] = 0.0;
     ++s.n;
     if (s.n == 1) s.keep({0}, {1.0});
     if (s.n == 2) closest_on_segment(s, 0, 1);
     if (s.n == 3) closest_on_triangle(s, 0, 1, 2);
     if (s.n == 4 && !closest_on_tetrahedron(s)) {
-      out.intersecting = true;
+      // The origin in the tetrahedron, unless rounding flattened it: a w that is still on the far
+      // side of v separates the sets, so that is convergence on a curved surface, not contact.
+      if (vv > 0.0 && v.dot(w) > margin * std::sqrt(vv)) {
+        s = before;
+        break;
+      }
+      end.intersecting = true;
       break;
     }
     const Vec3 next = s.point();
     if (next.squaredNorm() <= 1e-30 * scale * scale) {
-      out.intersecting = true;
+      end.intersecting = true;
       break;
     }
     if (s.n > 1 && next.squaredNorm() >= vv) break;  // no progress: rounding has the last word
     v = next;
+    if (deciding && vv <= decide_at * decide_at) break;  // this close: decided
   }
+  return end;
+}
+
+// The witnesses of the simplex's closest point, and its distance.
+void witnesses(const Simplex& s, ConvexDistance& out) {
   out.on_a = out.on_b = Vec3::Zero();
   for (int k = 0; k < s.n; ++k) {
     out.on_a += s.weight[k] * s.a[k];
@@ -160,10 +182,54 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
     if (s.ia[k] != s.ia[0]) out.vertex_a = -1;
     if (s.ib[k] != s.ib[0]) out.vertex_b = -1;
   }
+}
+
+// The normal of a triangle simplex, oriented along `along`: accurate where the difference of the
+// witnesses is not (face against face, far below the shapes' size).
+bool simplex_normal(const Simplex& s, const Vec3& along, Vec3& normal) {
+  if (s.n != 3) return false;
+  normal = (s.w[1] - s.w[0]).cross(s.w[2] - s.w[0]);
+  if (!(normal.norm() > 0)) return false;
+  if (normal.dot(along) < 0) normal = -normal;
+  normal.normalize();
+  return true;
+}
+
+}  // namespace
+
+ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a) {
+  ConvexDistance out;
+  if (a.empty() || b.empty()) {
+    out.lower_bound = out.distance = std::numeric_limits<double>::infinity();
+    return out;
+  }
+  const Mat3 Rt = b_in_a.R.transpose();
+  auto furthest = [](const std::vector<Vec3>& vertices, const Vec3& d) {
+    int best = 0;
+    double best_dot = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      if (const double x = d.dot(vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
+    }
+    return best;
+  };
+  auto b_point = [&](int i) -> Vec3 { return b_in_a * b.vertices[i]; };
+  auto support_a = [&](const Vec3& d) {
+    const int i = furthest(a.vertices, d);
+    return SupportPoint{a.vertices[i], i};
+  };
+  auto support_b = [&](const Vec3& d) {
+    const int i = furthest(b.vertices, Rt * d);
+    return SupportPoint{b_point(i), i};
+  };
+  const double scale = a.extent + b.extent + b_in_a.t.norm();
+  const GjkEnd end = gjk(support_a, support_b, a.vertices[0] - b_point(0), scale,
+                         std::numeric_limits<double>::quiet_NaN(), 1e-13 * scale);
+  const Simplex& s = end.s;
+  witnesses(s, out);
   if (out.vertex_a >= 0) out.on_a = a.vertices[out.vertex_a];
   if (out.vertex_b >= 0) out.on_b = b_point(out.vertex_b);
   out.distance = (out.on_a - out.on_b).norm();
-  if (out.intersecting || out.distance == 0.0) {
+  if (end.intersecting || out.distance == 0.0) {
     out.intersecting = true;
     return out;
   }
@@ -172,17 +238,210 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
   // shapes' size its rounding tilts it; a triangle simplex's normal comes from long edges and
   // stays accurate (face against face), so the better of the two is kept.
   auto gap_along = [&](const Vec3& n) {
-    const double gap = n.dot(a.vertices[support_a(-n)]) - n.dot(b_point(support_b(n)));
+    const double gap = n.dot(support_a(-n).p) - n.dot(support_b(n).p);
     return gap - 1e-13 * scale - 1e-15 * std::abs(gap);
   };
   const Vec3 along = (out.on_a - out.on_b) / out.distance;
   double bound = gap_along(along);
-  if (s.n == 3) {
-    Vec3 normal = (s.w[1] - s.w[0]).cross(s.w[2] - s.w[0]);
-    if (normal.dot(along) < 0) normal = -normal;
-    if (normal.norm() > 0) bound = std::max(bound, gap_along(normal.normalized()));
-  }
+  if (Vec3 normal; simplex_normal(s, along, normal)) bound = std::max(bound, gap_along(normal));
   out.lower_bound = std::max(0.0, bound);
+  return out;
+}
+
+namespace {
+
+// The set's support point in its own frame.
+SupportPoint own_support(const ConvexShape& s, const Vec3& d) {
+  switch (s.kind) {
+    case ConvexShape::Kind::kPrimitive: return {support(s.primitive, d), -1};
+    case ConvexShape::Kind::kTriangle: {
+      int best = 0;
+      double best_dot = d.dot(s.triangle[0]);
+      for (int k = 1; k < 3; ++k) {
+        if (const double x = d.dot(s.triangle[k]); x > best_dot) best_dot = x, best = k;
+      }
+      return {s.triangle[best], best};
+    }
+    case ConvexShape::Kind::kHull: {
+      int best = 0;
+      double best_dot = -std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < s.hull->vertices.size(); ++i) {
+        if (const double x = d.dot(s.hull->vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
+      }
+      return {s.hull->vertices[best], best};
+    }
+  }
+  return {Vec3::Zero(), -1};
+}
+
+// The point of the set closest to p (own frame); false for a hull (GJK is exact on polytopes).
+bool own_closest(const ConvexShape& s, const Vec3& p, Vec3& out) {
+  if (s.kind == ConvexShape::Kind::kPrimitive) {
+    out = closest_point(s.primitive, p);
+    return true;
+  }
+  if (s.kind == ConvexShape::Kind::kTriangle) {
+    out = closest_point_on_triangle(p, s.triangle[0], s.triangle[1], s.triangle[2]);
+    return true;
+  }
+  return false;
+}
+
+// Alternating projections from GJK's witnesses: each step takes the closest point of one set to
+// the other's witness, so the witnesses' distance only falls, and it falls fast where GJK's
+// simplex creeps along a curved surface. Both witnesses stay points of their sets.
+void polish_witnesses(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, ConvexDistance& out) {
+  Vec3 pa = out.on_a, pb = out.on_b;
+  for (int step = 0; step < 8; ++step) {
+    Vec3 qa, qb_local;
+    if (!own_closest(a, pb, qa) || !own_closest(b, b_in_a.R.transpose() * (qa - b_in_a.t), qb_local)) return;
+    const Vec3 qb = b_in_a * qb_local;
+    const double apart = (qa - qb).norm();
+    if (!(apart < out.distance)) return;
+    const bool small_gain = out.distance - apart <= 1e-3 * out.distance;
+    out.on_a = pa = qa, out.on_b = pb = qb, out.distance = apart;
+    out.vertex_a = out.vertex_b = -1;
+    if (small_gain) return;
+  }
+}
+
+bool curved(const ConvexShape& s) {
+  return s.kind == ConvexShape::Kind::kPrimitive && s.primitive.kind != Primitive::Kind::kBox;
+}
+
+// Directions where a set's faces make the gap function kink: flat faces (a triangle's normal, a
+// box's or a cylinder's axes), in a's frame. The gap along them is exact where rounding tilts
+// GJK's direction most (face against face).
+int face_directions(const ConvexShape& s, const Mat3& R, Vec3* out) {
+  if (s.kind == ConvexShape::Kind::kTriangle) {
+    const Vec3 n = (s.triangle[1] - s.triangle[0]).cross(s.triangle[2] - s.triangle[0]);
+    if (!(n.norm() > 0)) return 0;
+    out[0] = R * n.normalized();
+    return 1;
+  }
+  if (s.kind != ConvexShape::Kind::kPrimitive) return 0;
+  if (s.primitive.kind == Primitive::Kind::kBox) {
+    for (int i = 0; i < 3; ++i) out[i] = R.col(i);
+    return 3;
+  }
+  if (s.primitive.kind == Primitive::Kind::kCylinder) {
+    out[0] = R.col(2);
+    return 1;
+  }
+  return 0;
+}
+
+// Unit vectors perpendicular to n and to each other.
+void perpendicular_basis(const Vec3& n, Vec3& e1, Vec3& e2) {
+  const Vec3 helper = std::abs(n.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  e1 = n.cross(helper).normalized();
+  e2 = n.cross(e1);
+}
+
+// Maximises gap(n) over unit n near `n` by a pattern search whose step halves when no neighbour
+// improves: the gap is smooth or a cone near its maximum, and its evaluation does not cancel,
+// so the search reaches directions far more accurate than GJK's simplex gives.
+// Stops once the bound exceeds `enough`.
+template <class Gap>
+double refine_direction(const Gap& gap, Vec3& n, double bound, double step, double enough) {
+  Vec3 e1, e2;
+  perpendicular_basis(n, e1, e2);
+  for (int evaluations = 0; step > 1e-13 && evaluations < 400;) {
+    if (bound > enough) break;
+    bool moved = false;
+    for (const Vec3& dir : {Vec3(e1), Vec3(-e1), Vec3(e2), Vec3(-e2)}) {
+      const Vec3 m = (n + step * dir).normalized();
+      const double g = gap(m);
+      ++evaluations;
+      if (g > bound) {
+        bound = g, n = m, moved = true;
+        perpendicular_basis(n, e1, e2);
+        break;
+      }
+    }
+    if (!moved) step *= 0.5;
+  }
+  return bound;
+}
+
+}  // namespace
+
+double extent(const ConvexShape& s) {
+  switch (s.kind) {
+    case ConvexShape::Kind::kPrimitive: return bounding_radius(s.primitive);
+    case ConvexShape::Kind::kTriangle:
+      return std::max({s.triangle[0].norm(), s.triangle[1].norm(), s.triangle[2].norm()});
+    case ConvexShape::Kind::kHull: return s.hull->extent;
+  }
+  return 0.0;
+}
+
+ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double decide_at) {
+  ConvexDistance out;
+  if ((a.kind == ConvexShape::Kind::kHull && a.hull->empty()) || (b.kind == ConvexShape::Kind::kHull && b.hull->empty())) {
+    out.lower_bound = out.distance = std::numeric_limits<double>::infinity();
+    return out;
+  }
+  const Mat3 Rt = b_in_a.R.transpose();
+  auto support_a = [&](const Vec3& d) { return own_support(a, d); };
+  auto support_b = [&](const Vec3& d) {
+    const SupportPoint p = own_support(b, Rt * d);
+    return SupportPoint{b_in_a * p.p, p.index};
+  };
+  const double scale = extent(a) + extent(b) + b_in_a.t.norm();
+  // Rounding of support values: a few ulps of the scale per term (see the header).
+  const double margin = 1e-14 * scale;
+  auto gap_along = [&](const Vec3& n) {
+    const double gap = n.dot(support_a(-n).p) - n.dot(support_b(n).p);
+    return gap - margin - 1e-15 * std::abs(gap);
+  };
+  const Vec3 start = b_in_a.t.norm() > 0 ? Vec3(-b_in_a.t) : Vec3(Vec3::UnitX());
+  const GjkEnd end = gjk(support_a, support_b, start, scale, decide_at, margin);
+  if (end.separated) {
+    // Farther than asked along v: the gap along v is the certified answer; the support points
+    // are a pair of points of the sets, so their distance bounds the true one from above.
+    const Vec3 n = end.v.normalized();
+    out.lower_bound = std::max(0.0, gap_along(n));
+    if (end.s.n > 0) {
+      witnesses(end.s, out);
+    } else {
+      out.on_a = end.support_a, out.on_b = end.support_b;
+    }
+    out.distance = std::max((out.on_a - out.on_b).norm(), out.lower_bound);
+    return out;
+  }
+  witnesses(end.s, out);
+  out.distance = (out.on_a - out.on_b).norm();
+  if (end.intersecting || out.distance == 0.0) {
+    out.intersecting = true;
+    out.distance = 0.0;
+    out.on_b = out.on_a;  // one witness for both: (near) a point the sets share
+    return out;
+  }
+  const Vec3 along = (out.on_a - out.on_b) / out.distance;
+  Vec3 best_n = along;
+  double bound = gap_along(along);
+  auto consider = [&](Vec3 n) {
+    if (n.dot(along) < 0) n = -n;
+    if (const double g = gap_along(n); g > bound) bound = g, best_n = n;
+  };
+  if (Vec3 normal; simplex_normal(end.s, along, normal)) consider(normal);
+  Vec3 faces[3];
+  for (int k = 0, n = face_directions(a, Mat3::Identity(), faces); k < n; ++k) consider(faces[k]);
+  for (int k = 0, n = face_directions(b, b_in_a.R, faces); k < n; ++k) consider(faces[k]);
+  const bool decided = std::isfinite(decide_at) && (bound > decide_at || out.distance <= decide_at);
+  const double loose = out.distance - bound;
+  if (!decided && (curved(a) || curved(b)) && loose > 1e-13 * scale + 1e-9 * out.distance) {
+    // The direction error behind the loss: about sqrt(loss / curvature radius) for a curved face.
+    const double step = std::clamp(std::sqrt(loose / std::max(scale, 1e-300)), 1e-10, 0.1);
+    const double tight = out.distance - 1e-13 * scale - 1e-9 * out.distance;
+    bound = refine_direction(gap_along, best_n, bound, step, std::isfinite(decide_at) ? decide_at : tight);
+  }
+  if (curved(a) || curved(b)) polish_witnesses(a, b, b_in_a, out);
+  out.lower_bound = std::max(0.0, bound);
+  // Points of the sets never get closer than the certified bound; a witness distance below it is
+  // rounding in the subtraction.
+  out.distance = std::max(out.distance, out.lower_bound);
   return out;
 }
 

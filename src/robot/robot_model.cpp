@@ -141,8 +141,7 @@ class RobotModelBuilder {
         out.radius = cy.radius;
         out.length = cy.length;
         if (!(out.radius > 0 && out.length > 0)) throw RobotLoadError(where.str() + ": cylinder radius and length must be positive");
-        out.mesh = std::make_shared<TriangleMesh>(cylinder_mesh(out.radius, out.length, kCylinderMaxError));
-        out.source = "cylinder";
+        out.source = "cylinder";  // exact: no polygon stands in for it
         break;
       }
       case urdf::Geometry::MESH: {

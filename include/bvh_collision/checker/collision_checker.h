@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/checker/detail/shape_pairs.h"
 #include "bvh_collision/checker/environment.h"
 #include "bvh_collision/checker/mesh_octree.h"
 #include "bvh_collision/geometry/convex_hull.h"
@@ -206,8 +207,8 @@ class CollisionChecker {
  private:
   struct Shape {
     Transform origin;   // in the link frame
-    int mesh = -1;      // index into meshes_, or -1 for an analytic sphere
-    double radius = 0;  // sphere
+    int mesh = -1;      // index into meshes_, or -1 for an exact primitive
+    Primitive primitive;
   };
   struct LinkBound {
     Vec3 center = Vec3::Zero();  // link frame
@@ -218,34 +219,9 @@ class CollisionChecker {
                      SelfCollisionResult& result) const;
   double pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
                        const SelfCollisionRequest& request, SelfCollisionResult& result) const;
-  // One shape's geometry, whoever owns it (a link here, an environment object elsewhere).
-  struct ShapeRef {
-    const Bvh<Obb>* mesh = nullptr;  // null: an analytic sphere
-    const ConvexHull* hull = nullptr;
-    double radius = 0.0;
-  };
-  ShapeRef ref(const Shape& s) const {
-    return s.mesh < 0 ? ShapeRef{nullptr, nullptr, s.radius} : ShapeRef{&meshes_[s.mesh], &hulls_[s.mesh], 0.0};
-  }
-  bool shapes_collide(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double padding,
-                      const SelfCollisionRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) const;
-  // Below `best` (else `best` or more); with a tolerance, at most that much above the true distance.
-  double shapes_distance(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb, const Transform& pb, double best,
-                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance = 0.0) const;
-  double meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& mb, const Transform& pb, double best,
-                         bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) const;
-
-  // A sphere shape and a mesh shape with their poses, whichever order they came in.
-  struct SphereAndMesh {
-    const ShapeRef& sphere;
-    const Transform& sphere_pose;
-    const ShapeRef& mesh;
-    const Transform& mesh_pose;
-    bool sphere_first;
-  };
-  static SphereAndMesh sphere_and_mesh(const ShapeRef& sa, const Transform& pa, const ShapeRef& sb,
-                                       const Transform& pb) {
-    return !sa.mesh ? SphereAndMesh{sa, pa, sb, pb, true} : SphereAndMesh{sb, pb, sa, pa, false};
+  detail::ShapeRef ref(const Shape& s) const {
+    return s.mesh < 0 ? detail::ShapeRef{nullptr, nullptr, s.primitive}
+                      : detail::ShapeRef{&meshes_[s.mesh], &hulls_[s.mesh], Primitive{}};
   }
 
   bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,

@@ -8,6 +8,7 @@
 
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -28,16 +29,15 @@ struct ObjectShape {
   }
 };
 
-// A cylinder object is a circumscribing prism no more than this larger than the cylinder.
-constexpr double kObjectCylinderMaxError = 0.0005;  // metres
-
 struct CollisionObject {
   std::string id;
   ObjectShape shape;
   Transform pose;  // in the world frame
-  // Geometry as the checker uses it: spheres stay analytic (no mesh), the rest are meshes.
+  // Geometry as the checker uses it: spheres and cylinders stay exact primitives (no mesh);
+  // boxes (exact as 12 triangles) and meshes get a BVH and a hull.
   std::shared_ptr<const Bvh<Obb>> mesh;
   std::shared_ptr<const ConvexHull> hull;
+  Primitive primitive;  // when mesh is null
   Vec3 bound_center = Vec3::Zero();  // object frame
   double bound_radius = 0.0;
 };

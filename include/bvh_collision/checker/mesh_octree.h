@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -35,6 +36,14 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
 // The same for a point (a sphere link is a point with its radius subtracted).
 OctreeDistance point_octree_distance(const Vec3& p, const Octree& tree,
                                      double upper_bound = std::numeric_limits<double>::infinity());
+
+// The same for an exact primitive (cylinder, box, capsule; a sphere too, though the checker asks
+// the octree's sphere query for those): certified convex distance against each nearby cube.
+bool primitive_meets_octree(const Primitive& primitive, const Transform& pose, const Octree& tree, double padding,
+                            OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
+OctreeDistance primitive_octree_distance(const Primitive& primitive, const Transform& pose, const Octree& tree,
+                                         double upper_bound = std::numeric_limits<double>::infinity(),
+                                         QueryStats* stats = nullptr);
 
 // Exact primitives, exposed for their tests: a closed triangle against a closed axis-aligned box.
 bool triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi);

@@ -28,18 +28,14 @@ struct CollisionElement {
   enum class Shape { kMesh, kBox, kSphere, kCylinder };
   Shape shape = Shape::kMesh;
   Transform origin;  // the element's frame in its link's frame
-  // Triangles for meshes, boxes (exact, 12 triangles) and cylinders (a prism that contains the
-  // true cylinder; see kCylinderMaxError). Shared between elements that use the same file and scale.
+  // Triangles for meshes and boxes (exact, 12 triangles); null for spheres and cylinders, which
+  // stay exact primitives. Shared between elements that use the same file and scale.
   std::shared_ptr<const TriangleMesh> mesh;
-  double radius = 0.0;       // sphere (kept analytic) and cylinder
-  double length = 0.0;       // cylinder
+  double radius = 0.0;       // sphere and cylinder
+  double length = 0.0;       // cylinder, along the element's z axis
   Vec3 size = Vec3::Zero();  // box
   std::string source;        // what it came from, for messages: "mesh 'package://...'", "box"
 };
-
-// A cylinder becomes a regular prism circumscribing it, with enough sides that no point of the
-// prism is farther than this from the true cylinder (it only ever makes the link larger).
-constexpr double kCylinderMaxError = 0.0005;  // metres
 
 struct RobotLink {
   std::string name;

@@ -1,0 +1,50 @@
+// Exact convex primitives: the solids URDF and collision objects name (sphere, box, cylinder,
+// capsule), kept as the shapes they are instead of polygons. Each lives in its own frame, centred
+// on the origin; cylinders and capsules run along z. Everything here is a closed solid: touching
+// a primitive's surface is touching the primitive.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+struct Primitive {
+  enum class Kind : std::uint8_t { kSphere, kBox, kCylinder, kCapsule };
+  Kind kind = Kind::kSphere;
+  Vec3 half = Vec3::Zero();  // box: half the edge lengths
+  double radius = 0.0;       // sphere, cylinder, capsule
+  double half_length = 0.0;  // cylinder, capsule: half the length of the axis segment (z)
+
+  static Primitive sphere(double r) { return {Kind::kSphere, Vec3::Zero(), r, 0.0}; }
+  static Primitive box(const Vec3& size) { return {Kind::kBox, 0.5 * size, 0.0, 0.0}; }
+  // A capsule's length is that of its axis segment; its caps add `r` at each end (as in FCL).
+  static Primitive cylinder(double r, double length) { return {Kind::kCylinder, Vec3::Zero(), r, 0.5 * length}; }
+  static Primitive capsule(double r, double length) { return {Kind::kCapsule, Vec3::Zero(), r, 0.5 * length}; }
+};
+
+const char* primitive_name(Primitive::Kind kind);
+
+// A point of the primitive farthest along d (d need not be unit; d = 0 gives some point of it).
+Vec3 support(const Primitive& p, const Vec3& d);
+
+// Half extents of the primitive's box in its own frame: the tightest box around it.
+Vec3 half_extents(const Primitive& p);
+
+// The largest distance of any point of the primitive from its centre.
+double bounding_radius(const Primitive& p);
+
+// Is p (in the primitive's frame) inside or on the primitive?
+bool contains(const Primitive& prim, const Vec3& p);
+
+// The point of the primitive (the solid) closest to p, in the primitive's frame: p itself when
+// p is inside.
+Vec3 closest_point(const Primitive& prim, const Vec3& p);
+
+// Where the ray origin + s * unit (unit length, primitive frame), 0 <= s <= length, first meets
+// the primitive: 0 when the origin is inside, infinity when it misses.
+double ray_entry(const Primitive& prim, const Vec3& origin, const Vec3& unit, double length);
+
+}  // namespace bvh_collision

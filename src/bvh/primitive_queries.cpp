@@ -1,0 +1,153 @@
+#include "bvh_collision/bvh/primitive_queries.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bvh_collision/bvh/traversal_stack.h"
+#include "bvh_collision/geometry/convex_distance.h"
+
+namespace bvh_collision {
+namespace {
+
+// The primitive's tight box, in the mesh frame.
+Obb primitive_box(const Primitive& p, const Transform& p_in_mesh) {
+  const Vec3 half = half_extents(p);
+  return Obb{p_in_mesh.R, p_in_mesh.t, half, half.norm()};
+}
+
+// A point of the mesh inside the primitive (in the mesh frame), if one of its connected components
+// lies there; asked only once no triangle comes within reach, when each component is wholly
+// inside or wholly outside.
+bool component_in_primitive(const Bvh<Obb>& mesh, const Primitive& p, const Transform& p_in_mesh, Vec3& where) {
+  for (const Vec3& c : mesh.component_points()) {
+    if (contains(p, p_in_mesh.R.transpose() * (c - p_in_mesh.t))) {
+      where = c;
+      return true;
+    }
+  }
+  return false;
+}
+
+MeshContact contact_from(const ConvexDistance& d, const Triangle& t, const Transform& pose_mesh, const Vec3& p_centre,
+                         std::int32_t triangle) {
+  MeshContact c;
+  c.position = pose_mesh * (0.5 * (d.on_a + d.on_b));
+  Vec3 n = d.on_a - d.on_b;  // from the primitive towards the mesh
+  if (!(n.norm() > 0)) {
+    n = (t[1] - t[0]).cross(t[2] - t[0]);
+    if (n.dot(t[0] - p_centre) < 0) n = -n;
+  }
+  c.normal = n.norm() > 0 ? Vec3(pose_mesh.R * n.normalized()) : Vec3(Vec3::UnitZ());
+  c.triangle_a = triangle;
+  return c;
+}
+
+}  // namespace
+
+CollisionResult collide(const Bvh<Obb>& mesh, const Transform& pose_mesh, const Primitive& primitive,
+                        const Transform& pose_primitive, const CollisionRequest& request) {
+  CollisionResult result;
+  if (mesh.empty()) return result;
+  const Transform rel = relative_transform(pose_mesh, pose_primitive);
+  const Obb box = primitive_box(primitive, rel);
+  const ConvexShape shape = ConvexShape::of(primitive);
+  TraversalStack<std::int32_t> stack;
+  stack.push(0);
+  while (!stack.empty()) {
+    const BvhNode<Obb>& n = mesh.nodes()[stack.pop()];
+    ++result.stats.volume_tests;
+    if (!overlap_carried(n.volume, box, request.padding)) continue;
+    if (!n.is_leaf()) {
+      stack.push(n.right);
+      stack.push(n.left);
+      continue;
+    }
+    for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+      ++result.stats.primitive_tests;
+      const Triangle& t = mesh.triangles()[i];
+      const ConvexDistance d = convex_distance(ConvexShape::of(t), shape, rel, request.padding);
+      if (d.lower_bound > request.padding) continue;
+      result.collision = true;
+      if (result.contacts.size() < request.max_contacts) {
+        result.contacts.push_back(contact_from(d, t, pose_mesh, rel.t, mesh.triangle_id(i)));
+      }
+      if (result.contacts.size() >= request.max_contacts) return result;
+    }
+  }
+  if (result.collision) return result;
+  // No surface within reach: one may hold the other.
+  Vec3 where;
+  const bool inside_primitive = component_in_primitive(mesh, primitive, rel, where);
+  const bool inside_mesh = !inside_primitive && request.solids && mesh.closed() &&
+                           contains_point(mesh, rel.t, &result.stats);
+  if (inside_mesh) where = rel.t;
+  if (inside_primitive || inside_mesh) {
+    result.collision = true;
+    if (request.max_contacts > 0) {
+      MeshContact c;
+      c.position = pose_mesh * where;
+      result.contacts.push_back(c);
+    }
+  }
+  return result;
+}
+
+DistanceResult distance(const Bvh<Obb>& mesh, const Transform& pose_mesh, const Primitive& primitive,
+                        const Transform& pose_primitive, const DistanceRequest& request) {
+  DistanceResult result;
+  if (mesh.empty()) return result;
+  const Transform rel = relative_transform(pose_mesh, pose_primitive);
+  const Obb box = primitive_box(primitive, rel);
+  const RelativeFrame same = RelativeFrame::from(Transform::Identity());
+  const ConvexShape shape = ConvexShape::of(primitive);
+  double best = request.upper_bound;
+  struct Entry {
+    std::int32_t node;
+    double bound;
+  };
+  auto bound = [&](std::int32_t n) {
+    ++result.stats.volume_tests;
+    return distance_lower_bound(mesh.nodes()[n].volume, box, same);
+  };
+  TraversalStack<Entry> stack;
+  stack.push({0, bound(0)});
+  while (!stack.empty()) {
+    const Entry e = stack.pop();
+    if (e.bound >= best - request.tolerance) continue;  // cannot beat `best` by more than the tolerance
+    const BvhNode<Obb>& n = mesh.nodes()[e.node];
+    if (n.is_leaf()) {
+      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+        ++result.stats.primitive_tests;
+        const ConvexDistance d = convex_distance(ConvexShape::of(mesh.triangles()[i]), shape, rel);
+        if (d.distance < best) {
+          best = d.distance;
+          result.distance = d.distance;
+          result.point_a = d.on_a;
+          result.point_b = d.on_b;
+          result.triangle_a = mesh.triangle_id(i);
+        }
+      }
+      continue;
+    }
+    Entry l{n.left, bound(n.left)}, r{n.right, bound(n.right)};
+    if (l.bound < r.bound) std::swap(l, r);  // nearer child next
+    if (l.bound < best) stack.push(l);
+    if (r.bound < best) stack.push(r);
+  }
+  if (result.distance > 0.0) {
+    Vec3 where;
+    const bool inside = component_in_primitive(mesh, primitive, rel, where) ||
+                        (request.solids && mesh.closed() && contains_point(mesh, rel.t, &result.stats) &&
+                         (where = rel.t, true));
+    if (inside) {
+      result.distance = 0.0;
+      result.point_a = result.point_b = where;
+      result.triangle_a = -1;
+    }
+  }
+  result.point_a = pose_mesh * result.point_a;
+  result.point_b = pose_mesh * result.point_b;
+  return result;
+}
+
+}  // namespace bvh_collision
