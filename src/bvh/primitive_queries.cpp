@@ -15,17 +15,21 @@ Obb primitive_box(const Primitive& p, const Transform& p_in_mesh) {
   return Obb{p_in_mesh.R, p_in_mesh.t, half, half.norm()};
 }
 
-// A point of the mesh inside the primitive (in the mesh frame), if one of its connected components
-// lies there; asked only once no triangle comes within reach, when each component is wholly
-// inside or wholly outside.
-bool component_in_primitive(const Bvh<Obb>& mesh, const Primitive& p, const Transform& p_in_mesh, Vec3& where) {
+// Asked once no triangle comes within reach, when each connected component of the mesh is wholly
+// inside or wholly outside the primitive, and the primitive wholly inside or outside a closed mesh:
+// one point of each decides. A primitive is a solid, so a mesh inside it counts whatever
+// `solids` says; a primitive inside a closed mesh counts with `solids`. `where` (mesh frame) is
+// the point that decided.
+bool one_holds_the_other(const Bvh<Obb>& mesh, const Primitive& p, const Transform& p_in_mesh, bool solids,
+                         QueryStats& stats, Vec3& where) {
   for (const Vec3& c : mesh.component_points()) {
     if (contains(p, p_in_mesh.R.transpose() * (c - p_in_mesh.t))) {
       where = c;
       return true;
     }
   }
-  return false;
+  where = p_in_mesh.t;
+  return solids && mesh.closed() && contains_point(mesh, p_in_mesh.t, &stats);
 }
 
 MeshContact contact_from(const ConvexDistance& d, const Triangle& t, const Transform& pose_mesh, const Vec3& p_centre,
@@ -75,13 +79,7 @@ CollisionResult collide(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
     }
   }
   if (result.collision) return result;
-  // No surface within reach: one may hold the other.
-  Vec3 where;
-  const bool inside_primitive = component_in_primitive(mesh, primitive, rel, where);
-  const bool inside_mesh = !inside_primitive && request.solids && mesh.closed() &&
-                           contains_point(mesh, rel.t, &result.stats);
-  if (inside_mesh) where = rel.t;
-  if (inside_primitive || inside_mesh) {
+  if (Vec3 where; one_holds_the_other(mesh, primitive, rel, request.solids, result.stats, where)) {
     result.collision = true;
     if (request.max_contacts > 0) {
       MeshContact c;
@@ -135,11 +133,7 @@ DistanceResult distance(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
     if (r.bound < best) stack.push(r);
   }
   if (result.distance > 0.0) {
-    Vec3 where;
-    const bool inside = component_in_primitive(mesh, primitive, rel, where) ||
-                        (request.solids && mesh.closed() && contains_point(mesh, rel.t, &result.stats) &&
-                         (where = rel.t, true));
-    if (inside) {
+    if (Vec3 where; one_holds_the_other(mesh, primitive, rel, request.solids, result.stats, where)) {
       result.distance = 0.0;
       result.point_a = result.point_b = where;
       result.triangle_a = -1;

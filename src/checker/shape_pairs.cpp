@@ -109,32 +109,32 @@ double sphere_mesh_distance(const ShapeRef& sphere, const Transform& ps, const S
   return dist;
 }
 
-// ------------------------------------- another primitive and a mesh: the BVH against the shape
+// ------------------------------------- a mesh and another primitive: the BVH against the shape
 
-bool primitive_mesh_collide(const ShapeRef& p, const Transform& pp, const ShapeRef& mesh, const Transform& pm,
-                            const PairRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) {
+// The BVH layer's request for a pair request; contacts only when someone takes them.
+CollisionRequest collision_request(const PairRequest& request, bool want_contacts) {
   CollisionRequest r;
   r.padding = request.padding;
   r.tolerance = request.tolerance;
-  r.max_contacts = contacts ? request.max_contacts : 0;
+  r.max_contacts = want_contacts ? request.max_contacts : 0;
   r.solids = request.solids;
-  const CollisionResult c = collide(*mesh.mesh, pm, p.primitive, pp, r);
+  return r;
+}
+
+// The BVH query's contacts already point from b (the primitive) towards a (the mesh).
+bool mesh_primitive_collide(const ShapeRef& mesh, const Transform& pm, const ShapeRef& p, const Transform& pp,
+                            const PairRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) {
+  const CollisionResult c = collide(*mesh.mesh, pm, p.primitive, pp, collision_request(request, contacts != nullptr));
   stats += c.stats;
-  if (contacts) {
-    for (MeshContact m : c.contacts) {
-      m.normal = -m.normal;  // the primitive is a here
-      std::swap(m.triangle_a, m.triangle_b);
-      contacts->push_back(m);
-    }
-  }
+  if (contacts) contacts->insert(contacts->end(), c.contacts.begin(), c.contacts.end());
   return c.collision;
 }
 
-double primitive_mesh_distance(const ShapeRef& p, const Transform& pp, const ShapeRef& mesh, const Transform& pm,
+double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const ShapeRef& p, const Transform& pp,
                                double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) {
   // The hull first: a certified lower bound that settles most far pairs without the BVH.
-  const ConvexDistance hull = convex_distance(ConvexShape::of(p.primitive), ConvexShape::of(*mesh.hull),
-                                             relative_transform(pp, pm), best - tolerance);
+  const ConvexDistance hull = convex_distance(ConvexShape::of(*mesh.hull), ConvexShape::of(p.primitive),
+                                             relative_transform(pm, pp), best - tolerance);
   if (hull.lower_bound >= best - tolerance) return std::max(hull.lower_bound, best);
   DistanceRequest request;
   request.solids = solids;
@@ -142,8 +142,8 @@ double primitive_mesh_distance(const ShapeRef& p, const Transform& pp, const Sha
   request.tolerance = tolerance;
   const DistanceResult d = distance(*mesh.mesh, pm, p.primitive, pp, request);
   stats += d.stats;
-  wa = d.point_b;
-  wb = d.point_a;
+  wa = d.point_a;
+  wb = d.point_b;
   return d.distance;
 }
 
@@ -215,12 +215,7 @@ double meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& 
 
 bool meshes_collide(const ShapeRef& a, const Transform& pa, const ShapeRef& b, const Transform& pb,
                     const PairRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) {
-  CollisionRequest r;
-  r.padding = request.padding;
-  r.tolerance = request.tolerance;
-  r.max_contacts = contacts ? request.max_contacts : 0;
-  r.solids = request.solids;
-  CollisionResult c = collide(*a.mesh, pa, *b.mesh, pb, r);
+  const CollisionResult c = collide(*a.mesh, pa, *b.mesh, pb, collision_request(request, contacts != nullptr));
   stats += c.stats;
   if (contacts) contacts->insert(contacts->end(), c.contacts.begin(), c.contacts.end());
   return c.collision;
@@ -267,10 +262,10 @@ Table make_table() {
     }
   }
   for (int a = 0; a < mesh; ++a) {
-    t.collide[a][mesh] = primitive_mesh_collide;
-    t.distance[a][mesh] = primitive_mesh_distance;
-    t.collide[mesh][a] = swapped_collide<primitive_mesh_collide>;
-    t.distance[mesh][a] = swapped_distance<primitive_mesh_distance>;
+    t.collide[mesh][a] = mesh_primitive_collide;
+    t.distance[mesh][a] = mesh_primitive_distance;
+    t.collide[a][mesh] = swapped_collide<mesh_primitive_collide>;
+    t.distance[a][mesh] = swapped_distance<mesh_primitive_distance>;
   }
   t.collide[sphere][sphere] = sphere_sphere_collide;
   t.distance[sphere][sphere] = sphere_sphere_distance;

@@ -162,7 +162,10 @@ GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& sta
       end.intersecting = true;
       break;
     }
-    if (s.n > 1 && next.squaredNorm() >= vv) break;  // no progress: rounding has the last word
+    if (s.n > 1 && next.squaredNorm() >= vv) {  // no progress: rounding has the last word
+      s = before;  // the simplex that gave v, so the witnesses are v apart
+      break;
+    }
     v = next;
     if (deciding && vv <= decide_at * decide_at) break;  // this close: decided
   }
@@ -290,18 +293,19 @@ bool own_closest(const ConvexShape& s, const Vec3& p, Vec3& out) {
 // Alternating projections from GJK's witnesses: each step takes the closest point of one set to
 // the other's witness, so the witnesses' distance only falls, and it falls fast where GJK's
 // simplex creeps along a curved surface. Both witnesses stay points of their sets.
-void polish_witnesses(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, ConvexDistance& out) {
-  Vec3 pa = out.on_a, pb = out.on_b;
-  for (int step = 0; step < 8; ++step) {
+// Stops when a step gains less than `enough` or after 64 steps (the gain shrinks geometrically).
+void polish_witnesses(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double enough,
+                      ConvexDistance& out) {
+  for (int step = 0; step < 64; ++step) {
     Vec3 qa, qb_local;
-    if (!own_closest(a, pb, qa) || !own_closest(b, b_in_a.R.transpose() * (qa - b_in_a.t), qb_local)) return;
+    if (!own_closest(a, out.on_b, qa) || !own_closest(b, b_in_a.R.transpose() * (qa - b_in_a.t), qb_local)) return;
     const Vec3 qb = b_in_a * qb_local;
     const double apart = (qa - qb).norm();
     if (!(apart < out.distance)) return;
-    const bool small_gain = out.distance - apart <= 1e-3 * out.distance;
-    out.on_a = pa = qa, out.on_b = pb = qb, out.distance = apart;
+    const double gain = out.distance - apart;
+    out.on_a = qa, out.on_b = qb, out.distance = apart;
     out.vertex_a = out.vertex_b = -1;
-    if (small_gain) return;
+    if (gain <= enough) return;
   }
 }
 
@@ -437,7 +441,9 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
     const double tight = out.distance - 1e-13 * scale - 1e-9 * out.distance;
     bound = refine_direction(gap_along, best_n, bound, step, std::isfinite(decide_at) ? decide_at : tight);
   }
-  if (curved(a) || curved(b)) polish_witnesses(a, b, b_in_a, out);
+  if ((curved(a) || curved(b)) && out.distance - bound > 1e-15 * scale) {
+    polish_witnesses(a, b, b_in_a, 1e-15 * scale, out);
+  }
   out.lower_bound = std::max(0.0, bound);
   // Points of the sets never get closer than the certified bound; a witness distance below it is
   // rounding in the subtraction.
