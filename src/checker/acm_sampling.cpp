@@ -7,34 +7,38 @@
 #include <iomanip>
 #include <random>
 #include <sstream>
-#include <thread>
+#include <mutex>
+
+#include "bvh_collision/geometry/thread_pool.h"
 
 namespace bvh_collision {
 
 SampledPairs sample_collision_pairs(const CollisionChecker& checker, const SamplingOptions& options) {
   const auto& pairs = checker.checked_pairs();
-  const unsigned workers = std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::vector<std::size_t>> counts(workers, std::vector<std::size_t>(pairs.size(), 0));
-  auto work = [&](unsigned w) {
-    std::mt19937_64 rng(options.seed * 1000003 + w);
-    std::map<std::pair<int, int>, std::size_t> index;
-    for (std::size_t p = 0; p < pairs.size(); ++p) index[pairs[p]] = p;
+  std::map<std::pair<int, int>, std::size_t> index;
+  for (std::size_t p = 0; p < pairs.size(); ++p) index[pairs[p]] = p;
+  // Samples in blocks, each drawn from its own generator seeded by the block: the answer depends
+  // on the seed only, not on how many threads took part.
+  constexpr std::size_t kBlock = 64;
+  const std::size_t blocks = (options.samples + kBlock - 1) / kBlock;
+  std::vector<std::size_t> total(pairs.size(), 0);
+  std::mutex merge;
+  ThreadPool::shared().for_each(blocks, 1, [&](std::size_t b) {
+    std::mt19937_64 rng(options.seed * 1000003 + b);
+    std::vector<std::size_t> counts(pairs.size(), 0);
     SelfCollisionRequest request;
     request.all_pairs = true;
-    for (std::size_t s = w; s < options.samples; s += workers) {
+    for (std::size_t s = b * kBlock; s < std::min(options.samples, (b + 1) * kBlock); ++s) {
       const std::vector<double> state = random_configuration(checker.model(), rng);
-      for (const auto& pair : checker.check_self(state.data(), request).colliding_pairs) ++counts[w][index.at(pair)];
+      for (const auto& pair : checker.check_self(state.data(), request).colliding_pairs) ++counts[index.at(pair)];
     }
-  };
-  std::vector<std::thread> threads;
-  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work, w);
-  work(0);
-  for (std::thread& t : threads) t.join();
+    const std::lock_guard<std::mutex> lock(merge);
+    for (std::size_t p = 0; p < pairs.size(); ++p) total[p] += counts[p];
+  });
   SampledPairs out;
   out.samples = options.samples;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
-    std::size_t n = 0;
-    for (const auto& c : counts) n += c[p];
+    const std::size_t n = total[p];
     if (n == 0) out.never.push_back(pairs[p]);
     if (n > options.always_fraction * options.samples) out.always.push_back(pairs[p]);
   }

@@ -1,11 +1,11 @@
 #include "bvh_collision/checker/collision_checker.h"
 
+#include "bvh_collision/geometry/thread_pool.h"
+
 #include <algorithm>
-#include <atomic>
 #include <map>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 
 namespace bvh_collision {
 namespace {
@@ -216,18 +216,10 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
 }
 
 std::vector<bool> CollisionChecker::check_self_batch(const double* states, std::size_t count, double tolerance) const {
-  std::vector<char> out(count, 0);
-  SelfCollisionRequest request;
+  BatchRequest request;
+  request.environment = false;
   request.tolerance = tolerance;
-  const std::size_t stride = model_.variable_count();
-  const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), static_cast<unsigned>(count)));
-  auto work = [&](unsigned w) {
-    for (std::size_t i = w; i < count; i += workers) out[i] = check_self(states + i * stride, request).collision;
-  };
-  std::vector<std::thread> threads;
-  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work, w);
-  work(0);
-  for (std::thread& t : threads) t.join();
+  const std::vector<char> out = check_batch(states, count, nullptr, request);
   return std::vector<bool>(out.begin(), out.end());
 }
 
@@ -242,24 +234,13 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   environment.root_pose = request.root_pose;
   const std::size_t stride = model_.variable_count();
   // States are taken in blocks as threads come free: their costs differ by orders of magnitude
-  // (a free state near nothing against one deep in clutter).
-  constexpr std::size_t kBlock = 16;
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t first; (first = next.fetch_add(kBlock)) < count;) {
-      for (std::size_t i = first; i < std::min(count, first + kBlock); ++i) {
-        const double* q = states + i * stride;
-        out[i] = (request.self && check_self(q, self).collision) ||
-                 (request.environment && check_environment(q, *env, environment).collision);
-      }
-    }
-  };
-  const std::size_t blocks = (count + kBlock - 1) / kBlock;
-  const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), blocks));
-  std::vector<std::thread> threads;
-  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work);
-  work();
-  for (std::thread& t : threads) t.join();
+  // (a free state near nothing against one deep in clutter). A state that throws (a bad root
+  // pose) ends the batch with that error.
+  ThreadPool::shared().for_each(count, 16, [&](std::size_t i) {
+    const double* q = states + i * stride;
+    out[i] = (request.self && check_self(q, self).collision) ||
+             (request.environment && check_environment(q, *env, environment).collision);
+  });
   return out;
 }
 

@@ -3,10 +3,10 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <thread>
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/geometry/thread_pool.h"
 
 namespace bvh_collision {
 namespace {
@@ -30,21 +30,14 @@ bool segment_meets_ball(const Vec3& origin, const Vec3& unit, double length, con
 // only with a few thousand points); the parts come back in order.
 template <class Part, class Fn>
 std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
-  const std::size_t cores = std::max(1u, std::thread::hardware_concurrency());
-  const std::size_t workers = std::clamp<std::size_t>(n / 4096, 1, cores);
-  std::vector<Part> parts(workers);
-  const std::size_t chunk = (n + workers - 1) / workers;
-  std::vector<std::thread> threads;
-  for (std::size_t w = 0; w < workers; ++w) {
-    const std::size_t begin = std::min(n, w * chunk), end = std::min(n, begin + chunk);
-    auto work = [&fn, &parts, w, begin, end] { fn(begin, end, parts[w]); };
-    if (w + 1 < workers) {
-      threads.emplace_back(work);
-    } else {
-      work();
-    }
-  }
-  for (std::thread& t : threads) t.join();
+  ThreadPool& pool = ThreadPool::shared();
+  const std::size_t chunks = std::clamp<std::size_t>(n / 4096, 1, pool.capacity());
+  std::vector<Part> parts(chunks);
+  const std::size_t chunk = (n + chunks - 1) / chunks;
+  pool.for_each(chunks, 1, [&](std::size_t c) {
+    const std::size_t begin = std::min(n, c * chunk), end = std::min(n, begin + chunk);
+    fn(begin, end, parts[c]);
+  });
   return parts;
 }
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <thread>
 
+#include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/octree/voxel_set.h"
 
 namespace bvh_collision {
@@ -162,24 +163,17 @@ int thread_count(const ScanOptions& options, std::size_t points) {
 // blocks of rays as they go: a depth image's far rows have rays many times longer than its near
 // rows, so fixed halves would leave one core idle half the time.
 ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint& origin, const ScanOptions& options) {
-  const auto threads = static_cast<std::size_t>(thread_count(options, rays.size()));
+  const auto threads = static_cast<unsigned>(thread_count(options, rays.size()));
   std::vector<ScanPart> parts(threads);
-  std::vector<std::thread> workers;
   constexpr std::size_t kBlock = 2048;
   std::atomic<std::size_t> next{0};
-  for (std::size_t t = 0; t < threads; ++t) {
-    auto work = [&, t] {
-      for (std::size_t begin; (begin = next.fetch_add(kBlock)) < rays.size();) {
-        cast_all(grid, rays, begin, std::min(rays.size(), begin + kBlock), origin, options, parts[t]);
-      }
-    };
-    if (t + 1 < threads) {
-      workers.emplace_back(work);
-    } else {
-      work();
+  // Each participant gathers into its own part; whoever takes part (the caller alone when the
+  // pool is busy) takes blocks until none is left.
+  ThreadPool::shared().run(threads, [&](unsigned t) {
+    for (std::size_t begin; (begin = next.fetch_add(kBlock)) < rays.size();) {
+      cast_all(grid, rays, begin, std::min(rays.size(), begin + kBlock), origin, options, parts[t]);
     }
-  }
-  for (std::thread& w : workers) w.join();
+  });
   ScanPart& all = parts.front();
   for (std::size_t t = 1; t < parts.size(); ++t) {
     all.free.insert_all(parts[t].free);
