@@ -1,4 +1,5 @@
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/geometry/detail/filtered_predicates.h"
 #include "bvh_collision/bvh/traversal_stack.h"
 
 #include <algorithm>
@@ -126,14 +127,17 @@ class CollisionTraversal {
   void leaf_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
     for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j) {
       const Triangle tb = carried(b_.triangles()[j], frame_);
-      const TrianglePlane pb = TrianglePlane::of(tb[0], tb[1], tb[2]);
+      const TrianglePlane pb = detail::plane_of(tb[0], tb[1], tb[2]);
       const Vec3 cb = frame_.apply(b_.spheres()[j].center);
       for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
         ++result_.stats.primitive_tests;
         const Triangle& ta = a_.triangles()[i];
         if (request_.padding == 0.0) {
           // Certified float plane tests first; the exact test only when they cannot tell.
-          if (pb.separates(ta[0], ta[1], ta[2]) || a_.planes()[i].separates(tb[0], tb[1], tb[2])) continue;
+          if (detail::plane_separates(pb, ta[0], ta[1], ta[2]) ||
+              detail::plane_separates(a_.planes()[i], tb[0], tb[1], tb[2])) {
+            continue;
+          }
           if (!triangles_intersect(ta, tb)) continue;
           record(ta, tb, i, j, nullptr);
         } else {
@@ -285,13 +289,15 @@ enum class Crossing { kNone, kProper, kOnSurface, kDegenerate };
 
 // How the segment q -> far meets closed triangle t, exactly.
 Crossing classify_crossing(const Vec3& q, const Vec3& far, const Triangle& t) {
-  const int sq = orient3d(t[0], t[1], t[2], q);
-  const int sf = orient3d(t[0], t[1], t[2], far);
+  const int sq = detail::orient3d_filtered(t[0], t[1], t[2], q);
+  const int sf = detail::orient3d_filtered(t[0], t[1], t[2], far);
   if (sq * sf > 0) return Crossing::kNone;
   if (sq == 0) {
     return segment_intersects_triangle(q, q, t[0], t[1], t[2]) ? Crossing::kOnSurface : Crossing::kNone;
   }
-  const int o1 = orient3d(q, far, t[0], t[1]), o2 = orient3d(q, far, t[1], t[2]), o3 = orient3d(q, far, t[2], t[0]);
+  const int o1 = detail::orient3d_filtered(q, far, t[0], t[1]);
+  const int o2 = detail::orient3d_filtered(q, far, t[1], t[2]);
+  const int o3 = detail::orient3d_filtered(q, far, t[2], t[0]);
   const bool positive = o1 >= 0 && o2 >= 0 && o3 >= 0, negative = o1 <= 0 && o2 <= 0 && o3 <= 0;
   if (!positive && !negative) return Crossing::kNone;
   if (sf == 0 || o1 == 0 || o2 == 0 || o3 == 0) return Crossing::kDegenerate;  // grazes an edge

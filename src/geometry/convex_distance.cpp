@@ -382,7 +382,8 @@ double extent(const ConvexShape& s) {
 
 ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double decide_at) {
   ConvexDistance out;
-  if ((a.kind == ConvexShape::Kind::kHull && a.hull->empty()) || (b.kind == ConvexShape::Kind::kHull && b.hull->empty())) {
+  auto empty = [](const ConvexShape& s) { return s.kind == ConvexShape::Kind::kHull && s.hull->empty(); };
+  if (empty(a) || empty(b)) {
     out.lower_bound = out.distance = std::numeric_limits<double>::infinity();
     return out;
   }

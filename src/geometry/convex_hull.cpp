@@ -1,4 +1,5 @@
 #include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/detail/filtered_predicates.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +37,7 @@ bool initial_tetrahedron(const std::vector<Vec3>& p, std::array<int, 4>& t) {
   const Vec3 normal = (p[t[1]] - p[0]).cross(p[t[2]] - p[0]);
   for (std::size_t i = 1; i < p.size(); ++i) {
     const double d = std::abs(normal.dot(p[i] - p[0]));
-    if (d > best && orient3d(p[0], p[t[1]], p[t[2]], p[i]) != 0) best = d, t[3] = static_cast<int>(i);
+    if (d > best && detail::orient3d_filtered(p[0], p[t[1]], p[t[2]], p[i]) != 0) best = d, t[3] = static_cast<int>(i);
   }
   return t[3] >= 0;
 }
@@ -51,7 +52,7 @@ bool add_point(const std::vector<Vec3>& p, int pi, std::vector<Face>& faces) {
   bool any = false;
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const Face& q = faces[f];
-    visible[f] = orient3d(p[q[0]], p[q[1]], p[q[2]], p[pi]) < 0;
+    visible[f] = detail::orient3d_filtered(p[q[0]], p[q[1]], p[q[2]], p[pi]) < 0;
     any = any || visible[f];
   }
   if (!any) return false;
@@ -97,7 +98,7 @@ ConvexHull convex_hull(const std::vector<Vec3>& points) {
   std::vector<Face> faces;
   for (int k = 0; k < 4; ++k) {  // each face oriented away from the fourth vertex
     Face f{t[k], t[(k + 1) % 4], t[(k + 2) % 4]};
-    if (orient3d(p[f[0]], p[f[1]], p[f[2]], p[t[(k + 3) % 4]]) < 0) std::swap(f[1], f[2]);
+    if (detail::orient3d_filtered(p[f[0]], p[f[1]], p[f[2]], p[t[(k + 3) % 4]]) < 0) std::swap(f[1], f[2]);
     faces.push_back(f);
   }
   // Far points first: they are the likely vertices, and the hull they make rejects the rest.

@@ -1,4 +1,5 @@
 #include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/detail/filtered_predicates.h"
 
 #include <algorithm>
 #include <cmath>
@@ -195,8 +196,8 @@ ClosestPoints triangle_triangle_distance(const Triangle& a_in, const Triangle& b
   ClosestPoints best;
   // The exact decision is made on the given coordinates (the shifted copies may have rounded);
   // a certified plane separation settles most pairs without it.
-  const bool apart = TrianglePlane::of(b_in[0], b_in[1], b_in[2]).separates(a_in[0], a_in[1], a_in[2]) ||
-                     TrianglePlane::of(a_in[0], a_in[1], a_in[2]).separates(b_in[0], b_in[1], b_in[2]);
+  const bool apart = detail::plane_separates(detail::plane_of(b_in[0], b_in[1], b_in[2]), a_in[0], a_in[1], a_in[2]) ||
+                     detail::plane_separates(detail::plane_of(a_in[0], a_in[1], a_in[2]), b_in[0], b_in[1], b_in[2]);
   if (!apart && triangles_intersect(a_in, b_in)) {
     best.on_a = best.on_b = intersection_point(a, b) + origin;
     return best;

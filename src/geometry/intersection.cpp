@@ -1,4 +1,5 @@
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/geometry/detail/filtered_predicates.h"
 
 #include <algorithm>
 
@@ -6,6 +7,10 @@
 
 namespace bvh_collision {
 namespace {
+
+// The filtered predicates inlined (geometry/detail/filtered_predicates.h), under short names.
+constexpr auto orient3 = detail::orient3d_filtered;
+constexpr auto orient2 = detail::orient2d_filtered;
 
 // ---- 2-D tests in the projection that drops coordinate k (injective on the plane in question).
 
@@ -21,8 +26,8 @@ bool within_box_2d(const Vec3& p1, const Vec3& p2, const Vec3& q, int k) {
 }
 
 bool segments_intersect_2d(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2, int k) {
-  const int o1 = orient2d(p1, p2, q1, k), o2 = orient2d(p1, p2, q2, k);
-  const int o3 = orient2d(q1, q2, p1, k), o4 = orient2d(q1, q2, p2, k);
+  const int o1 = orient2(p1, p2, q1, k), o2 = orient2(p1, p2, q2, k);
+  const int o3 = orient2(q1, q2, p1, k), o4 = orient2(q1, q2, p2, k);
   if (o1 * o2 < 0 && o3 * o4 < 0) return true;
   return (o1 == 0 && within_box_2d(p1, p2, q1, k)) || (o2 == 0 && within_box_2d(p1, p2, q2, k)) ||
          (o3 == 0 && within_box_2d(q1, q2, p1, k)) || (o4 == 0 && within_box_2d(q1, q2, p2, k));
@@ -30,7 +35,7 @@ bool segments_intersect_2d(const Vec3& p1, const Vec3& p2, const Vec3& q1, const
 
 // Closed, non-degenerate (in this projection) triangle.
 bool point_in_triangle_2d(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int k) {
-  const int o1 = orient2d(a, b, p, k), o2 = orient2d(b, c, p, k), o3 = orient2d(c, a, p, k);
+  const int o1 = orient2(a, b, p, k), o2 = orient2(b, c, p, k), o3 = orient2(c, a, p, k);
   return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
 }
 
@@ -54,7 +59,7 @@ bool triangles_intersect_2d(const Vec3* a, const Vec3* b, int k) {
 
 // The line through u and v (not in the triangle's plane) passes through closed triangle abc.
 bool line_crosses_triangle(const Vec3& u, const Vec3& v, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const int o1 = orient3d(u, v, a, b), o2 = orient3d(u, v, b, c), o3 = orient3d(u, v, c, a);
+  const int o1 = orient3(u, v, a, b), o2 = orient3(u, v, b, c), o3 = orient3(u, v, c, a);
   return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
 }
 
@@ -94,7 +99,7 @@ bool triangles_intersect_special(const Vec3* a, const Vec3* b) {
 }  // namespace
 
 bool segments_intersect(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2) {
-  if (orient3d(p1, p2, q1, q2) != 0) return false;  // not coplanar
+  if (orient3(p1, p2, q1, q2) != 0) return false;  // not coplanar
   // Coplanar: find a projection that is injective on the common plane (some non-collinear triple
   // keeps non-zero area in it).
   const Vec3* pts[4] = {&p1, &p2, &q1, &q2};
@@ -104,7 +109,7 @@ bool segments_intersect(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Ve
       for (int i = 0, n = 0; i < 4; ++i) {
         if (i != skip) t[n++] = pts[i];
       }
-      if (orient2d(*t[0], *t[1], *t[2], k) != 0) return segments_intersect_2d(p1, p2, q1, q2, k);
+      if (orient2(*t[0], *t[1], *t[2], k) != 0) return segments_intersect_2d(p1, p2, q1, q2, k);
     }
   }
   // All four points on one line: compare intervals along a coordinate that varies on it (an
@@ -126,7 +131,7 @@ bool segment_intersects_triangle(const Vec3& u, const Vec3& v, const Vec3& a, co
     const Vec3 seg[3] = {u, v, v};  // a segment as a degenerate triangle
     return degenerate_vs_geometry(tri, seg, true);
   }
-  const int su = orient3d(a, b, c, u), sv = orient3d(a, b, c, v);
+  const int su = orient3(a, b, c, u), sv = orient3(a, b, c, v);
   if (u == v) {
     return su == 0 && point_in_triangle_2d(u, a, b, c, projection_axis(a, b, c));
   }
@@ -138,9 +143,9 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   const Vec3 a[3] = {a0, a1, a2};
   const Vec3 b[3] = {b0, b1, b2};
   // Sides of a's vertices against b's plane, and of b's against a's; all on one strict side: apart.
-  const int sa[3] = {orient3d(b0, b1, b2, a0), orient3d(b0, b1, b2, a1), orient3d(b0, b1, b2, a2)};
+  const int sa[3] = {orient3(b0, b1, b2, a0), orient3(b0, b1, b2, a1), orient3(b0, b1, b2, a2)};
   if (sa[0] * sa[1] > 0 && sa[0] * sa[2] > 0) return false;
-  const int sb[3] = {orient3d(a0, a1, a2, b0), orient3d(a0, a1, a2, b1), orient3d(a0, a1, a2, b2)};
+  const int sb[3] = {orient3(a0, a1, a2, b0), orient3(a0, a1, a2, b1), orient3(a0, a1, a2, b2)};
   if (sb[0] * sb[1] > 0 && sb[0] * sb[2] > 0) return false;
   // All zero: coplanar, or the other triangle is degenerate (its plane is undefined).
   if ((sa[0] == 0 && sa[1] == 0 && sa[2] == 0) || (sb[0] == 0 && sb[1] == 0 && sb[2] == 0)) {

@@ -1,5 +1,7 @@
 #include "bvh_collision/geometry/predicates.h"
 
+#include "bvh_collision/geometry/detail/filtered_predicates.h"
+
 #include <array>
 #include <cmath>
 
@@ -128,6 +130,19 @@ int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
     if (k != dominant && orient2d(a, b, c, k) != 0) return k;
   }
   return -1;
+}
+
+}  // namespace bvh_collision
+
+namespace bvh_collision {
+
+int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return detail::orient3d_filtered(a, b, c, d); }
+int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int drop) { return detail::orient2d_filtered(a, b, c, drop); }
+
+TrianglePlane TrianglePlane::of(const Vec3& t0, const Vec3& t1, const Vec3& t2) { return detail::plane_of(t0, t1, t2); }
+int TrianglePlane::side(const Vec3& v) const { return detail::plane_side(*this, v); }
+bool TrianglePlane::separates(const Vec3& a, const Vec3& b, const Vec3& c) const {
+  return detail::plane_separates(*this, a, b, c);
 }
 
 }  // namespace bvh_collision
