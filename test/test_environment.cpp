@@ -6,6 +6,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 
+#include <iostream>
 #include <random>
 #include <set>
 
@@ -184,6 +185,45 @@ TEST(MeshAgainstOctree, SolidsInsideEachOther) {
   EXPECT_FALSE(mesh_meets_octree(big, Transform::Identity(), one, 0.0, 0.0, false));
   EXPECT_EQ(mesh_octree_distance(big, Transform::Identity(), one, true).distance, 0.0);
   EXPECT_GT(mesh_octree_distance(big, Transform::Identity(), one, false).distance, 0.2);
+}
+
+// The tolerance's early exit may answer "collision" for a volume near a cube, but never beyond
+// padding + tolerance (DESIGN.md section 2). Boxes (few triangles, flat leaf volumes) turned so
+// that an edge faces a voxel's edge are separated only along the cross product of the two edges:
+// a test of the boxes' face axes alone sees them overlap however far apart they are.
+TEST(MeshAgainstOctree, ToleranceNeverReportsBeyondPaddingPlusTolerance) {
+  const double res = 0.1;
+  Octree tree(res);
+  const Vec3 voxel(0.05, 0.05, 0.05);
+  tree.update(*tree.grid().key(voxel), true);
+  const Vec3 lo = tree.cube_min(*tree.grid().key(voxel)), hi = lo + Vec3::Constant(res);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int early = 0, checked = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const TriangleMesh mesh = box_mesh(Vec3(0.02 + 0.2 * std::abs(u(rng())), 0.02 + 0.2 * std::abs(u(rng())), 0.3));
+    const Bvh<Obb> bvh = Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2});
+    // Turned about a random axis near a diagonal, centred on the voxel's diagonal outside it.
+    Transform pose = test::random_rotation(rng(), voxel + Vec3(1, 1, 0).normalized() * (0.1 + 0.25 * std::abs(u(rng()))) +
+                                                      Vec3(u(rng()), u(rng()), u(rng())) * 0.05);
+    double d = std::numeric_limits<double>::infinity();
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle tri = mesh.triangle(t);
+      Vec3 on_t, on_b;
+      d = std::min(d, triangle_box_distance(Triangle{{pose * tri[0], pose * tri[1], pose * tri[2]}}, lo, hi, on_t, on_b));
+    }
+    for (const double padding : {0.0, 0.005}) {
+      for (const double tolerance : {0.002, 0.02}) {
+        const bool hit = mesh_meets_octree(bvh, pose, tree, padding, tolerance, false);
+        ++checked;
+        if (hit && d > padding) ++early;
+        ASSERT_FALSE(hit && d > padding + tolerance + 1e-12)
+            << "case " << i << ": collision reported at distance " << d << " > padding " << padding << " + tolerance "
+            << tolerance;
+        if (d <= padding) ASSERT_TRUE(hit) << "case " << i << ": a miss";
+      }
+    }
+  }
+  std::cout << early << " of " << checked << " answers used the tolerance\n";
 }
 
 // A box meeting one voxel by a face, an edge or a corner, from each of the 26 directions, exactly

@@ -325,9 +325,12 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     if (!node_meets_cube(world[it.node], frame.lo(it.cube) + Vec3::Constant(half), half, allowance)) continue;
     // Every point of the volume lies within `slack` of the node's triangles, so a volume within
     // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
-    // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.)
+    // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.) The test
+    // above skips the nine edge axes, so it may pass boxes that are far apart edge to edge: the
+    // shortcut takes all fifteen axes (overlap_carried), whose rounding allowance is counted too.
     const bool cube_leaf = tree.is_leaf(it.cube.node);
-    const bool settled = cube_leaf && tolerance > 0.0 && n.slack <= tolerance;
+    const bool settled = cube_leaf && tolerance > 0.0 && n.slack + 1e-9 * (n.size + half) <= tolerance &&
+                         overlap_carried(n.volume, frame.box(it.cube), padding);
     if (settled || (cube_leaf && n.is_leaf())) {
       const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
       for (std::int32_t i = n.first; i < n.first + n.count && !settled; ++i) {
