@@ -217,6 +217,48 @@ TYPED_TEST(BvhOracle, SolidsContainment) {
   EXPECT_FALSE(collide(open_bvh, Transform(), small, inside).collision);
 }
 
+// A link made of closed shells that overlap (two boxes, as a URDF's mesh often is) is solid in
+// the overlap too, and a cavity (an inward-facing inner shell) is not solid: containment is the
+// winding number, checked against the boxes themselves. Ray parity called the overlap outside.
+TYPED_TEST(BvhOracle, ContainmentIsTheWindingNumber) {
+  auto shell = [](const Vec3& size, const Vec3& at, bool inward) {
+    TriangleMesh m = box_mesh(size);
+    for (Vec3& v : m.vertices) v += at;
+    if (inward) {
+      for (auto& t : m.triangles) std::swap(t[1], t[2]);
+    }
+    return m;
+  };
+  auto join = [](TriangleMesh a, const TriangleMesh& b) {
+    const auto offset = static_cast<std::int32_t>(a.vertices.size());
+    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    return a;
+  };
+  const Vec3 size(1.0, 0.6, 0.6), at_a(0, 0, 0), at_b(0.5, 0.1, 0.05);
+  const auto two = Bvh<TypeParam>::build(join(shell(size, at_a, false), shell(size, at_b, false)));
+  const auto hollow = Bvh<TypeParam>::build(join(shell(Vec3(1, 1, 1), at_a, false), shell(Vec3(0.4, 0.4, 0.4), at_a, true)));
+  ASSERT_TRUE(two.closed());
+  ASSERT_TRUE(hollow.closed());
+  auto in_box = [](const Vec3& p, const Vec3& size, const Vec3& at) { return ((p - at).cwiseAbs() - 0.5 * size).maxCoeff() <= 0; };
+  std::uniform_real_distribution<double> u(-0.8, 1.3);
+  int overlap = 0, cavity = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3 p(u(rng()), 0.6 * u(rng()), 0.6 * u(rng()));
+    const bool a = in_box(p, size, at_a), b = in_box(p, size, at_b);
+    overlap += a && b;
+    ASSERT_EQ(contains_point(two, p), a || b) << p.transpose();
+    const bool in_cavity = ((p.cwiseAbs() - Vec3::Constant(0.2)).maxCoeff() < 0);
+    cavity += in_cavity;
+    ASSERT_EQ(contains_point(hollow, p), in_box(p, Vec3(1, 1, 1), at_a) && !in_cavity) << p.transpose();
+  }
+  EXPECT_GT(overlap, 100);
+  EXPECT_GT(cavity, 10);
+  // A small box wholly in the overlap collides with the two-shell link (solids).
+  const auto small = Bvh<TypeParam>::build(box_mesh(Vec3(0.1, 0.1, 0.1)));
+  EXPECT_TRUE(collide(two, Transform(), small, Transform::Translation(Vec3(0.25, 0.05, 0.02))).collision);
+}
+
 TYPED_TEST(BvhOracle, EmptyMeshCollidesWithNothing) {
   const auto empty = Bvh<TypeParam>::build(TriangleMesh{});
   const auto box = Bvh<TypeParam>::build(box_mesh(Vec3(1, 1, 1)));

@@ -66,8 +66,11 @@ TEST(CheckTool, PrintsTheMatrix) {
   EXPECT_NE(r.out.find("skip link1:link2 adjacent"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("check base_link:link3"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("tool_frame"), std::string::npos) << "links without geometry are not listed";
-  // 10 links with geometry: 45 pairs.
-  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 45);
+  // 10 links with geometry: 45 pairs, then the 10 solid links (boxes, cylinders, spheres) and no
+  // open mesh.
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 55);
+  EXPECT_NE(r.out.find("\nsolid base_link\n"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("\nopen "), std::string::npos) << r.out;
 }
 
 TEST(CheckTool, SampledPairsAndTheirCache) {

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/intersection.h"
 #include "bvh_collision/geometry/predicates.h"
 #include "cgal_oracle.h"
@@ -278,6 +279,26 @@ TEST(Distance, TranslationFarFromOriginChangesNothing) {
       ASSERT_NEAR(triangle_triangle_distance(ta, tb).distance, base, 1e-12 * (1 + base)) << "case " << i;
     }
   }
+}
+
+// Why a mesh is not closed: a removed face leaves its three edges without a reverse; a flipped
+// face makes its edges repeat in one direction; a closed box has none.
+TEST(Mesh, OpenEdgesSayWhyAMeshIsNotClosed) {
+  const TriangleMesh box = box_mesh(Vec3(1, 2, 3));
+  EXPECT_TRUE(open_edges(box).empty());
+  EXPECT_TRUE(is_closed(box));
+  TriangleMesh hole = box;
+  hole.triangles.pop_back();
+  const auto holes = open_edges(hole);
+  ASSERT_EQ(holes.size(), 3u);
+  for (const MeshEdge& e : holes) EXPECT_EQ(e.fault, MeshEdge::Fault::kBoundary);
+  EXPECT_FALSE(is_closed(hole));
+  TriangleMesh flipped = box;
+  std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);
+  bool repeated = false;
+  for (const MeshEdge& e : open_edges(flipped)) repeated = repeated || e.fault == MeshEdge::Fault::kRepeated;
+  EXPECT_TRUE(repeated);
+  EXPECT_FALSE(is_closed(flipped));
 }
 
 }  // namespace

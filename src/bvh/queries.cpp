@@ -287,9 +287,11 @@ class DistanceTraversal {
 
 enum class Crossing { kNone, kProper, kOnSurface, kDegenerate };
 
-// How the segment q -> far meets closed triangle t, exactly.
-Crossing classify_crossing(const Vec3& q, const Vec3& far, const Triangle& t) {
+// How the segment q -> far meets closed triangle t, exactly. A proper crossing's `sign` is +1
+// when q is on the triangle's positive side (det[t1 - t0, t2 - t0, q - t0] < 0), else -1.
+Crossing classify_crossing(const Vec3& q, const Vec3& far, const Triangle& t, int& sign) {
   const int sq = detail::orient3d_filtered(t[0], t[1], t[2], q);
+  sign = sq;
   const int sf = detail::orient3d_filtered(t[0], t[1], t[2], far);
   if (sq * sf > 0) return Crossing::kNone;
   if (sq == 0) {
@@ -320,7 +322,7 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
   for (const Vec3& dir : kDirections) {
     const Vec3 far = point + reach * dir.normalized();
     const Ray ray(point, far - point, 1.0);
-    int crossings = 0;
+    int winding = 0;  // signed crossings: the winding number of the surface around the point
     bool degenerate = false;
     TraversalStack<std::int32_t> stack;
     stack.push(0);
@@ -335,13 +337,17 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
       }
       for (std::int32_t i = n.first; i < n.first + n.count && !degenerate; ++i) {
         ++s.primitive_tests;
-        const Crossing c = classify_crossing(point, far, bvh.triangles()[i]);
+        int sign = 0;
+        const Crossing c = classify_crossing(point, far, bvh.triangles()[i], sign);
         if (c == Crossing::kOnSurface) return true;
         degenerate = c == Crossing::kDegenerate;
-        crossings += c == Crossing::kProper;
+        if (c == Crossing::kProper) winding += sign;
       }
     }
-    if (!degenerate) return bvh.closed() && crossings % 2 == 1;
+    // A closed, consistently oriented surface winds an integer number of times around each point
+    // not on it: 0 outside, +-1 inside one shell, 2 where two shells overlap (parity would call
+    // that outside). A cavity's inward shell cancels its outer one.
+    if (!degenerate) return bvh.closed() && winding != 0;
   }
   return bvh.closed();  // every ray grazed an edge: err towards "inside" (never a false negative)
 }

@@ -12,6 +12,7 @@
 
 #include "bvh_collision/checker/acm_sampling.h"
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/link_solidity.h"
 #include "bvh_collision/robot/robot_description.h"
 
 namespace bvh_collision {
@@ -142,6 +143,10 @@ void print_acm(const CollisionChecker& checker, std::ostream& out) {
     return x.substr(x.find(' ')) < y.substr(y.find(' '));  // by pair name
   });
   for (const std::string& l : lines) out << l << "\n";
+  // Which links are solids (a link inside one collides), and which meshes are not, and why.
+  const LinkSolidity solidity = link_solidity(m);
+  for (const int l : solidity.solid_links) out << "solid " << m.links()[l].name << "\n";
+  for (const OpenMesh& open : solidity.open_meshes) out << "open " << describe(open, m) << "\n";
 }
 
 // Adds pairs that --sample-acm N random configurations show never or always colliding, from the

@@ -30,23 +30,39 @@ std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t x) {
 
 }  // namespace
 
-bool is_closed(const TriangleMesh& mesh) {
-  if (mesh.triangles.empty()) return false;
+std::vector<MeshEdge> open_edges(const TriangleMesh& mesh) {
   const std::vector<std::int32_t> id = welded_ids(mesh);
-  // Directed edge -> count; closed and oriented iff each directed edge appears once and its
+  // Directed edge -> count: closed and oriented iff each directed edge appears once and its
   // reverse appears once too.
   std::map<std::pair<std::int32_t, std::int32_t>, int> directed;
+  std::vector<MeshEdge> out;
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = id[t[k]], b = id[t[(k + 1) % 3]];
-      if (a == b) return false;  // a degenerate edge: not a proper surface
-      if (++directed[{a, b}] > 1) return false;
+      if (a == b) {
+        out.push_back({mesh.vertices[a], mesh.vertices[b], MeshEdge::Fault::kDegenerate});
+      } else if (++directed[{a, b}] == 2) {
+        out.push_back({mesh.vertices[a], mesh.vertices[b], MeshEdge::Fault::kRepeated});
+      }
     }
   }
   for (const auto& [edge, count] : directed) {
-    if (directed.find({edge.second, edge.first}) == directed.end()) return false;
+    if (directed.find({edge.second, edge.first}) == directed.end()) {
+      out.push_back({mesh.vertices[edge.first], mesh.vertices[edge.second], MeshEdge::Fault::kBoundary});
+    }
   }
-  return true;
+  return out;
+}
+
+bool is_closed(const TriangleMesh& mesh) { return !mesh.triangles.empty() && open_edges(mesh).empty(); }
+
+const char* edge_fault_name(MeshEdge::Fault f) {
+  switch (f) {
+    case MeshEdge::Fault::kBoundary: return "boundary";
+    case MeshEdge::Fault::kRepeated: return "repeated";
+    case MeshEdge::Fault::kDegenerate: return "degenerate";
+  }
+  return "?";
 }
 
 std::vector<std::int32_t> component_representatives(const TriangleMesh& mesh) {

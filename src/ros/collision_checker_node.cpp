@@ -8,6 +8,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "bvh_collision/octree/octomap_bridge.h"
+#include "bvh_collision/robot/link_solidity.h"
 
 namespace bvh_collision {
 
@@ -29,6 +30,7 @@ CollisionCheckerNode::CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle p
   ROS_INFO_STREAM("collision_checker: " << summary_.to_string() << "; world frame '" << params_.world_frame
                                         << "', octree resolution " << params_.resolution << " m, "
                                         << checker_->checked_pairs().size() << " link pairs checked");
+  log_solidity();
   publish_status();  // last: once these are set, the node is up
 }
 
@@ -141,6 +143,25 @@ void CollisionCheckerNode::advertise() {
       nh_.createWallTimer(ros::WallDuration(1.0), &CollisionCheckerNode::publish_diagnostics, this);
 }
 
+// One line: which links are solids (a link inside one collides) and which meshes are open, and
+// why; the same lists as parameters (robot/solid_links, robot/open_meshes).
+void CollisionCheckerNode::log_solidity() {
+  const RobotModel& m = checker_->model();
+  const LinkSolidity solidity = link_solidity(m);
+  solid_links_.clear();
+  open_meshes_.clear();
+  for (const int l : solidity.solid_links) solid_links_.push_back(m.links()[l].name);
+  for (const OpenMesh& open : solidity.open_meshes) open_meshes_.push_back(describe(open, m));
+  std::ostringstream line;
+  line << "collision_checker: " << solid_links_.size() << " solid links";
+  for (std::size_t i = 0; i < solid_links_.size(); ++i) {
+    line << (i ? ", " : " (") << solid_links_[i] << (i + 1 == solid_links_.size() ? ")" : "");
+  }
+  line << "; " << open_meshes_.size() << " open meshes (not solids)";
+  for (const std::string& open : open_meshes_) line << "; " << open;
+  ROS_INFO_STREAM(line.str());
+}
+
 void CollisionCheckerNode::publish_status() {
   private_nh_.setParam("world_frame", params_.world_frame);
   private_nh_.setParam("resolution", params_.resolution);
@@ -152,6 +173,8 @@ void CollisionCheckerNode::publish_status() {
   private_nh_.setParam("robot/variables", checker_->model().variable_names());
   private_nh_.setParam("robot/checked_pairs", static_cast<int>(checker_->checked_pairs().size()));
   private_nh_.setParam("robot/reach", checker_->reach());
+  private_nh_.setParam("robot/solid_links", solid_links_);
+  private_nh_.setParam("robot/open_meshes", open_meshes_);
 }
 
 void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPtr& msg) {

@@ -91,9 +91,11 @@ template <class BV>
 RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, const Vec3& direction,
                double max_range, bool any_hit = false, QueryStats* stats = nullptr);
 
-// Is the point (in the mesh's own frame) inside or on the closed mesh? Decided by the parity of
-// exact ray crossings; a ray grazing an edge or vertex is replaced by another one. For a mesh
-// that is not closed, answers whether the point lies on it.
+// Is the point (in the mesh's own frame) inside or on the closed mesh? Decided by the winding
+// number: exact ray crossings (orient3d) counted with their orientation, so a mesh of several
+// overlapping closed shells is solid where they overlap, and a cavity (an inward shell) is not.
+// A ray grazing an edge or vertex is replaced by another one. For a mesh that is not closed,
+// answers whether the point lies on it.
 template <class BV>
 bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats = nullptr);
 

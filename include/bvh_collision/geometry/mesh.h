@@ -24,6 +24,19 @@ struct TriangleMesh {
 // edge is used by exactly two triangles, once in each direction. Such a mesh bounds a solid.
 bool is_closed(const TriangleMesh& mesh);
 
+// An edge that keeps a mesh from being closed, and why: no triangle uses it the other way (a hole
+// or a flipped neighbour), a second triangle uses it the same way (inconsistent orientation or
+// more than two triangles on it), or its two ends are one point.
+struct MeshEdge {
+  enum class Fault { kBoundary, kRepeated, kDegenerate };
+  Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+  Fault fault = Fault::kBoundary;
+};
+const char* edge_fault_name(MeshEdge::Fault f);
+
+// Every such edge (none for a closed mesh).
+std::vector<MeshEdge> open_edges(const TriangleMesh& mesh);
+
 // One vertex (as an index) from each connected component (triangles sharing a vertex position).
 // A mesh wholly inside a solid has all of these inside it; one outside has none.
 std::vector<std::int32_t> component_representatives(const TriangleMesh& mesh);

@@ -91,6 +91,7 @@ class CollisionCheckerNode {
   Environment initial_environment() const;
   void advertise();
   void publish_status();
+  void log_solidity();
 
   // The robot's state and pose (collision_checker_node.cpp).
   void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg);
@@ -136,6 +137,7 @@ class CollisionCheckerNode {
   NodeParameters params_;
   std::shared_ptr<urdf::ModelInterface> urdf_;
   RobotSummary summary_;
+  std::vector<std::string> solid_links_, open_meshes_;  // link_solidity(), for the log and parameters
   PackageResolver resolver_;
   std::unique_ptr<const CollisionChecker> checker_;
   std::unique_ptr<const JointValueMap> joint_map_;
