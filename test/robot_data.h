@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -22,6 +23,16 @@ inline bool running_in_ci() {
 }
 
 inline std::string source_dir() { return BVH_COLLISION_SOURCE_DIR; }
+
+// Cases for a randomized test: all of them in the Release build, a quarter under the sanitizers
+// (about ten times slower), which look for memory errors, not for rarer geometry.
+inline int sized(int cases) {
+#if defined(BVH_COLLISION_SANITIZED) && BVH_COLLISION_SANITIZED
+  return std::max(1, cases / 4);
+#else
+  return cases;
+#endif
+}
 
 }  // namespace bvh_collision::test
 

@@ -199,7 +199,7 @@ TEST(MeshAgainstOctree, ToleranceNeverReportsBeyondPaddingPlusTolerance) {
   const Vec3 lo = tree.cube_min(*tree.grid().key(voxel)), hi = lo + Vec3::Constant(res);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int early = 0, checked = 0;
-  for (int i = 0; i < 4000; ++i) {
+  for (int i = 0; i < test::sized(4000); ++i) {
     const TriangleMesh mesh = box_mesh(Vec3(0.02 + 0.2 * std::abs(u(rng())), 0.02 + 0.2 * std::abs(u(rng())), 0.3));
     const Bvh<Obb> bvh = Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2});
     // Turned about a random axis near a diagonal, centred on the voxel's diagonal outside it.

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "cgal_oracle.h"
+#include "robot_data.h"
 
 namespace bvh_collision::test {
 
@@ -43,7 +44,7 @@ Vec3 grid_point(double offset) {
 TEST(FloatingPointContract, PredicatesUnderFmaContractionEqualCgal) {
   if (!__builtin_cpu_supports("fma")) GTEST_SKIP() << "this CPU has no FMA: the probe was not run";
   int zero_signs = 0;
-  for (int i = 0; i < 50000; ++i) {
+  for (int i = 0; i < test::sized(50000); ++i) {
     const double scale = i % 3 == 0 ? 1e-3 : (i % 3 == 1 ? 1.0 : 1e3);
     Vec3 a = random_point(scale), b = random_point(scale), c = random_point(scale), d = nearly_on_plane(a, b, c);
     if (i % 4 == 0) a = grid_point(1e4), b = grid_point(1e4), c = grid_point(1e4), d = grid_point(1e4);
@@ -63,7 +64,7 @@ TEST(FloatingPointContract, PredicatesUnderFmaContractionEqualCgal) {
     const Triangle t{{a, b, c}}, u{{d, a + 0.5 * (b - a), d + (c - a)}};
     ASSERT_EQ(probe_triangles_intersect(t, u), cgal_triangles_intersect(t, u)) << "case " << i;
   }
-  EXPECT_GT(zero_signs, 1000) << "exactly degenerate cases must be among those tested";
+  EXPECT_GT(zero_signs, test::sized(50000) / 50) << "exactly degenerate cases must be among those tested";
 }
 
 }  // namespace
