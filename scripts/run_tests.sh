@@ -3,6 +3,10 @@
 # (unless SANITIZE=1), then the unit tests under AddressSanitizer and UndefinedBehaviorSanitizer
 # in their own build folder (when SANITIZE=1 or CI=true). The last line is the combined count,
 # `N passed, N failed, N skipped`; the exit status is non-zero when anything failed.
+#
+# Unit tests need no master and share nothing, so ctest runs JOBS of them at once (through
+# catkin's run_tests.py, which writes each XML result, a failure one when a test crashes). Launch
+# tests start masters and time services, so they run one at a time.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 export PATH="/usr/bin:$PATH"
@@ -13,6 +17,11 @@ JOBS=${JOBS:-2}
 run_normal=1; run_sanitized=0
 [[ "${SANITIZE:-0}" == "1" ]] && { run_normal=0; run_sanitized=1; }
 [[ "${CI:-}" == "true" ]] && run_sanitized=1
+
+# Every gtest of a build folder, JOBS at a time; a failure's output is printed in full.
+unit_tests() {
+  ctest --test-dir "$1" -j"$JOBS" -R '^_ctest_bvh_collision_gtest_' --output-on-failure
+}
 
 lint_dir="$BUILD/lint_results"
 result_dirs=("$lint_dir")
@@ -29,22 +38,24 @@ cat > "$lint_dir/catkin_lint.xml" <<XML
 XML
 
 if [[ $run_normal == 1 ]]; then
-  echo "== unit and launch tests ($BUILD)"
+  echo "== unit and launch tests ($BUILD) $(date +%T)"
   rm -rf "$BUILD/test_results"
-  make -C "$BUILD" run_tests || status=1
+  unit_tests "$BUILD" || status=1
+  echo "== launch tests ($BUILD) $(date +%T)"
+  ctest --test-dir "$BUILD" -R '^_ctest_bvh_collision_rostest_' --output-on-failure || status=1
   # catkin_test_results is the gate; its counts double gtest cases, so the summary counts XML.
   catkin_test_results "$BUILD/test_results" > /dev/null || status=1
   result_dirs+=("$BUILD/test_results")
 fi
 
 if [[ $run_sanitized == 1 ]]; then
-  echo "== unit tests under ASan + UBSan ($SAN_BUILD)"
+  echo "== unit tests under ASan + UBSan ($SAN_BUILD) $(date +%T)"
   if cmake -S . -B "$SAN_BUILD" -DBVH_COLLISION_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$SAN_BUILD.configure.log" 2>&1 \
       && make -C "$SAN_BUILD" -j"$JOBS" unit_tests; then
     rm -rf "$SAN_BUILD/test_results"
     ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1} \
       UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1} \
-      make -C "$SAN_BUILD" run_tests_bvh_collision_gtest || status=1
+      unit_tests "$SAN_BUILD" || status=1
     catkin_test_results "$SAN_BUILD/test_results" > /dev/null || status=1
     result_dirs+=("$SAN_BUILD/test_results")
   else
@@ -57,7 +68,7 @@ if [[ $run_sanitized == 1 ]]; then
   fi
 fi
 
-echo "== summary"
+echo "== summary $(date +%T)"
 [[ $run_normal == 1 ]] && python3 scripts/test_summary.py "release" "$BUILD/test_results" | tail -1
 [[ $run_sanitized == 1 ]] && python3 scripts/test_summary.py "sanitized" "$SAN_BUILD/test_results" | tail -1
 python3 scripts/test_summary.py "total" "${result_dirs[@]}" > "$BUILD/test_summary.txt" || status=1

@@ -183,7 +183,9 @@ TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval
         EXPECT_EQ(ours, 0.0) << o.name << " " << i;
       }
     }
-    EXPECT_GT(decided, test::sized(24) / 3) << o.name;
+    // At least a third of the placements are apart by more than the sampling's bound (the
+    // others test only that no contact is missed).
+    EXPECT_GE(decided, test::sized(24) / 3) << o.name;
   }
 }
 
