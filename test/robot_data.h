@@ -26,7 +26,7 @@ inline std::string source_dir() { return BVH_COLLISION_SOURCE_DIR; }
 
 // Cases for a randomized test: all of them in the Release build, a quarter under the sanitizers
 // (about ten times slower), which look for memory errors, not for rarer geometry.
-inline int sized(int cases) {
+constexpr int sized(int cases) {
 #if defined(BVH_COLLISION_SANITIZED) && BVH_COLLISION_SANITIZED
   return std::max(1, cases / 4);
 #else

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "bvh_collision/checker/check_tool.h"
+#include "check_tool.h"
 #include "robot_data.h"
 
 namespace bvh_collision {

@@ -135,7 +135,8 @@ TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
   std::mt19937_64 rng(17);
   std::vector<Transform> poses;
   int colliding = 0, fcl_above_truth = 0;
-  const int kConfigurations = 2000, kDistanceConfigurations = 500;  // all 2000 agreed in a one-off run (109 s)
+  // All 2000 agreed in a one-off run (109 s); a quarter under the sanitizers (test::sized).
+  const int kConfigurations = test::sized(2000), kDistanceConfigurations = test::sized(500);
   for (int i = 0; i < kConfigurations; ++i) {
     const std::vector<double> state = random_configuration(m, rng);
     forward_kinematics(m, state.data(), poses);
@@ -242,7 +243,7 @@ TEST_P(SelfCollision, DistanceToleranceBoundsTheError) {
   std::mt19937_64 rng(31);
   SelfCollisionRequest exact;
   exact.distance = true;
-  for (int i = 0; i < 150; ++i) {
+  for (int i = 0; i < test::sized(150); ++i) {
     const auto s = random_configuration(f.checker->model(), rng);
     const SelfCollisionResult truth = f.checker->check_self(s.data(), exact);
     for (const double tolerance : {0.001, 0.005, 0.02, 0.1}) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/distance.h"
 
 namespace bvh_collision {
@@ -279,7 +280,7 @@ struct BvhBuilder {
         }
         worst = std::max(worst, best);
       }
-      node.slack = std::min(node.slack, (worst + box.half.norm() / kCells) * (1 + 1e-9));
+      node.slack = std::min(node.slack, (worst + box.half.norm() / kCells) * (1 + kPoseMargin));
     }
   }
 

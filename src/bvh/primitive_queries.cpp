@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "bvh_collision/bvh/traversal_stack.h"
+#include "bvh_collision/bvh/traversal.h"
 #include "bvh_collision/geometry/convex_distance.h"
 
 namespace bvh_collision {
@@ -55,17 +55,11 @@ CollisionResult collide(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
   const Transform rel = relative_transform(pose_mesh, pose_primitive);
   const Obb box = primitive_box(primitive, rel);
   const ConvexShape shape = ConvexShape::of(primitive);
-  TraversalStack<std::int32_t> stack;
-  stack.push(0);
-  while (!stack.empty()) {
-    const BvhNode<Obb>& n = mesh.nodes()[stack.pop()];
+  auto visit = [&](const BvhNode<Obb>& n) {
     ++result.stats.volume_tests;
-    if (!overlap_carried(n.volume, box, request.padding)) continue;
-    if (!n.is_leaf()) {
-      stack.push(n.right);
-      stack.push(n.left);
-      continue;
-    }
+    return overlap_carried(n.volume, box, request.padding) ? Visit::kEnter : Visit::kSkip;
+  };
+  depth_first(mesh, visit, [&](const BvhNode<Obb>& n) {
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++result.stats.primitive_tests;
       const Triangle& t = mesh.triangles()[i];
@@ -75,9 +69,10 @@ CollisionResult collide(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
       if (result.contacts.size() < request.max_contacts) {
         result.contacts.push_back(contact_from(d, t, pose_mesh, rel.t, mesh.triangle_id(i)));
       }
-      if (result.contacts.size() >= request.max_contacts) return result;
+      if (result.contacts.size() >= request.max_contacts) return true;
     }
-  }
+    return false;
+  });
   if (result.collision) return result;
   if (Vec3 where; one_holds_the_other(mesh, primitive, rel, request.solids, result.stats, where)) {
     result.collision = true;
@@ -99,39 +94,26 @@ DistanceResult distance(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
   const RelativeFrame same = RelativeFrame::from(Transform::Identity());
   const ConvexShape shape = ConvexShape::of(primitive);
   double best = request.upper_bound;
-  struct Entry {
-    std::int32_t node;
-    double bound;
-  };
   auto bound = [&](std::int32_t n) {
     ++result.stats.volume_tests;
     return distance_lower_bound(mesh.nodes()[n].volume, box, same);
   };
-  TraversalStack<Entry> stack;
-  stack.push({0, bound(0)});
-  while (!stack.empty()) {
-    const Entry e = stack.pop();
-    if (e.bound >= best - request.tolerance) continue;  // cannot beat `best` by more than the tolerance
-    const BvhNode<Obb>& n = mesh.nodes()[e.node];
-    if (n.is_leaf()) {
-      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
-        ++result.stats.primitive_tests;
-        const ConvexDistance d = convex_distance(ConvexShape::of(mesh.triangles()[i]), shape, rel);
-        if (d.distance < best) {
-          best = d.distance;
-          result.distance = d.distance;
-          result.point_a = d.on_a;
-          result.point_b = d.on_b;
-          result.triangle_a = mesh.triangle_id(i);
-        }
+  auto leaf = [&](const BvhNode<Obb>& n) {
+    for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+      ++result.stats.primitive_tests;
+      const ConvexDistance d = convex_distance(ConvexShape::of(mesh.triangles()[i]), shape, rel);
+      if (d.distance < best) {
+        best = d.distance;
+        result.distance = d.distance;
+        result.point_a = d.on_a;
+        result.point_b = d.on_b;
+        result.triangle_a = mesh.triangle_id(i);
       }
-      continue;
     }
-    Entry l{n.left, bound(n.left)}, r{n.right, bound(n.right)};
-    if (l.bound < r.bound) std::swap(l, r);  // nearer child next
-    if (l.bound < best) stack.push(l);
-    if (r.bound < best) stack.push(r);
-  }
+    return false;
+  };
+  // A node that cannot beat `best` by more than the tolerance is not entered.
+  nearest_first(mesh, bound, leaf, [&] { return best - request.tolerance; });
   if (result.distance > 0.0) {
     if (Vec3 where; one_holds_the_other(mesh, primitive, rel, request.solids, result.stats, where)) {
       result.distance = 0.0;

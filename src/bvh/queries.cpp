@@ -1,6 +1,7 @@
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/geometry/detail/filtered_predicates.h"
-#include "bvh_collision/bvh/traversal_stack.h"
+#include "bvh_collision/bvh/traversal.h"
+#include "bvh_collision/geometry/safety_margin.h"
 
 #include <algorithm>
 #include <array>
@@ -11,10 +12,6 @@
 
 namespace bvh_collision {
 namespace {
-
-struct NodePair {
-  std::int32_t a, b;
-};
 
 Triangle carried(const Triangle& t, const RelativeFrame& f) {
   if (f.pure_translation) return Triangle{{t[0] + f.t, t[1] + f.t, t[2] + f.t}};
@@ -33,14 +30,6 @@ double penetration_behind(const Triangle& s, const Triangle& t) {
   double depth = 0.0;
   for (int i = 0; i < 3; ++i) depth = std::max(depth, -(s[i] - t[0]).dot(n));
   return depth;
-}
-
-// Which of a node pair to descend: the larger volume, unless it is a leaf.
-template <class BV>
-bool descend_a(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
-  if (nb.is_leaf()) return true;
-  if (na.is_leaf()) return false;
-  return na.size >= nb.size;
 }
 
 // ------------------------------------------------------------------------------------ collide
@@ -64,25 +53,24 @@ class CollisionTraversal {
         cache.stamp.resize(b_.nodes().size(), 0);
       }
     }
-    TraversalStack<NodePair> stack;
-    stack.push({0, 0});
-    while (!stack.empty() && !done()) {
-      const NodePair p = stack.pop();
-      const BvhNode<BV>& na = a_.nodes()[p.a];
-      const BvhNode<BV>& nb = b_.nodes()[p.b];
+    auto visit = [this](std::int32_t a, std::int32_t b) {
+      const BvhNode<BV>& na = a_.nodes()[a];
+      const BvhNode<BV>& nb = b_.nodes()[b];
       ++result_.stats.volume_tests;
-      if (!overlaps(na.volume, p.b)) continue;
-      if (request_.max_contacts == 0 && request_.tolerance > 0.0 &&
-          na.slack + nb.slack <= request_.tolerance) {
+      if (!overlaps(na.volume, b)) return Visit::kSkip;
+      if (request_.max_contacts == 0 && request_.tolerance > 0.0 && na.slack + nb.slack <= request_.tolerance) {
         result_.collision = result_.within_tolerance = true;  // d <= padding + tolerance
-        return;
+        return Visit::kStop;
       }
-      if (na.is_leaf() && nb.is_leaf()) {
-        leaf_pair(na, nb);
-      } else {
-        push_children(na, nb, p, stack);
-      }
-    }
+      return Visit::kEnter;
+    };
+    auto leaf = [this](const BvhNode<BV>& na, const BvhNode<BV>& nb) {
+      leaf_pair(na, nb);
+      return done();
+    };
+    depth_first_pair(a_, b_, visit, leaf, [this](const BvhNode<BV>& na, const BvhNode<BV>& nb, bool split_a) {
+      return left_nearer(na, nb, split_a);
+    });
   }
 
  private:
@@ -101,23 +89,17 @@ class CollisionTraversal {
     }
   }
 
-  // The child pair whose centres are closer is popped first: a penetration is reached in
+  // The child pair whose centres are closer is entered first: a penetration is reached in
   // fewer steps, which is what a boolean query (stopping at the first contact) pays for.
-  void push_children(const BvhNode<BV>& na, const BvhNode<BV>& nb, const NodePair& p,
-                     TraversalStack<NodePair>& stack) const {
-    if (descend_a(na, nb)) {
+  bool left_nearer(const BvhNode<BV>& na, const BvhNode<BV>& nb, bool split_a) const {
+    if (split_a) {
       const Vec3 cb = frame_.apply(center(nb.volume));
-      const bool left_nearer = (center(a_.nodes()[na.left].volume) - cb).squaredNorm() <=
-                               (center(a_.nodes()[na.right].volume) - cb).squaredNorm();
-      stack.push({left_nearer ? na.right : na.left, p.b});
-      stack.push({left_nearer ? na.left : na.right, p.b});
-    } else {
-      const Vec3 ca = center(na.volume);
-      const bool left_nearer = (frame_.apply(center(b_.nodes()[nb.left].volume)) - ca).squaredNorm() <=
-                               (frame_.apply(center(b_.nodes()[nb.right].volume)) - ca).squaredNorm();
-      stack.push({p.a, left_nearer ? nb.right : nb.left});
-      stack.push({p.a, left_nearer ? nb.left : nb.right});
+      return (center(a_.nodes()[na.left].volume) - cb).squaredNorm() <=
+             (center(a_.nodes()[na.right].volume) - cb).squaredNorm();
     }
+    const Vec3 ca = center(na.volume);
+    return (frame_.apply(center(b_.nodes()[nb.left].volume)) - ca).squaredNorm() <=
+           (frame_.apply(center(b_.nodes()[nb.right].volume)) - ca).squaredNorm();
   }
 
   bool done() const {
@@ -142,7 +124,8 @@ class CollisionTraversal {
           record(ta, tb, i, j, nullptr);
         } else {
           const double reach = request_.padding + a_.spheres()[i].radius + b_.spheres()[j].radius;
-          if ((a_.spheres()[i].center - cb).squaredNorm() > reach * reach * (1 + 1e-9)) continue;
+          const double grown = grown_radius(reach);
+          if ((a_.spheres()[i].center - cb).squaredNorm() > grown * grown) continue;
           const ClosestPoints d = triangle_triangle_distance(ta, tb);
           if (d.distance > request_.padding) continue;
           record(ta, tb, i, j, &d);
@@ -211,38 +194,16 @@ class DistanceTraversal {
                     double upper_bound, DistanceResult& result)
       : a_(a), b_(b), frame_(RelativeFrame::from(b_in_a)), tolerance_(tolerance), result_(result), best_(upper_bound) {}
 
-  // Best-first: always expand the pair with the smallest lower bound, so the first leaf pairs
-  // reached are close to the answer and the bound prunes the most (a min-heap on the bound).
+  // Best-first (best_first_pair): the first leaf pairs reached are close to the answer, and the
+  // bound prunes the most.
   void run() {
-    struct Entry {
-      std::int32_t a, b;
-      double bound;
-      bool operator<(const Entry& o) const { return bound > o.bound; }  // smallest on top
-    };
-    thread_local std::vector<Entry> heap;
-    heap.clear();
-    heap.push_back({0, 0, bound(0, 0)});
-    while (!heap.empty()) {
-      std::pop_heap(heap.begin(), heap.end());
-      const Entry e = heap.back();
-      heap.pop_back();
-      if (e.bound >= best_ - tolerance_) break;  // every remaining bound is at least this
-      const BvhNode<BV>& na = a_.nodes()[e.a];
-      const BvhNode<BV>& nb = b_.nodes()[e.b];
-      if (na.is_leaf() && nb.is_leaf()) {
-        leaf_pair(na, nb);
-        if (best_ == 0.0) break;
-        continue;
-      }
-      const bool split_a = descend_a(na, nb);
-      for (const std::int32_t child : {split_a ? na.left : nb.left, split_a ? na.right : nb.right}) {
-        const Entry c = split_a ? Entry{child, e.b, bound(child, e.b)} : Entry{e.a, child, bound(e.a, child)};
-        if (c.bound < best_ - tolerance_) {
-          heap.push_back(c);
-          std::push_heap(heap.begin(), heap.end());
-        }
-      }
-    }
+    best_first_pair(
+        a_, b_, [this](std::int32_t i, std::int32_t j) { return bound(i, j); },
+        [this](const BvhNode<BV>& na, const BvhNode<BV>& nb) {
+          leaf_pair(na, nb);
+          return best_ == 0.0;
+        },
+        [this] { return best_ - tolerance_; });
     result_.distance = result_.triangle_a >= 0 ? best_ : std::numeric_limits<double>::infinity();
   }
 
@@ -259,8 +220,9 @@ class DistanceTraversal {
       const double rb = b_.spheres()[j].radius;
       for (std::int32_t i = na.first; i < na.first + na.count; ++i) {
         // Bounding spheres of the two triangles: most pairs end here.
-        const double lb = (a_.spheres()[i].center - cb).norm() - a_.spheres()[i].radius - rb;
-        if (lb * (1 + 1e-12) >= best_ - tolerance_) continue;
+        const double apart = (a_.spheres()[i].center - cb).norm(), ra = a_.spheres()[i].radius;
+        const double lb = apart - ra - rb - kVolumeMargin * (apart + ra + rb);
+        if (lb >= best_ - tolerance_) continue;
         ++result_.stats.primitive_tests;
         const ClosestPoints d = triangle_triangle_distance(a_.triangles()[i], tb);
         if (d.distance < best_) {
@@ -324,26 +286,24 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
     const Ray ray(point, far - point, 1.0);
     int winding = 0;  // signed crossings: the winding number of the surface around the point
     bool degenerate = false;
-    TraversalStack<std::int32_t> stack;
-    stack.push(0);
-    while (!stack.empty() && !degenerate) {
-      const BvhNode<BV>& n = bvh.nodes()[stack.pop()];
+    bool on_surface = false;
+    auto visit = [&](const BvhNode<BV>& n) {
       ++s.volume_tests;
-      if (!ray_hits(n.volume, ray)) continue;
-      if (!n.is_leaf()) {
-        stack.push(n.left);
-        stack.push(n.right);
-        continue;
-      }
-      for (std::int32_t i = n.first; i < n.first + n.count && !degenerate; ++i) {
+      return ray_hits(n.volume, ray) ? Visit::kEnter : Visit::kSkip;
+    };
+    depth_first(bvh, visit, [&](const BvhNode<BV>& n) {
+      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
         ++s.primitive_tests;
         int sign = 0;
         const Crossing c = classify_crossing(point, far, bvh.triangles()[i], sign);
-        if (c == Crossing::kOnSurface) return true;
+        on_surface = c == Crossing::kOnSurface;
         degenerate = c == Crossing::kDegenerate;
+        if (on_surface || degenerate) return true;  // decided, or this ray cannot decide
         if (c == Crossing::kProper) winding += sign;
       }
-    }
+      return false;
+    });
+    if (on_surface) return true;
     // A closed, consistently oriented surface winds an integer number of times around each point
     // not on it: 0 outside, +-1 inside one shell, 2 where two shells overlap (parity would call
     // that outside). A cavity's inward shell cancels its outer one.
@@ -415,36 +375,22 @@ DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const V
     const BvhNode<BV>& node = bvh.nodes()[n];
     return (q - center(node.volume)).norm() - node.size;  // node.size circumscribes the volume
   };
-  struct Entry {
-    std::int32_t node;
-    double bound;
-  };
-  TraversalStack<Entry> stack;
-  stack.push({0, bound(0)});
-  while (!stack.empty()) {
-    const Entry e = stack.pop();
-    if (e.bound >= best) continue;
-    const BvhNode<BV>& n = bvh.nodes()[e.node];
-    if (n.is_leaf()) {
-      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
-        ++result.stats.primitive_tests;
-        const Triangle& t = bvh.triangles()[i];
-        const Vec3 c = closest_point_on_triangle(q, t[0], t[1], t[2]);
-        const double d = (c - q).norm();
-        if (d < best) {
-          best = d;
-          result.distance = d;
-          result.point_b = pose * c;
-          result.triangle_b = bvh.triangle_id(i);
-        }
+  auto leaf = [&](const BvhNode<BV>& n) {
+    for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+      ++result.stats.primitive_tests;
+      const Triangle& t = bvh.triangles()[i];
+      const Vec3 c = closest_point_on_triangle(q, t[0], t[1], t[2]);
+      const double d = (c - q).norm();
+      if (d < best) {
+        best = d;
+        result.distance = d;
+        result.point_b = pose * c;
+        result.triangle_b = bvh.triangle_id(i);
       }
-      continue;
     }
-    Entry l{n.left, bound(n.left)}, r{n.right, bound(n.right)};
-    if (l.bound < r.bound) std::swap(l, r);  // nearer child next
-    if (l.bound < best) stack.push(l);
-    if (r.bound < best) stack.push(r);
-  }
+    return false;
+  };
+  nearest_first(bvh, bound, leaf, [&] { return best; });
   return result;
 }
 
@@ -459,17 +405,11 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
   const Vec3 o = pose.R.transpose() * (origin - pose.t);
   const Vec3 d = pose.R.transpose() * (direction / len);
   double best = max_range > 0.0 ? max_range : std::numeric_limits<double>::max();
-  std::vector<std::int32_t> stack{0};
-  while (!stack.empty()) {
-    const BvhNode<BV>& n = bvh.nodes()[stack.back()];
-    stack.pop_back();
+  auto visit = [&](const BvhNode<BV>& n) {
     ++s.volume_tests;
-    if (!ray_hits(n.volume, Ray(o, d, best))) continue;
-    if (!n.is_leaf()) {
-      stack.push_back(n.right);
-      stack.push_back(n.left);
-      continue;
-    }
+    return ray_hits(n.volume, Ray(o, d, best)) ? Visit::kEnter : Visit::kSkip;
+  };
+  depth_first(bvh, visit, [&](const BvhNode<BV>& n) {
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++s.primitive_tests;
       const Triangle& t = bvh.triangles()[i];
@@ -485,10 +425,10 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
       hit.hit = true;
       hit.distance = dist;
       hit.triangle = bvh.triangle_id(i);
-      if (any_hit) break;
+      if (any_hit) return true;
     }
-    if (any_hit && hit.hit) break;
-  }
+    return false;
+  });
   if (hit.hit) hit.point = origin + hit.distance * (direction / len);
   return hit;
 }

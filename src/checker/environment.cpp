@@ -1,7 +1,10 @@
 #include "bvh_collision/checker/environment.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
+
+#include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
 namespace {
@@ -37,7 +40,8 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
       return *shape.mesh;
     }
     case ObjectShape::Kind::kSphere:
-    case ObjectShape::Kind::kCylinder: break;
+    case ObjectShape::Kind::kCylinder:
+    case ObjectShape::Kind::kCapsule: break;
   }
   return {};
 }
@@ -56,7 +60,13 @@ CollisionObject make_object(const std::string& id, const ObjectShape& shape, con
     }
     o.primitive = Primitive::cylinder(shape.radius, shape.length);
   }
-  if (shape.kind == ObjectShape::Kind::kSphere || shape.kind == ObjectShape::Kind::kCylinder) {
+  if (shape.kind == ObjectShape::Kind::kCapsule) {
+    if (!(positive(shape.radius) && std::isfinite(shape.length) && shape.length >= 0.0)) {
+      throw std::invalid_argument("object '" + id + "': capsule radius must be positive and its length non-negative, both finite");
+    }
+    o.primitive = Primitive::capsule(shape.radius, shape.length);
+  }
+  if (o.primitive.radius > 0.0) {  // a sphere, cylinder or capsule: exact, no mesh
     o.bound_radius = bounding_radius(o.primitive);
     return o;
   }
@@ -67,7 +77,7 @@ CollisionObject make_object(const std::string& id, const ObjectShape& shape, con
   for (const Vec3& v : used_vertices(mesh)) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
   o.bound_center = 0.5 * (lo + hi);
   for (const Vec3& v : used_vertices(mesh)) o.bound_radius = std::max(o.bound_radius, (v - o.bound_center).norm());
-  o.bound_radius = o.bound_radius * (1 + 1e-12) + 1e-12;
+  o.bound_radius = grown_radius(o.bound_radius);
   return o;
 }
 

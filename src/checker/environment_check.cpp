@@ -12,13 +12,13 @@ thread_local std::vector<Transform> tl_env_poses;
 
 bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const Octree& tree,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
-  const double padding = padding_[link];
-  for (const Shape& s : shapes_[link]) {
+  const double padding = m_->paddings()[link];
+  for (const LinkShape& s : m_->shapes()[link]) {
     const Transform p = pose * s.origin;
     OctreeContact contact;
     bool hit = false;
     if (s.mesh >= 0) {
-      hit = mesh_meets_octree(meshes_[s.mesh], p, tree, padding, request.tolerance, request.solids, &contact, &result.stats);
+      hit = mesh_meets_octree(m_->meshes()[s.mesh], p, tree, padding, request.tolerance, request.solids, &contact, &result.stats);
     } else if (s.primitive.kind != Primitive::Kind::kSphere) {
       hit = primitive_meets_octree(s.primitive, p, tree, padding, &contact, &result.stats);
     } else if (const auto cubes = tree.occupied_in_sphere(p.t, s.primitive.radius + padding, true); !cubes.empty()) {
@@ -36,18 +36,18 @@ bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const 
 
 bool CollisionChecker::link_meets_object(int link, const Transform& pose, const CollisionObject& object,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
-  const double padding = padding_[link];
-  const double reach = bounds_[link].radius + object.bound_radius + padding + request.tolerance;
-  if ((pose * bounds_[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
+  const double padding = m_->paddings()[link];
+  const double reach = m_->bounds()[link].radius + object.bound_radius + padding + request.tolerance;
+  if ((pose * m_->bounds()[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
   const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
   detail::PairRequest r;
   r.padding = padding;
   r.tolerance = request.tolerance;
   r.max_contacts = 1;
   r.solids = request.solids;
-  for (const Shape& s : shapes_[link]) {
+  for (const LinkShape& s : m_->shapes()[link]) {
     std::vector<MeshContact> contacts;
-    if (detail::shapes_collide(ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
+    if (detail::shapes_collide(m_->ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
       EnvironmentContact c{link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position};
       result.contacts.push_back(c);
       return true;
@@ -58,11 +58,11 @@ bool CollisionChecker::link_meets_object(int link, const Transform& pose, const 
 
 double CollisionChecker::link_octree_distance(int link, const Transform& pose, const Octree& tree, double best,
                                               bool solids, EnvironmentResult& result) const {
-  for (const Shape& s : shapes_[link]) {
+  for (const LinkShape& s : m_->shapes()[link]) {
     const Transform p = pose * s.origin;
     OctreeDistance d;
     if (s.mesh >= 0) {
-      d = mesh_octree_distance(meshes_[s.mesh], p, tree, solids, best, &result.stats);
+      d = mesh_octree_distance(m_->meshes()[s.mesh], p, tree, solids, best, &result.stats);
     } else if (s.primitive.kind != Primitive::Kind::kSphere) {
       d = primitive_octree_distance(s.primitive, p, tree, best, &result.stats);
     } else {
@@ -91,9 +91,9 @@ double CollisionChecker::link_octree_distance(int link, const Transform& pose, c
 double CollisionChecker::link_object_distance(int link, const Transform& pose, const CollisionObject& object,
                                               double best, bool solids, EnvironmentResult& result) const {
   const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
-  for (const Shape& s : shapes_[link]) {
+  for (const LinkShape& s : m_->shapes()[link]) {
     Vec3 wa, wb;
-    const double d = detail::shapes_distance(ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
+    const double d = detail::shapes_distance(m_->ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
     if (d < best) {
       best = d;
       result.min_distance = best;
@@ -110,15 +110,15 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
                                                       const EnvironmentRequest& request) const {
   EnvironmentResult result;
   std::vector<Transform>& poses = tl_env_poses;
-  kinematics_.compute(state, poses);
+  m_->kinematics().compute(state, poses);
   if (!is_rigid(request.root_pose)) throw std::invalid_argument("environment check: the root pose is not a finite rigid transform");
-  for (std::size_t l = 0; l < shapes_.size(); ++l) {
-    if (!shapes_[l].empty()) poses[l] = request.root_pose * poses[l];
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (!m_->shapes()[l].empty()) poses[l] = request.root_pose * poses[l];
   }
   const bool use_octree = request.octree && !env.octree().empty();
   const bool stop_early = !request.all_links && !request.distance;
-  for (std::size_t l = 0; l < shapes_.size() && !(stop_early && result.collision); ++l) {
-    if (shapes_[l].empty()) continue;
+  for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
+    if (m_->shapes()[l].empty()) continue;
     const int link = static_cast<int>(l);
     bool hit = use_octree && link_meets_octree(link, poses[l], env.octree(), request, result);
     for (std::size_t o = 0; request.objects && o < env.objects().size() && !(hit && !request.all_links); ++o) {
@@ -128,14 +128,14 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
   }
   if (!request.distance) return result;
   double best = std::numeric_limits<double>::infinity();
-  for (std::size_t l = 0; l < shapes_.size(); ++l) {
-    if (shapes_[l].empty()) continue;
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (m_->shapes()[l].empty()) continue;
     const int link = static_cast<int>(l);
     if (use_octree) best = link_octree_distance(link, poses[l], env.octree(), best, request.solids, result);
     for (std::size_t o = 0; request.objects && o < env.objects().size(); ++o) {
       const CollisionObject& object = env.objects()[o];
-      const double gap = (poses[l] * bounds_[l].center - object.pose * object.bound_center).norm() -
-                         bounds_[l].radius - object.bound_radius;
+      const double gap = (poses[l] * m_->bounds()[l].center - object.pose * object.bound_center).norm() -
+                         m_->bounds()[l].radius - object.bound_radius;
       if (gap < best) best = link_object_distance(link, poses[l], object, best, request.solids, result);
     }
   }

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 
-#include "bvh_collision/bvh/traversal_stack.h"
+#include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/traversal_stack.h"
+#include "bvh_collision/octree/cube_walk.h"
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
@@ -37,12 +39,7 @@ double bounds_gap(const Triangle& t, const Vec3& lo, const Vec3& hi) {
 
 Triangle in_world(const Triangle& t, const Transform& pose) { return Triangle{{pose * t[0], pose * t[1], pose * t[2]}}; }
 
-struct Cube {
-  std::int32_t node;
-  int depth;
-  OctreeKey corner;
-  std::uint64_t index;
-};
+using Cube = OctreeCube;
 
 // What the descent needs of the octree and the link's pose: a cube as a box in the link frame.
 struct CubeFrame {
@@ -55,20 +52,10 @@ struct CubeFrame {
     const Vec3 centre = lo(c) + Vec3::Constant(half);
     return Obb{link_from_world.R, link_from_world * centre, Vec3::Constant(half), half * std::sqrt(3.0)};
   }
-  Octree::Leaf leaf(const Cube& c) const { return {c.corner, c.depth, c.index, tree.value(c.node)}; }
-  // Calls f for each occupied child whose bit is set in `which`.
+  Octree::Leaf leaf(const Cube& c) const { return leaf_of(tree, c); }
   template <class F>
   void for_children(const Cube& c, F&& f, std::uint8_t which = 0xFF) const {
-    unsigned bits = which & tree.child_mask(c.node);
-    const std::int32_t first = tree.children_block(c.node);
-    while (bits) {
-      const int b = __builtin_ctz(bits);
-      bits &= bits - 1;
-      const std::int32_t child = first + b;
-      if (tree.occupied(tree.value(child))) {
-        f(Cube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
-      }
-    }
+    for_occupied_children(tree, c, std::forward<F>(f), which);
   }
 };
 
@@ -174,16 +161,11 @@ bool node_meets_cube(const NodeInWorld& n, const Vec3& c, double h, double reach
   return true;
 }
 
-std::optional<Cube> root_cube(const Octree& tree) {
-  if (tree.root() < 0 || !tree.occupied(tree.value(tree.root()))) return std::nullopt;
-  return Cube{tree.root(), 0, OctreeKey{}, 0};
-}
-
 // The smallest node holding every voxel the box [lo, hi] (world) can touch, found by descending
 // while the box's two corner keys fall into the same child (the seed's box descent): a link's
 // query starts there instead of 16 levels above.
 std::optional<Cube> start_cube(const Octree& tree, const Vec3& lo, const Vec3& hi) {
-  auto cube = root_cube(tree);
+  auto cube = occupied_root(tree);
   if (!cube) return cube;
   const auto a = tree.grid().key(lo), b = tree.grid().key(hi);
   if (!a || !b) return cube;
@@ -204,21 +186,18 @@ std::optional<Cube> start_cube(const Octree& tree, const Vec3& lo, const Vec3& h
 std::pair<Vec3, Vec3> world_bounds(const Bvh<Obb>& mesh, const Transform& pose, double margin) {
   const Obb& v = mesh.root().volume;
   const Vec3 centre = pose * v.center;
-  const Vec3 half = (pose.R * v.axes).cwiseAbs() * v.half + Vec3::Constant(margin + 1e-9 * (1.0 + centre.cwiseAbs().maxCoeff()));
+  const Vec3 half = (pose.R * v.axes).cwiseAbs() * v.half + Vec3::Constant(margin + pose_margin(centre.cwiseAbs().maxCoeff()));
   return {centre - half, centre + half};
 }
 
 // Does any occupied leaf inside `cube` meet the key range? Integer work only: a cheap test that
 // lets a link in free space skip every box test.
 bool occupied_in_range(const CubeFrame& frame, const Cube& cube, const KeyRange& range) {
-  TraversalStack<Cube> stack;
-  stack.push(cube);
-  while (!stack.empty()) {
-    const Cube c = stack.pop();
-    if (frame.tree.is_leaf(c.node)) return true;
-    frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
-  }
-  return false;
+  bool found = false;
+  descend_while(
+      frame.tree, cube, [](const Cube&) { return Visit::kEnter; }, [&](const Cube&) { return found = true; },
+      [&](const Cube& c) { return range.children(c.corner, c.depth); });
+  return found;
 }
 
 // Is the cube (centre c, half side h) inside the node's box, up to the rounding slack?
@@ -243,20 +222,19 @@ std::optional<Cube> cube_inside_solid(const Bvh<Obb>& mesh, const Transform& pos
   const KeyRange range(frame.tree.grid(), lo, hi);
   const double slack = rounding_slack(lo, hi, frame.lo(*root), frame.hi(*root));
   const NodeInWorld& volume = world[0];
-  TraversalStack<Cube> stack;
-  stack.push(*root);
-  while (!stack.empty()) {
-    const Cube c = stack.pop();
+  std::optional<Cube> inside;
+  auto visit = [&](const Cube& c) {
+    const double half = 0.5 * frame.tree.cube_size(c.depth);
+    return node_meets_cube(volume, frame.lo(c) + Vec3::Constant(half), half, slack) ? Visit::kEnter : Visit::kSkip;
+  };
+  auto leaf = [&](const Cube& c) {
     const double half = 0.5 * frame.tree.cube_size(c.depth);
     const Vec3 centre = frame.lo(c) + Vec3::Constant(half);
-    if (!node_meets_cube(volume, centre, half, slack)) continue;
-    if (!frame.tree.is_leaf(c.node)) {
-      frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
-    } else if (cube_within_node(volume, centre, half, slack) && contains_point(mesh, frame.link_from_world * centre, stats)) {
-      return c;
-    }
-  }
-  return std::nullopt;
+    if (cube_within_node(volume, centre, half, slack) && contains_point(mesh, frame.link_from_world * centre, stats)) inside = c;
+    return inside.has_value();
+  };
+  descend_while(frame.tree, *root, visit, leaf, [&](const Cube& c) { return range.children(c.corner, c.depth); });
+  return inside;
 }
 
 }  // namespace
@@ -329,7 +307,7 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
     // above skips the nine edge axes, so it may pass boxes that are far apart edge to edge: the
     // shortcut takes all fifteen axes (overlap_carried), whose rounding allowance is counted too.
     const bool cube_leaf = tree.is_leaf(it.cube.node);
-    const bool settled = cube_leaf && tolerance > 0.0 && n.slack + 1e-9 * (n.size + half) <= tolerance &&
+    const bool settled = cube_leaf && tolerance > 0.0 && n.slack + kPoseMargin * (n.size + half) <= tolerance &&
                          overlap_carried(n.volume, frame.box(it.cube), padding);
     if (settled || (cube_leaf && n.is_leaf())) {
       const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
@@ -370,7 +348,7 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
 OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, bool solids,
                                     double upper_bound, QueryStats* stats) {
   OctreeDistance best;
-  const auto root = root_cube(tree);
+  const auto root = occupied_root(tree);
   if (!root || mesh.empty()) return best;
   QueryStats local;
   QueryStats& s = stats ? *stats : local;
@@ -433,29 +411,18 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
 
 OctreeDistance point_octree_distance(const Vec3& p, const Octree& tree, double upper_bound) {
   OctreeDistance best;
-  const auto root = root_cube(tree);
+  const auto root = occupied_root(tree);
   if (!root) return best;
   const CubeFrame frame{tree, Transform::Identity()};
   double bound = upper_bound;
-  std::vector<std::pair<double, Cube>> stack{{0.0, *root}}, children;
-  while (!stack.empty()) {
-    const auto [lower, c] = stack.back();
-    stack.pop_back();
-    if (lower >= bound) continue;
-    if (tree.is_leaf(c.node)) {
-      const Vec3 nearest = p.cwiseMax(frame.lo(c)).cwiseMin(frame.hi(c));
-      bound = (p - nearest).norm();
-      best = {bound, p, nearest, frame.leaf(c)};
-      continue;
-    }
-    children.clear();
-    frame.for_children(c, [&](const Cube& child) {
-      const double d = (p - p.cwiseMax(frame.lo(child)).cwiseMin(frame.hi(child))).norm();
-      if (d < bound) children.emplace_back(d, child);
-    });
-    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    stack.insert(stack.end(), children.begin(), children.end());
-  }
+  auto lower = [&](const Cube& c) { return (p - p.cwiseMax(frame.lo(c)).cwiseMin(frame.hi(c))).norm(); };
+  auto leaf = [&](const Cube& c) {
+    const Vec3 nearest = p.cwiseMax(frame.lo(c)).cwiseMin(frame.hi(c));
+    bound = (p - nearest).norm();
+    best = {bound, p, nearest, frame.leaf(c)};
+    return false;
+  };
+  nearest_cubes_first(tree, *root, lower, leaf, [&] { return bound; });
   return best;
 }
 
@@ -486,38 +453,35 @@ struct PrimitiveInWorld {
 bool primitive_meets_octree(const Primitive& primitive, const Transform& pose, const Octree& tree, double padding,
                             OctreeContact* contact, QueryStats* stats) {
   const PrimitiveInWorld shape(primitive, pose);
-  const double margin = padding + 1e-9 * (1.0 + pose.t.cwiseAbs().maxCoeff());
+  const double margin = padding + pose_margin(pose.t.cwiseAbs().maxCoeff());
   const Vec3 lo = pose.t - shape.box.reach - Vec3::Constant(margin), hi = pose.t + shape.box.reach + Vec3::Constant(margin);
   const auto start = start_cube(tree, lo, hi);
   if (!start) return false;
   const CubeFrame frame{tree, pose.inverse()};
   const KeyRange range(tree.grid(), lo, hi);
   const double slack = padding + rounding_slack(lo, hi, frame.lo(*start), frame.hi(*start));
-  TraversalStack<Cube> stack;
-  stack.push(*start);
-  while (!stack.empty()) {
-    const Cube c = stack.pop();
+  bool met = false;
+  auto visit = [&](const Cube& c) {
     const double half = 0.5 * tree.cube_size(c.depth);
-    const Vec3 centre = frame.lo(c) + Vec3::Constant(half);
     if (stats) ++stats->volume_tests;
-    if (!node_meets_cube(shape.box, centre, half, slack)) continue;
-    if (!tree.is_leaf(c.node)) {
-      frame.for_children(c, [&](const Cube& child) { stack.push(child); }, range.children(c.corner, c.depth));
-      continue;
-    }
+    return node_meets_cube(shape.box, frame.lo(c) + Vec3::Constant(half), half, slack) ? Visit::kEnter : Visit::kSkip;
+  };
+  auto leaf = [&](const Cube& c) {
+    const double half = 0.5 * tree.cube_size(c.depth);
     if (stats) ++stats->primitive_tests;
-    const ConvexDistance d = shape.against(centre, half, padding);
-    if (d.lower_bound > padding) continue;
+    const ConvexDistance d = shape.against(frame.lo(c) + Vec3::Constant(half), half, padding);
+    if (d.lower_bound > padding) return false;
     if (contact) *contact = {frame.leaf(c), pose * (0.5 * (d.on_a + d.on_b))};
-    return true;
-  }
-  return false;
+    return met = true;
+  };
+  descend_while(tree, *start, visit, leaf, [&](const Cube& c) { return range.children(c.corner, c.depth); });
+  return met;
 }
 
 OctreeDistance primitive_octree_distance(const Primitive& primitive, const Transform& pose, const Octree& tree,
                                          double upper_bound, QueryStats* stats) {
   OctreeDistance best;
-  const auto root = root_cube(tree);
+  const auto root = occupied_root(tree);
   if (!root) return best;
   const PrimitiveInWorld shape(primitive, pose);
   const CubeFrame frame{tree, pose.inverse()};
@@ -525,33 +489,23 @@ OctreeDistance primitive_octree_distance(const Primitive& primitive, const Trans
   const Obb own{Mat3::Identity(), Vec3::Zero(), half, half.norm()};
   const RelativeFrame same = RelativeFrame::from(Transform::Identity());
   double bound = upper_bound;
-  std::vector<std::pair<double, Cube>> stack{{0.0, *root}}, children;
-  while (!stack.empty()) {
-    const auto [lower, c] = stack.back();
-    stack.pop_back();
-    if (lower >= bound) continue;
-    if (tree.is_leaf(c.node)) {
-      if (stats) ++stats->primitive_tests;
-      const double h = 0.5 * tree.cube_size(c.depth);
-      const ConvexDistance d = shape.against(frame.lo(c) + Vec3::Constant(h), h, std::numeric_limits<double>::quiet_NaN());
-      const double dist = d.intersecting ? 0.0 : d.distance;
-      if (dist < bound) {
-        bound = dist;
-        const Vec3 on_link = pose * d.on_a, on_cube = d.intersecting ? on_link : Vec3(pose * d.on_b);
-        best = {dist, on_link, on_cube, frame.leaf(c)};
-      }
-      continue;
+  auto lower = [&](const Cube& c) {
+    if (stats) ++stats->volume_tests;
+    return distance_lower_bound(own, frame.box(c), same);
+  };
+  auto leaf = [&](const Cube& c) {
+    if (stats) ++stats->primitive_tests;
+    const double h = 0.5 * tree.cube_size(c.depth);
+    const ConvexDistance d = shape.against(frame.lo(c) + Vec3::Constant(h), h, std::numeric_limits<double>::quiet_NaN());
+    const double dist = d.intersecting ? 0.0 : d.distance;
+    if (dist < bound) {
+      bound = dist;
+      const Vec3 on_link = pose * d.on_a, on_cube = d.intersecting ? on_link : Vec3(pose * d.on_b);
+      best = {dist, on_link, on_cube, frame.leaf(c)};
     }
-    children.clear();
-    frame.for_children(c, [&](const Cube& child) {
-      if (stats) ++stats->volume_tests;
-      const double d = distance_lower_bound(own, frame.box(child), same);
-      if (d < bound) children.emplace_back(d, child);
-    });
-    // Nearest on top, so that a small bound comes early and prunes the rest.
-    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    stack.insert(stack.end(), children.begin(), children.end());
-  }
+    return false;
+  };
+  nearest_cubes_first(tree, *root, lower, leaf, [&] { return bound; });
   return best;
 }
 

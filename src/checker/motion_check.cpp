@@ -10,60 +10,18 @@
 
 namespace bvh_collision {
 
-// For each link, walk to the root: a revolute joint moves the link's points at most at their
-// distance from the joint's origin per radian, which is bounded by the sum of the joint offsets
-// below it plus the link's geometry reach (the chain's length, whatever the other joints do);
-// a prismatic joint moves them at 1 m per metre and lengthens the chain by its largest travel
-// within its source variable's limits (link_speed widens the bound for values beyond them).
-void CollisionChecker::compute_motion_rates() {
-  const auto& links = model_.links();
-  const auto& joints = model_.joints();
-  std::vector<double> travel(model_.variable_count(), 0.0);  // largest |value| within limits
-  for (const RobotJoint& joint : joints) {
-    if (joint.variable >= 0) travel[joint.variable] = std::max(std::abs(joint.lower), std::abs(joint.upper));
-  }
-  motion_rates_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
-  motion_turns_.assign(links.size(), std::vector<double>(model_.variable_count(), 0.0));
-  motion_slides_.assign(links.size(), {});
-  reach_ = 0.0;
-  for (std::size_t l = 0; l < links.size(); ++l) {
-    if (bounds_[l].radius < 0.0) continue;
-    double reach = bounds_[l].center.norm() + bounds_[l].radius + padding_[l];
-    for (int j = links[l].parent_joint; j >= 0; j = links[joints[j].parent_link].parent_joint) {
-      const RobotJoint& joint = joints[j];
-      int variable = joint.variable;
-      double multiplier = 1.0, offset = 0.0;
-      if (joint.mimic >= 0) {
-        variable = joints[joint.mimic].variable;
-        multiplier = std::abs(joint.multiplier);
-        offset = std::abs(joint.offset);
-      }
-      if (variable >= 0 && (joint.type == JointType::kRevolute || joint.type == JointType::kContinuous)) {
-        motion_rates_[l][variable] += multiplier * reach;
-        motion_turns_[l][variable] += multiplier;
-      } else if (variable >= 0 && joint.type == JointType::kPrismatic) {
-        motion_rates_[l][variable] += multiplier;
-        reach += multiplier * travel[variable] + offset;
-        motion_slides_[l].push_back({variable, multiplier, travel[variable]});
-      }
-      reach += joint.origin.t.norm();
-    }
-    reach_ = std::max(reach_, reach);
-  }
-}
-
 // A slide beyond its travel lengthens every lever above it by at most |multiplier| times the
 // excess, which is largest at an end of the segment (|value| is convex along it).
 double CollisionChecker::link_speed(int link, const double* start, const double* goal) const {
-  const auto& rates = motion_rates_[link];
+  const auto& rates = m_->motion_rates()[link];
   double speed = 0.0, turning = 0.0;
   for (std::size_t j = 0; j < rates.size(); ++j) {
     const double change = std::abs(goal[j] - start[j]);
     speed += rates[j] * change;
-    turning += motion_turns_[link][j] * change;
+    turning += m_->motion_turns()[link][j] * change;
   }
   double excess = 0.0;
-  for (const SlideBound& slide : motion_slides_[link]) {
+  for (const SlideBound& slide : m_->motion_slides()[link]) {
     const double farthest = std::max(std::abs(start[slide.variable]), std::abs(goal[slide.variable]));
     excess += slide.multiplier * std::max(0.0, farthest - slide.travel);
   }
@@ -190,12 +148,12 @@ MotionResult CollisionChecker::check_motion(const double* start, const double* g
   if (!std::isfinite(request.min_clearance) || request.min_clearance < 0.0) {
     throw std::invalid_argument("motion check: min_clearance must be finite and >= 0");
   }
-  for (std::size_t j = 0; j < model_.variable_count(); ++j) {
+  for (std::size_t j = 0; j < m_->robot().variable_count(); ++j) {
     if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) {
-      throw std::invalid_argument("motion check: " + model_.variable_names()[j] + " is not finite");
+      throw std::invalid_argument("motion check: " + m_->robot().variable_names()[j] + " is not finite");
     }
   }
-  Segment segment(start, goal, model_.variable_count());
+  Segment segment(start, goal, m_->robot().variable_count());
   return request.resolution > 0.0 ? motion_in_steps(*this, segment, env, request)
                                   : motion_certified(*this, segment, env, request);
 }

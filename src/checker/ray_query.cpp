@@ -30,9 +30,9 @@ RayCastResult CollisionChecker::cast_ray(const double* state, const Environment&
   RayCastResult result;
   result.distance = max_range > 0.0 ? max_range : std::numeric_limits<double>::infinity();
   std::vector<Transform> poses;
-  kinematics_.compute(state, poses);
-  for (std::size_t l = 0; l < shapes_.size(); ++l) {
-    if (shapes_[l].empty()) continue;
+  m_->kinematics().compute(state, poses);
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (m_->shapes()[l].empty()) continue;
     const double d = ray_meets_link(static_cast<int>(l), root_pose * poses[l], origin, unit, result.distance);
     if (std::isfinite(d) && d <= result.distance && (!result.hit || d < result.distance)) {
       result = {true, d, origin + d * unit, static_cast<int>(l), std::string(), false};

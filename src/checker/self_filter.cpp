@@ -46,14 +46,14 @@ std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
 bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const {
   // "On or within": a point exactly at the padding distance counts.
   const double reach = std::nextafter(padding, std::numeric_limits<double>::infinity());
-  for (const Shape& s : shapes_[link]) {
+  for (const LinkShape& s : m_->shapes()[link]) {
     const Transform sp = pose * s.origin;
     if (s.mesh < 0) {
       const Vec3 local = sp.R.transpose() * (p - sp.t);
       if ((closest_point(s.primitive, local) - local).norm() <= padding) return true;
       continue;
     }
-    const Bvh<Obb>& mesh = meshes_[s.mesh];
+    const Bvh<Obb>& mesh = m_->meshes()[s.mesh];
     if (point_distance(mesh, sp, p, reach).distance <= padding) return true;
     if (mesh.closed() && contains_point(mesh, sp.R.transpose() * (p - sp.t))) return true;
   }
@@ -63,14 +63,14 @@ bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3
 double CollisionChecker::ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit,
                                         double length) const {
   double first = std::numeric_limits<double>::infinity();
-  for (const Shape& s : shapes_[link]) {
+  for (const LinkShape& s : m_->shapes()[link]) {
     const Transform sp = pose * s.origin;
     if (s.mesh < 0) {
       const Mat3 Rt = sp.R.transpose();
       first = std::min(first, ray_entry(s.primitive, Rt * (origin - sp.t), Rt * unit, length));
       continue;
     }
-    const RayHit hit = raycast(meshes_[s.mesh], sp, origin, unit, std::min(first, length));
+    const RayHit hit = raycast(m_->meshes()[s.mesh], sp, origin, unit, std::min(first, length));
     if (hit.hit) first = std::min(first, hit.distance);
   }
   return first;
@@ -84,14 +84,14 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
   if (!sensor.allFinite()) throw std::invalid_argument("self filter: the sensor origin is not finite");
   if (!is_rigid(root_pose)) throw std::invalid_argument("self filter: the root pose is not a finite rigid transform");
   std::vector<Transform> poses;
-  kinematics_.compute(state, poses);
+  m_->kinematics().compute(state, poses);
   const Vec3 origin = sensor.cast<double>();
   std::vector<LinkInScan> links;
-  for (std::size_t l = 0; l < shapes_.size(); ++l) {
-    if (shapes_[l].empty()) continue;
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (m_->shapes()[l].empty()) continue;
     const int link = static_cast<int>(l);
     poses[l] = root_pose * poses[l];
-    links.push_back({link, poses[l], poses[l] * bounds_[l].center, bounds_[l].radius,
+    links.push_back({link, poses[l], poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius,
                      point_on_link(link, poses[l], origin, padding)});
   }
   // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`

@@ -7,6 +7,7 @@
 
 #include "bvh_collision/bvh/primitive_queries.h"
 #include "bvh_collision/geometry/convex_distance.h"
+#include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision::detail {
 namespace {
@@ -77,7 +78,7 @@ double primitives_distance(const ShapeRef& a, const Transform& pa, const ShapeRe
 bool sphere_mesh_collide(const ShapeRef& sphere, const Transform& ps, const ShapeRef& mesh, const Transform& pm,
                          const PairRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) {
   const double reach = sphere.primitive.radius + request.padding;
-  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, reach * (1 + 1e-12) + 1e-15);
+  const DistanceResult d = point_distance(*mesh.mesh, pm, ps.t, grown_radius(reach));
   stats += d.stats;
   bool hit = d.distance <= reach;
   if (!hit && request.solids) hit = contains_point(*mesh.mesh, pm.inverse() * ps.t, &stats);

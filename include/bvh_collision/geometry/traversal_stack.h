@@ -1,12 +1,21 @@
-// The stack of a hierarchy traversal (BVH against BVH, BVH against octree).
+// The stack of a hierarchy traversal (BVH, BVH pair, octree, BVH against octree), and what a
+// traversal's callback answers for a node it reached.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <type_traits>
 #include <vector>
 
 namespace bvh_collision {
+
+// What a traversal does with a node (or node pair) it reached.
+enum class Visit : std::uint8_t {
+  kSkip,   // prune it
+  kEnter,  // descend into it (a leaf goes to the leaf callback)
+  kStop,   // end the traversal now
+};
 
 // A stack that lives on the C++ stack for the usual depths (no allocation per query) and moves
 // to the heap only when a degenerate hierarchy needs more. The local slots are raw bytes: items

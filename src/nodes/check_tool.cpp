@@ -1,4 +1,4 @@
-#include "bvh_collision/checker/check_tool.h"
+#include "check_tool.h"
 
 #include <algorithm>
 #include <cmath>

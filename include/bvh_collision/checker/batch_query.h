@@ -1,0 +1,15 @@
+// Boolean checks of many states at once (CollisionChecker::check_batch): the request.
+#pragma once
+
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+// A batch of states checked for collision, boolean (check_batch).
+struct BatchRequest {
+  bool self = true, environment = true;
+  double tolerance = 0.0;  // DESIGN.md section 2
+  Transform root_pose;     // the root link in the world frame
+};
+
+}  // namespace bvh_collision

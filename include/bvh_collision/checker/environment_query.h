@@ -1,0 +1,42 @@
+// The robot against its environment (CollisionChecker::check_environment): request and result.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/geometry/types.h"
+#include "bvh_collision/octree/octree.h"
+
+namespace bvh_collision {
+
+struct EnvironmentRequest {
+  double tolerance = 0.0;  // DESIGN.md section 2
+  bool all_links = false;  // false: stop at the first colliding link
+  bool distance = false;   // also the minimum distance from the robot to any obstacle
+  bool solids = true;      // closed meshes bound solids; occupied space is solid
+  bool octree = true;      // check against the octree...
+  bool objects = true;     // ...and against the collision objects
+  Transform root_pose;     // the root link in the environment's (world) frame: a moving base
+};
+
+struct EnvironmentContact {
+  int link = -1;
+  std::string object;            // the object's id; empty for the octree
+  Octree::Leaf voxel;            // the occupied cube, for the octree
+  Vec3 position = Vec3::Zero();  // world frame
+};
+
+struct EnvironmentResult {
+  bool collision = false;
+  std::vector<EnvironmentContact> contacts;  // one per colliding (link, obstacle), in checking order
+  double min_distance = std::numeric_limits<double>::quiet_NaN();  // only when asked; inf: no obstacle
+  int closest_link = -1;
+  std::string closest_object;  // empty: the octree (when closest_link >= 0)
+  Octree::Leaf closest_voxel;
+  Vec3 point_link = Vec3::Zero(), point_obstacle = Vec3::Zero();  // world frame witnesses
+  QueryStats stats;
+};
+
+}  // namespace bvh_collision

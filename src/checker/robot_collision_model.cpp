@@ -1,0 +1,140 @@
+#include "bvh_collision/checker/robot_collision_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "bvh_collision/geometry/safety_margin.h"
+
+namespace bvh_collision {
+namespace {
+
+// A sphere in the link frame that holds every shape of the link.
+LinkBound bounding_sphere(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes) {
+  Aabb box;
+  for (const auto& s : shapes) {
+    if (s.mesh < 0) {
+      const double r = bounding_radius(s.primitive);
+      box.extend(s.origin.t - Vec3::Constant(r));
+      box.extend(s.origin.t + Vec3::Constant(r));
+      continue;
+    }
+    for (const Triangle& t : meshes[s.mesh].triangles()) {
+      for (int k = 0; k < 3; ++k) box.extend(s.origin * t[k]);
+    }
+  }
+  const Vec3 c = center(box);
+  double r = 0.0;
+  for (const auto& s : shapes) {
+    if (s.mesh < 0) {
+      r = std::max(r, (s.origin.t - c).norm() + bounding_radius(s.primitive));
+      continue;
+    }
+    for (const Triangle& t : meshes[s.mesh].triangles()) {
+      for (int k = 0; k < 3; ++k) r = std::max(r, (s.origin * t[k] - c).norm());
+    }
+  }
+  return {c, grown_radius(r)};
+}
+
+}  // namespace
+
+RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options)
+    : robot_(std::move(robot)), acm_(std::move(acm)) {
+  const std::size_t n = robot_.links().size();
+  if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
+  padding_.resize(n, options.padding);
+  for (std::size_t l = 0; l < n; ++l) {
+    if (const auto it = options.link_padding.find(robot_.links()[l].name); it != options.link_padding.end()) {
+      padding_[l] = it->second;
+    }
+  }
+  // The pairs to check. Every link with geometry gets its BVH: environment queries check links
+  // that no self pair needs.
+  std::vector<bool> needed(n, false);
+  for (std::size_t a = 0; a < n; ++a) {
+    needed[a] = !robot_.links()[a].collision.empty();
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if (robot_.links()[a].collision.empty() || robot_.links()[b].collision.empty() || acm_.allowed(a, b)) continue;
+      checked_pairs_.emplace_back(static_cast<int>(a), static_cast<int>(b));
+    }
+  }
+  build_shapes(options, needed);
+  kinematics_ = KinematicsPlan(robot_, needed);
+  compute_motion_rates();
+}
+
+// Exact primitives stay primitives; each distinct mesh gets one hierarchy and one hull, shared by
+// the elements that use it.
+void RobotCollisionModel::build_shapes(const CheckerOptions& options, const std::vector<bool>& needed) {
+  const std::size_t n = robot_.links().size();
+  shapes_.resize(n);
+  bounds_.resize(n);
+  std::map<const TriangleMesh*, int> built;
+  for (std::size_t l = 0; l < n; ++l) {
+    if (!needed[l]) continue;
+    for (const CollisionElement& e : robot_.links()[l].collision) {
+      LinkShape s;
+      s.origin = e.origin;
+      if (e.shape == CollisionElement::Shape::kSphere) {
+        s.primitive = Primitive::sphere(e.radius);
+      } else if (e.shape == CollisionElement::Shape::kCylinder) {
+        s.primitive = Primitive::cylinder(e.radius, e.length);
+      } else {
+        auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
+        if (fresh) {
+          meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
+          // Surface vertices only: a hull vertex is taken to lie on the mesh (meshes_distance).
+          hulls_.push_back(convex_hull(used_vertices(*e.mesh)));
+        }
+        s.mesh = it->second;
+      }
+      shapes_[l].push_back(s);
+    }
+    bounds_[l] = bounding_sphere(shapes_[l], meshes_);
+  }
+}
+
+// For each link, walk to the root: a revolute joint moves the link's points at most at their
+// distance from the joint's origin per radian, which is bounded by the sum of the joint offsets
+// below it plus the link's geometry reach (the chain's length, whatever the other joints do);
+// a prismatic joint moves them at 1 m per metre and lengthens the chain by its largest travel
+// within its source variable's limits (link_speed widens the bound for values beyond them).
+void RobotCollisionModel::compute_motion_rates() {
+  const auto& links = robot_.links();
+  const auto& joints = robot_.joints();
+  std::vector<double> travel(robot_.variable_count(), 0.0);  // largest |value| within limits
+  for (const RobotJoint& joint : joints) {
+    if (joint.variable >= 0) travel[joint.variable] = std::max(std::abs(joint.lower), std::abs(joint.upper));
+  }
+  motion_rates_.assign(links.size(), std::vector<double>(robot_.variable_count(), 0.0));
+  motion_turns_.assign(links.size(), std::vector<double>(robot_.variable_count(), 0.0));
+  motion_slides_.assign(links.size(), {});
+  reach_ = 0.0;
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    if (bounds_[l].radius < 0.0) continue;
+    double reach = bounds_[l].center.norm() + bounds_[l].radius + padding_[l];
+    for (int j = links[l].parent_joint; j >= 0; j = links[joints[j].parent_link].parent_joint) {
+      const RobotJoint& joint = joints[j];
+      int variable = joint.variable;
+      double multiplier = 1.0, offset = 0.0;
+      if (joint.mimic >= 0) {
+        variable = joints[joint.mimic].variable;
+        multiplier = std::abs(joint.multiplier);
+        offset = std::abs(joint.offset);
+      }
+      if (variable >= 0 && (joint.type == JointType::kRevolute || joint.type == JointType::kContinuous)) {
+        motion_rates_[l][variable] += multiplier * reach;
+        motion_turns_[l][variable] += multiplier;
+      } else if (variable >= 0 && joint.type == JointType::kPrismatic) {
+        motion_rates_[l][variable] += multiplier;
+        reach += multiplier * travel[variable] + offset;
+        motion_slides_[l].push_back({variable, multiplier, travel[variable]});
+      }
+      reach += joint.origin.t.norm();
+    }
+    reach_ = std::max(reach_, reach);
+  }
+}
+
+}  // namespace bvh_collision

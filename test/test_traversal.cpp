@@ -1,0 +1,189 @@
+// The traversal cores (bvh/traversal.h, octree/cube_walk.h) against brute force: every leaf is
+// reached once when nothing is pruned, stopping stops, the bounded walks find the true minimum,
+// and the pair walks see every leaf pair. And the robot collision model is built once: copies of
+// a checker share it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <random>
+#include <set>
+
+#include "bvh_collision/bvh/traversal.h"
+#include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/octree/cube_walk.h"
+#include "checker_fixtures.h"
+#include "mesh_fixtures.h"
+
+namespace bvh_collision {
+namespace {
+
+std::mt19937_64& rng() {
+  static std::mt19937_64 r(41);
+  return r;
+}
+
+Bvh<Obb> soup(int n) { return Bvh<Obb>::build(test::triangle_soup(rng(), n, 1.0, 0.1), {BuildMethod::kSah, 2}); }
+
+// The leaf-order triangle indices under a node.
+std::vector<int> leaf_triangles(const BvhNode<Obb>& n) {
+  std::vector<int> out;
+  for (std::int32_t i = n.first; i < n.first + n.count; ++i) out.push_back(i);
+  return out;
+}
+
+TEST(Traversal, DepthFirstReachesEveryTriangleOnceAndStops) {
+  const Bvh<Obb> bvh = soup(300);
+  std::multiset<int> seen;
+  int visits = 0;
+  depth_first(
+      bvh, [&](const BvhNode<Obb>&) { return ++visits, Visit::kEnter; },
+      [&](const BvhNode<Obb>& n) {
+        for (const int i : leaf_triangles(n)) seen.insert(i);
+        return false;
+      });
+  ASSERT_EQ(seen.size(), bvh.triangles().size());
+  for (std::size_t i = 0; i < bvh.triangles().size(); ++i) EXPECT_EQ(seen.count(static_cast<int>(i)), 1u);
+  EXPECT_EQ(visits, static_cast<int>(bvh.nodes().size()));  // every node once
+
+  int leaves = 0;
+  depth_first(bvh, [](const BvhNode<Obb>&) { return Visit::kEnter; }, [&](const BvhNode<Obb>&) { return ++leaves == 3; });
+  EXPECT_EQ(leaves, 3) << "a leaf returning true stops the walk";
+  int after_stop = 0;
+  depth_first(bvh, [&](const BvhNode<Obb>&) { return ++after_stop, Visit::kStop; }, [](const BvhNode<Obb>&) { return false; });
+  EXPECT_EQ(after_stop, 1);
+}
+
+TEST(Traversal, NearestFirstFindsTheClosestTriangle) {
+  const Bvh<Obb> bvh = soup(400);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 q(u(rng()), u(rng()), u(rng()));
+    double truth = std::numeric_limits<double>::infinity();
+    for (const Triangle& t : bvh.triangles()) truth = std::min(truth, (closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm());
+    double best = std::numeric_limits<double>::infinity();
+    int leaves = 0;
+    nearest_first(
+        bvh, [&](std::int32_t i) { return (q - center(bvh.nodes()[i].volume)).norm() - bvh.nodes()[i].size; },
+        [&](const BvhNode<Obb>& n) {
+          ++leaves;
+          for (const int i : leaf_triangles(n)) {
+            const Triangle& t = bvh.triangles()[i];
+            best = std::min(best, (closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm());
+          }
+          return false;
+        },
+        [&] { return best; });
+    EXPECT_EQ(best, truth) << k;
+    EXPECT_LT(leaves, static_cast<int>(bvh.triangles().size()) / 4) << "the bound prunes";
+  }
+}
+
+TEST(Traversal, PairWalksSeeEveryLeafPairAndTheBestFirstMinimum) {
+  const Bvh<Obb> a = soup(120), b = soup(120);
+  const Transform b_in_a = test::random_rotation(rng(), Vec3(1.5, 0.2, 0.1));
+  const RelativeFrame f = RelativeFrame::from(b_in_a);
+  std::set<std::pair<int, int>> pairs;
+  depth_first_pair(
+      a, b, [](std::int32_t, std::int32_t) { return Visit::kEnter; },
+      [&](const BvhNode<Obb>& na, const BvhNode<Obb>& nb) {
+        for (const int i : leaf_triangles(na)) {
+          for (const int j : leaf_triangles(nb)) EXPECT_TRUE(pairs.emplace(i, j).second) << "pair reached twice";
+        }
+        return false;
+      });
+  EXPECT_EQ(pairs.size(), a.triangles().size() * b.triangles().size());
+
+  double truth = std::numeric_limits<double>::infinity();
+  for (const Triangle& ta : a.triangles()) {
+    for (const Triangle& tb : b.triangles()) {
+      const Triangle carried{{b_in_a * tb[0], b_in_a * tb[1], b_in_a * tb[2]}};
+      truth = std::min(truth, triangle_triangle_distance(ta, carried).distance);
+    }
+  }
+  double best = std::numeric_limits<double>::infinity();
+  std::size_t leaf_pairs = 0;
+  best_first_pair(
+      a, b, [&](std::int32_t i, std::int32_t j) { return distance_lower_bound(a.nodes()[i].volume, b.nodes()[j].volume, f); },
+      [&](const BvhNode<Obb>& na, const BvhNode<Obb>& nb) {
+        ++leaf_pairs;
+        for (const int i : leaf_triangles(na)) {
+          for (const int j : leaf_triangles(nb)) {
+            const Triangle& tb = b.triangles()[j];
+            const Triangle carried{{b_in_a * tb[0], b_in_a * tb[1], b_in_a * tb[2]}};
+            best = std::min(best, triangle_triangle_distance(a.triangles()[i], carried).distance);
+          }
+        }
+        return false;
+      },
+      [&] { return best; });
+  EXPECT_EQ(best, truth);
+  EXPECT_LT(leaf_pairs, pairs.size() / 20) << "the bound prunes";
+}
+
+Octree random_tree(double resolution, int voxels) {
+  Octree tree(resolution);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < voxels; ++i) {
+    if (const auto key = tree.grid().key(Vec3(u(rng()), u(rng()), 0.5 * u(rng())))) {
+      for (int k = 0; k < 3; ++k) tree.update(*key, true);
+    }
+  }
+  return tree;
+}
+
+TEST(CubeWalk, DescendWhileReachesEveryOccupiedLeafAndNearestFirstFindsTheClosest) {
+  const Octree tree = random_tree(0.05, 400);
+  std::set<std::uint64_t> occupied;
+  for (const Octree::Leaf& l : tree.leaves()) {
+    if (tree.occupied(l.log_odds)) occupied.insert(l.index);
+  }
+  ASSERT_GT(occupied.size(), 100u);
+  const auto root = occupied_root(tree);
+  ASSERT_TRUE(root);
+  std::set<std::uint64_t> walked;
+  descend_while(
+      tree, *root, [](const OctreeCube&) { return Visit::kEnter; },
+      [&](const OctreeCube& c) {
+        EXPECT_TRUE(walked.insert(c.index).second);
+        return false;
+      });
+  EXPECT_EQ(walked, occupied);
+
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 p(u(rng()), u(rng()), u(rng()));
+    auto gap = [&](const Vec3& lo, double size) {
+      return (p - p.cwiseMax(lo).cwiseMin(lo + Vec3::Constant(size))).norm();
+    };
+    double truth = std::numeric_limits<double>::infinity();
+    for (const Octree::Leaf& l : tree.leaves()) {
+      if (tree.occupied(l.log_odds)) truth = std::min(truth, gap(tree.cube_min(l.key), tree.cube_size(l.depth)));
+    }
+    double best = std::numeric_limits<double>::infinity();
+    nearest_cubes_first(
+        tree, *root, [&](const OctreeCube& c) { return gap(tree.cube_min(c.corner), tree.cube_size(c.depth)); },
+        [&](const OctreeCube& c) {
+          best = std::min(best, gap(tree.cube_min(c.corner), tree.cube_size(c.depth)));
+          return false;
+        },
+        [&] { return best; });
+    EXPECT_EQ(best, truth) << k;
+  }
+}
+
+TEST(RobotCollisionModel, BuiltOnceAndSharedByCheckerCopies) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = test::load_checker("panda");
+  const CollisionChecker copy = checker;  // NOLINT: the copy is the point
+  EXPECT_EQ(&checker.collision_model(), &copy.collision_model());
+  const RobotCollisionModel& m = checker.collision_model();
+  EXPECT_EQ(m.shapes().size(), checker.model().links().size());
+  EXPECT_EQ(m.checked_pairs(), checker.checked_pairs());
+  EXPECT_EQ(m.meshes().size(), checker.built_meshes());
+  std::vector<double> state(checker.model().variable_count(), 0.1);
+  EXPECT_EQ(checker.check_self(state.data()).collision, copy.check_self(state.data()).collision);
+}
+
+}  // namespace
+}  // namespace bvh_collision
