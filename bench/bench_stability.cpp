@@ -2,13 +2,17 @@
 // suite of test/hard_cases.h plus the mesh-level cases of test_hard_cases.cpp) with the exact
 // answer (CGAL's exact predicates and distances, or the construction), ours and FCL's; and the
 // scale sweep: box pairs of 1 mm to 100 m, posed up to 1e4 m from the origin, at gaps from
-// overlapping to a tenth of their size, with the largest distance error and wrong answers seen.
+// overlapping to a tenth of their size, with the largest distance error and wrong answers seen;
+// and the cylinder cases: exact cylinders (ours) against FCL's Cylinderd, touching and just apart
+// at 1 mm to 100 m, 1e4 m from the origin.
 // Usage: bench_stability [OUTPUT_DIR] [--quick]
 #include <iostream>
 #include <random>
 
 #include "bench_util.h"
+#include "bvh_collision/bvh/primitive_queries.h"
 #include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/geometry/convex_distance.h"
 #include "cgal_oracle.h"
 #include "fcl_oracle.h"
 #include "hard_cases.h"
@@ -167,6 +171,104 @@ void scale_sweep(bool quick, const std::string& dir) {
   table.write(dir);
 }
 
+
+// ------------------------------------------------------------------------------ cylinders
+
+// A placed shape for the cylinder cases: a primitive, or a mesh (box_mesh).
+struct Placed {
+  Primitive primitive;
+  bool mesh = false;
+  Transform pose;
+};
+
+Answers ours_pair(const Placed& a, const Placed& b) {
+  if (b.mesh) {  // a is the cylinder
+    const TriangleMesh box = box_mesh(2.0 * half_extents(b.primitive));
+    const Bvh<Obb> bvh = Bvh<Obb>::build(box);
+    CollisionRequest c;
+    c.solids = false;
+    DistanceRequest d;
+    d.solids = false;
+    return {collide(bvh, b.pose, a.primitive, a.pose, c).collision, distance(bvh, b.pose, a.primitive, a.pose, d).distance};
+  }
+  const Transform rel = relative_transform(a.pose, b.pose);
+  const ConvexShape sa = ConvexShape::of(a.primitive), sb = ConvexShape::of(b.primitive);
+  return {convex_within(sa, sb, rel, 0.0), convex_distance(sa, sb, rel).distance};
+}
+
+std::shared_ptr<fcl::CollisionGeometryd> fcl_shape(const Placed& p) {
+  const Vec3 h = half_extents(p.primitive);
+  if (p.mesh) return test::fcl_model<fcl::OBBRSSd>(box_mesh(2.0 * h));
+  switch (p.primitive.kind) {
+    case Primitive::Kind::kSphere: return std::make_shared<fcl::Sphered>(p.primitive.radius);
+    case Primitive::Kind::kBox: return std::make_shared<fcl::Boxd>(2.0 * h);
+    case Primitive::Kind::kCylinder: return std::make_shared<fcl::Cylinderd>(p.primitive.radius, 2.0 * p.primitive.half_length);
+    default: return std::make_shared<fcl::Capsuled>(p.primitive.radius, 2.0 * p.primitive.half_length);
+  }
+}
+
+Answers fcl_pair(const Placed& a, const Placed& b) {
+  fcl::CollisionObjectd oa(fcl_shape(a), test::fcl_transform(a.pose)), ob(fcl_shape(b), test::fcl_transform(b.pose));
+  fcl::CollisionRequestd creq;
+  fcl::CollisionResultd cres;
+  fcl::collide(&oa, &ob, creq, cres);
+  fcl::DistanceRequestd dreq;
+  fcl::DistanceResultd dres;
+  fcl::distance(&oa, &ob, dreq, dres);
+  return {cres.isCollision(), std::max(0.0, dres.min_distance)};
+}
+
+// A cylinder of radius s/4 and length s at `offset` (axis along z), and the other shape placed
+// `gap` beyond touching along x (side contacts) or z (cap contacts). Sizes are powers of two, so
+// the contact extents (s/2, 3s/4, s) are exact; the true gap is what the placed centres leave,
+// computed exactly ((x_b - x_a) and the extent are within a factor of two: Sterbenz).
+void cylinder_cases(const std::string& dir) {
+  Table table("stability_cylinders", "Hard cases: exact cylinders (URDF cylinders) against other shapes",
+              {"case", "size m", "offset m", "true answer", "true distance", "ours", "ours distance", "FCL", "FCL distance"});
+  int ours_wrong = 0, fcl_wrong = 0;
+  double ours_error = 0.0, fcl_error = 0.0;
+  for (const double s : {0x1p-10, 1.0, 0x1p7}) {
+    for (const double offset : {0.0, 8192.0}) {
+      const Vec3 o = Vec3::Constant(offset);
+      const double r = s / 4, half = s / 2;
+      const Placed cylinder{Primitive::cylinder(r, s), false, Transform::Translation(o)};
+      for (const double relative_gap : {0.0, 0x1p-40, 0x1p-18}) {
+        const double gap = relative_gap * s;
+        struct Case {
+          std::string name;
+          Placed other;
+          int axis;       // the shapes are apart along this axis
+          double extent;  // centre distance along it at touching
+        };
+        const Case cases[] = {
+            {"cylinder side to parallel cylinder side", {Primitive::cylinder(r, s), false, Transform::Translation(o + Vec3(2 * r + gap, 0, 0))}, 0, 2 * r},
+            {"cylinder cap to cylinder cap", {Primitive::cylinder(r, s), false, Transform::Translation(o + Vec3(0.5 * r, 0, s + gap))}, 2, s},
+            {"cylinder side to box face", {Primitive::box(Vec3::Constant(s)), false, Transform::Translation(o + Vec3(r + half + gap, 0, 0))}, 0, r + half},
+            {"cylinder cap to sphere", {Primitive::sphere(r), false, Transform::Translation(o + Vec3(0, 0, half + r + gap))}, 2, half + r},
+            {"cylinder side to mesh box face", {Primitive::box(Vec3::Constant(s)), true, Transform::Translation(o + Vec3(r + half + gap, 0, 0))}, 0, r + half},
+        };
+        for (const Case& c : cases) {
+          const double true_gap = std::max(0.0, (c.other.pose.t[c.axis] - cylinder.pose.t[c.axis]) - c.extent);
+          const bool truth = true_gap == 0.0;
+          const Answers a = ours_pair(cylinder, c.other), f = fcl_pair(cylinder, c.other);
+          ours_wrong += a.collision != truth;
+          fcl_wrong += f.collision != truth;
+          ours_error = std::max(ours_error, std::abs(a.distance - true_gap) / s);
+          fcl_error = std::max(fcl_error, std::abs(f.distance - true_gap) / s);
+          table.row({c.name + (truth ? ", touching" : ", apart"), s, offset, answer(truth), true_gap, answer(a.collision),
+                     a.distance, answer(f.collision), f.distance});
+        }
+      }
+    }
+  }
+  table.note("Sizes 2^-10 m (about 1 mm), 1 m and 128 m; gaps of 0, 2^-40 and 2^-18 times the size, 0 and 8192 m "
+             "from the origin (where the smallest gaps round away: the true distance column says what is left). Ours: exact primitives (GJK on the exact support function with a "
+             "certified lower bound, an exact decision at 0); FCL: its Cylinderd, Boxd and Sphered (GJK/EPA). Wrong answers: "
+             "ours " + std::to_string(ours_wrong) + ", FCL " + std::to_string(fcl_wrong) + "; largest distance error / size: ours " +
+             bench::format(ours_error) + ", FCL " + bench::format(fcl_error) + ".");
+  table.write(dir);
+}
+
 }  // namespace
 }  // namespace bvh_collision
 
@@ -177,5 +279,6 @@ int main(int argc, char** argv) {
   triangle_cases(dir);
   mesh_cases(dir);
   scale_sweep(bench::quick_mode(argc, argv), dir);
+  cylinder_cases(dir);
   return 0;
 }

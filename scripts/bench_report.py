@@ -149,6 +149,9 @@ def check_promises(tables):
         raise ReportError("a wrong answer on a hard mesh case")
     if any(v and v > 0 for v in column(need(tables, "stability_scale"), "ours wrong answers")):
         raise ReportError("a wrong answer in the scale sweep")
+    cylinders = need(tables, "stability_cylinders")
+    if column(cylinders, "true answer") != column(cylinders, "ours"):
+        raise ReportError("a wrong answer on a cylinder case")
 
 
 # ------------------------------------------------------------------------------- plots
@@ -423,7 +426,8 @@ def build_report(tables, bench_dir, quick):
 
     out += ["## 7. Numerical stability", "",
             f"![scale sweep]({plot_scale(need(tables, 'stability_scale'), plots_dir)})", ""]
-    out += [markdown(need(tables, i)) for i in ["stability_triangles", "stability_meshes", "stability_scale"]]
+    out += [markdown(need(tables, i)) for i in ["stability_triangles", "stability_meshes", "stability_scale",
+                                                "stability_cylinders"]]
     return "\n".join(out)
 
 

@@ -127,6 +127,7 @@ TEST_F(BenchReport, GeneratorRefusesFiguresThatBreakTheSemantics) {
   expect_refused(dir_, "self_tolerance_ur5e", "false negatives", 1, "false negatives");
   expect_refused(dir_, "self_distance_pr2", "ours beyond the bound", 2, "allowed error");
   expect_refused(dir_, "stability_scale", "ours wrong answers", 1, "scale sweep");
+  expect_refused(dir_, "stability_cylinders", "ours", 1, "cylinder case");
   expect_refused(dir_, "scene_model_pr2", "wrong answers", 1, "only moved pairs", 4);
 }
 

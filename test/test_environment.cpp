@@ -14,6 +14,7 @@
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "cgal_oracle.h"
+#include "checker_fixtures.h"
 #include "mesh_fixtures.h"
 #include "robot_data.h"
 
@@ -52,7 +53,7 @@ TEST(CubeTriangle, AgainstCgal) {
   const Vec3 lo(0.25, -0.5, 1.0), hi(0.5, -0.25, 1.25);
   std::uniform_real_distribution<double> u(-0.35, 0.35), grid(-1, 5);
   int meets = 0, apart = 0;
-  for (int i = 0; i < 4000; ++i) {
+  for (int i = 0; i < test::sized(4000); ++i) {
     Triangle t;
     for (int k = 0; k < 3; ++k) {
       // Vertices often exactly on the box's planes and edges (multiples of the side), where
@@ -109,7 +110,8 @@ Exploded explode(const Octree& tree) {
   return e;
 }
 
-void expect_mesh_matches_exploded(const TriangleMesh& mesh, const Octree& tree, double padding, int poses) {
+void expect_mesh_matches_exploded(const TriangleMesh& mesh, const Octree& tree, double padding, int all_poses) {
+  const int poses = test::sized(all_poses);
   const Bvh<Obb> bvh = Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2});
   const Exploded boxes = explode(tree);
   std::uniform_real_distribution<double> u(-0.7, 0.7);
@@ -373,6 +375,60 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
   EXPECT_GT(colliding, 5);
   EXPECT_GT(free, 5);
   EXPECT_EQ(undecided, 0) << "a link passed within 1e-6 m of the post's surface: the prisms cannot tell";
+}
+
+
+// Capsule objects are exact primitives (the points within `radius` of a segment): panda against a
+// capsule, by distance and by boolean, against brute force over every link triangle and the
+// segment (a degenerate triangle), minus the radius.
+TEST(Environment, CapsuleObjectsAreExact) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker checker = test::load_checker("panda");
+  const RobotModel& m = checker.model();
+  const double radius = 0.04, length = 0.3;
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  int colliding = 0, free = 0;
+  for (int i = 0; i < test::sized(40); ++i) {
+    const std::vector<double> state = random_configuration(m, rng());
+    const Transform pose = test::random_rotation(rng(), Vec3(0.3 + u(rng()), u(rng()), 0.5 + u(rng())));
+    Environment env(0.05);
+    env.add_object("capsule", ObjectShape::capsule(radius, length), pose);
+    ASSERT_EQ(env.find_object("capsule")->mesh, nullptr);
+    ASSERT_EQ(env.find_object("capsule")->primitive.kind, Primitive::Kind::kCapsule);
+    const Vec3 p1 = pose * Vec3(0, 0, -0.5 * length), p2 = pose * Vec3(0, 0, 0.5 * length);
+    std::vector<Transform> poses;
+    forward_kinematics(m, state.data(), poses);
+    double truth = std::numeric_limits<double>::infinity();
+    for (std::size_t l = 0; l < m.links().size(); ++l) {
+      for (const CollisionElement& e : m.links()[l].collision) {
+        ASSERT_TRUE(e.mesh) << "panda's links are meshes";
+        const Transform to_world = poses[l] * e.origin;
+        for (std::size_t t = 0; t < e.mesh->triangles.size(); ++t) {
+          const Triangle tri = e.mesh->triangle(t);
+          const Triangle world{{to_world * tri[0], to_world * tri[1], to_world * tri[2]}};
+          truth = std::min(truth, triangle_triangle_distance(world, Triangle{{p1, p2, p2}}).distance - radius);
+        }
+      }
+    }
+    EnvironmentRequest request;
+    request.distance = true;
+    request.all_links = true;
+    request.solids = false;  // the oracle sees surfaces
+    const EnvironmentResult r = checker.check_environment(state.data(), env, request);
+    if (truth > 1e-9) {
+      ++free;
+      EXPECT_FALSE(r.collision) << i;
+      EXPECT_NEAR(r.min_distance, truth, 1e-9) << i;
+    } else if (truth < -1e-9) {
+      ++colliding;
+      EXPECT_TRUE(r.collision) << i;
+      EXPECT_EQ(r.min_distance, 0.0) << i;
+    }
+  }
+  EXPECT_GT(free, 0);
+  EXPECT_GT(colliding, 0);
+  EXPECT_THROW(Environment(0.05).add_object("c", ObjectShape::capsule(0.0, 1.0), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(Environment(0.05).add_object("c", ObjectShape::capsule(0.1, -1.0), Transform::Identity()), std::invalid_argument);
 }
 
 }  // namespace

@@ -128,6 +128,14 @@ TEST(Shapes, EveryTypeAndItsErrors) {
   s.dimensions = {0.1};
   EXPECT_EQ(error_of([&] { to_object_shape(s, resolver); }),
             "CYLINDER needs 2 dimensions (radius, length), got 1");
+  s.type = CollisionShape::CAPSULE;
+  s.dimensions = {0.05, 0.3};
+  const ObjectShape capsule = to_object_shape(s, resolver);
+  EXPECT_EQ(capsule.kind, ObjectShape::Kind::kCapsule);
+  EXPECT_EQ(capsule.radius, 0.05);
+  EXPECT_EQ(capsule.length, 0.3);
+  s.dimensions = {0.05, -0.3};
+  EXPECT_NE(error_of([&] { to_object_shape(s, resolver); }).find("CAPSULE dimensions must be positive"), std::string::npos);
   s.type = CollisionShape::TRIANGLES;
   s.vertices.resize(3);
   s.vertices[1].x = 1.0;

@@ -197,13 +197,16 @@ ObjectShape to_object_shape(const CollisionShape& shape, const PackageResolver& 
     case CollisionShape::CYLINDER:
       expect_dimensions(shape, 2, "CYLINDER");
       return ObjectShape::cylinder(shape.dimensions[0], shape.dimensions[1]);
+    case CollisionShape::CAPSULE:
+      expect_dimensions(shape, 2, "CAPSULE");
+      return ObjectShape::capsule(shape.dimensions[0], shape.dimensions[1]);
     case CollisionShape::MESH_FILE:
       return mesh_file_shape(shape, resolver);
     case CollisionShape::TRIANGLES:
       return triangles_shape(shape);
     default:
       throw RequestError("unknown shape type " + std::to_string(int(shape.type)) +
-                         " (BOX=1, SPHERE=2, CYLINDER=3, MESH_FILE=4, TRIANGLES=5)");
+                         " (BOX=1, SPHERE=2, CYLINDER=3, MESH_FILE=4, TRIANGLES=5, CAPSULE=6)");
   }
 }
 
