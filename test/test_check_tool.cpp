@@ -93,7 +93,16 @@ TEST(CheckTool, ErrorsGoToStderrWithNonZeroExit) {
            {{"--urdf", "/missing.urdf", "--states", write_states("joints: joint1\n0\n")}, "/missing.urdf"},
            {{"--states", "x"}, "--urdf FILE is required"},
            {{"--urdf", kUrdf, "--tolerance", "-1", "--states", "x"}, "--tolerance needs a number"},
-           {{"--bogus"}, "unknown argument '--bogus'"}}) {
+           {{"--bogus"}, "unknown argument '--bogus'"},
+           // A joint named twice in the header, and counts out of their type's range.
+           {{"--urdf", kUrdf, "--states", write_states("joints: joint1 joint1\n0 0\n")}, "joint 'joint1' is named twice"},
+           {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "99999999999999999999"}, "--sample-acm needs a whole number"},
+           {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "1.5"}, "--sample-acm needs a whole number"},
+           {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "0"}, "--sample-acm needs a whole number"},
+           // Only regular files: /dev/zero is read forever, a directory is no file.
+           {{"--urdf", "/dev/zero", "--states", write_states("joints: joint1\n0\n")}, "is not a regular file"},
+           {{"--urdf", kUrdf, "--states", "/dev/zero"}, "is not a regular file"},
+           {{"--urdf", kUrdf, "--srdf", "/tmp", "--states", write_states("joints: joint1\n0\n")}, "is not a regular file"}}) {
     const ToolRun r = run(args);
     EXPECT_NE(r.code, 0) << message;
     EXPECT_TRUE(r.out.empty()) << r.out;

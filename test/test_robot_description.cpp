@@ -138,5 +138,116 @@ TEST(RobotDescription, JointTypeNames) {
   EXPECT_STREQ(joint_type_name(urdf::Joint::PLANAR), "planar");
 }
 
+
+// ------------------------------------------------------------- malformed robot descriptions
+
+// A four-link robot with a box, a cylinder, a sphere and a mesh; each case below replaces one
+// piece of it. The unchanged robot parses.
+std::string small_robot(const std::map<std::string, std::string>& changes = {}) {
+  std::map<std::string, std::string> v = {
+      {"BOX", R"(<box size="0.1 0.2 0.3"/>)"},
+      {"CYLINDER", R"(<cylinder radius="0.05" length="0.4"/>)"},
+      {"SPHERE", R"(<sphere radius="0.07"/>)"},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="1 1 1"/>)"},
+      {"ORIGIN", R"(<origin xyz="0 0 0.1" rpy="0 0 0"/>)"},
+      {"J1", R"(<origin xyz="0 0 0.5"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>)"},
+      {"J2_TYPE", "revolute"},
+      {"J2_CHILD", "link2"},
+      {"J2_AXIS", "1 0 0"},
+      {"J3_PARENT", "link2"},
+  };
+  for (const auto& [k, x] : changes) v[k] = x;
+  return "<robot name=\"small\">"
+         "<link name=\"base\"><collision>" + v["ORIGIN"] + "<geometry>" + v["BOX"] + "</geometry></collision></link>"
+         "<link name=\"link1\"><collision><geometry>" + v["CYLINDER"] + "</geometry></collision></link>"
+         "<link name=\"link2\"><collision><geometry>" + v["SPHERE"] + "</geometry></collision></link>"
+         "<link name=\"link3\"><collision><geometry>" + v["MESH"] + "</geometry></collision></link>"
+         "<joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/><child link=\"link1\"/>" + v["J1"] + "</joint>"
+         "<joint name=\"j2\" type=\"" + v["J2_TYPE"] + "\"><parent link=\"link1\"/><child link=\"" + v["J2_CHILD"] + "\"/>"
+         "<axis xyz=\"" + v["J2_AXIS"] + "\"/><limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+         "<joint name=\"j3\" type=\"fixed\"><parent link=\"" + v["J3_PARENT"] + "\"/><child link=\"link3\"/></joint>"
+         "</robot>";
+}
+
+struct BadCase {
+  std::string key, value;
+  std::vector<std::string> message;  // every piece must appear in the error
+};
+
+TEST(RobotDescription, EveryMalformedCollisionElementIsRefusedByName) {
+  ASSERT_NO_THROW(parse_robot_description(small_robot()));
+  const std::vector<BadCase> cases = {
+      {"CYLINDER", R"(<cylinder radius="nan" length="0.4"/>)", {"link 'link1', collision element 1", "'radius'", "'nan'", "not finite"}},
+      {"CYLINDER", R"(<cylinder radius="inf" length="0.4"/>)", {"link 'link1'", "'inf'", "not finite"}},
+      {"CYLINDER", R"(<cylinder radius="abc" length="0.4"/>)", {"link 'link1'", "'abc'", "not a number"}},
+      {"CYLINDER", R"(<cylinder radius="" length="0.4"/>)", {"link 'link1'", "'radius'", "needs 1 number, got 0"}},
+      {"CYLINDER", R"(<cylinder radius="0.05" length="nan"/>)", {"'length'", "not finite"}},
+      {"CYLINDER", R"(<cylinder radius="0.05"/>)", {"'length'", "missing"}},
+      {"CYLINDER", R"(<cylinder radius="1e300" length="0.4"/>)", {"'1e300'", "beyond"}},
+      {"CYLINDER", R"(<cylinder radius="0.05" length="-1"/>)", {"'length'", "positive"}},
+      {"SPHERE", R"(<sphere radius="nan"/>)", {"link 'link2', collision element 1", "not finite"}},
+      {"SPHERE", R"(<sphere radius="inf"/>)", {"link 'link2'", "not finite"}},
+      {"BOX", R"(<box size="nan 1 1"/>)", {"link 'base'", "'size'", "not finite"}},
+      {"BOX", R"(<box size="inf 1 1"/>)", {"link 'base'", "not finite"}},
+      {"BOX", R"(<box size="a b c"/>)", {"link 'base'", "not a number"}},
+      {"BOX", R"(<box size="1 1"/>)", {"link 'base'", "needs 3 numbers, got 2"}},
+      {"BOX", R"(<box size="1 1 1 1"/>)", {"link 'base'", "needs 3 numbers, got 4"}},
+      {"BOX", R"(<box size="1e308 1 1"/>)", {"link 'base'", "beyond"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="nan 1 1"/>)", {"link 'link3'", "'scale'", "not finite"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="inf 1 1"/>)", {"link 'link3'", "not finite"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="x y z"/>)", {"link 'link3'", "not a number"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="1"/>)", {"link 'link3'", "needs 3 numbers, got 1"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="1 1"/>)", {"needs 3 numbers, got 2"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="1e300 1 1"/>)", {"beyond"}},
+      {"MESH", R"(<mesh filename="package://p/m.stl" scale="0 1 1"/>)", {"must not be zero"}},
+      {"MESH", R"(<mesh/>)", {"link 'link3'", "no filename"}},
+      {"MESH", R"(<capsule radius="0.1" length="0.2"/>)", {"link 'link3'", "unknown shape <capsule>", "box, sphere, cylinder, mesh"}},
+      {"MESH", "", {"link 'link3'", "<geometry> is empty"}},
+      {"ORIGIN", R"(<origin xyz="nan 0 0"/>)", {"link 'base', collision element 1", "'xyz'", "not finite"}},
+      {"ORIGIN", R"(<origin xyz="a b c"/>)", {"link 'base'", "not a number"}},
+      {"ORIGIN", R"(<origin xyz="0 0"/>)", {"link 'base'", "needs 3 numbers, got 2"}},
+      {"ORIGIN", R"(<origin rpy="0 inf 0"/>)", {"'rpy'", "not finite"}},
+      {"ORIGIN", R"(<origin xyz="0 0 e99999999999999999999"/>)", {"not"}},
+  };
+  for (const BadCase& c : cases) {
+    const std::string msg = parse_error(small_robot({{c.key, c.value}}));
+    for (const std::string& piece : c.message) {
+      EXPECT_NE(msg.find(piece), std::string::npos) << c.key << " = " << c.value << ": " << msg;
+    }
+  }
+}
+
+TEST(RobotDescription, JointErrorsAreRefusedByName) {
+  const std::vector<BadCase> cases = {
+      {"J1", R"(<origin xyz="1e308 0 0"/><axis xyz="0 0 1"/>)", {"joint 'j1'", "'1e308 0 0'", "beyond"}},
+      {"J1", R"(<origin xyz="nan 0 0"/><axis xyz="0 0 1"/>)", {"joint 'j1'", "not finite"}},
+      {"J1", R"(<axis xyz="0 0 0"/>)", {"joint 'j1'", "zero axis"}},
+      {"J1", R"(<axis xyz="0 0 nan"/>)", {"joint 'j1'", "not finite"}},
+      {"J1", R"(<axis xyz="0 0 1"/><limit lower="1" upper="-1" effort="1" velocity="1"/>)", {"joint 'j1'", "lower '1' is above upper '-1'"}},
+      {"J1", R"(<axis xyz="0 0 1"/><limit lower="nan" upper="1" effort="1" velocity="1"/>)", {"joint 'j1'", "not finite"}},
+      {"J2_CHILD", "link1", {"joint 'j2'", "parent link 'link1' is also its child"}},
+      {"J3_PARENT", "base\"/><child link=\"link2", {"link 'link2'", "child of two joints", "'j2'", "'j3'"}},
+  };
+  for (const BadCase& c : cases) {
+    const std::string msg = parse_error(small_robot({{c.key, c.value}}));
+    for (const std::string& piece : c.message) {
+      EXPECT_NE(msg.find(piece), std::string::npos) << c.key << " = " << c.value << ": " << msg;
+    }
+  }
+  // A fixed joint's axis is not read (urdfdom ignores it): zero there is no error.
+  EXPECT_NO_THROW(parse_robot_description(small_robot({{"J2_TYPE", "fixed"}, {"J2_AXIS", "0 0 0"}})));
+}
+
+TEST(RobotDescription, OnlyRegularFilesAreRead) {
+  for (const std::string path : {"/dev/zero", "/tmp", "/dev/null"}) {
+    try {
+      load_robot_description_file(path);
+      FAIL() << path << " was read";
+    } catch (const RobotDescriptionError& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace bvh_collision

@@ -5,12 +5,15 @@
 
 #include <kdl/treefksolverpos_recursive.hpp>
 #include <kdl_parser/kdl_parser.hpp>
+#include <chrono>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/bvh/bounding_volumes.h"
+#include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/robot_model.h"
 #include "robot_data.h"
 
@@ -128,7 +131,7 @@ TEST(RobotModel, ForwardKinematicsEqualsKdlOnEveryRobot) {
 // ---------------------------------------------------------------- a project-written URDF
 
 // A binary STL of a unit box with corner (0, 0, 0) and (1, 2, 3) (outward winding).
-void write_stl(const fs::path& path) {
+void write_stl(const fs::path& path, float poison = 0.0f) {
   const TriangleMesh box = box_mesh(Vec3(1, 2, 3));
   std::ofstream out(path, std::ios::binary);
   char header[80] = "bvh_collision test box";
@@ -140,7 +143,8 @@ void write_stl(const fs::path& path) {
     out.write(reinterpret_cast<const char*>(normal), 12);
     for (int k = 0; k < 3; ++k) {
       const Vec3 v = box.vertices[box.triangles[t][k]] + Vec3(0.5, 1.0, 1.5);
-      const float f[3] = {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+      float f[3] = {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+      if (t == 5 && k == 1 && poison != 0.0f) f[0] = poison;  // one vertex of one facet
       out.write(reinterpret_cast<const char*>(f), 12);
     }
     const std::uint16_t attributes = 0;
@@ -150,9 +154,8 @@ void write_stl(const fs::path& path) {
 
 // A Collada triangle (0,0,0) (1,0,0) (0,1,0) with up_axis Z_UP and a child node translation of
 // (0, 0, 5): under the ROS convention the result is the triangle moved 5 along z, not rotated.
-void write_collada(const fs::path& path) {
-  std::ofstream out(path);
-  out << R"(<?xml version="1.0" encoding="utf-8"?>
+void write_collada(const fs::path& path, const std::string& from = "", const std::string& to = "") {
+  std::string text = R"(<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
   <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
   <library_geometries><geometry id="tri" name="tri"><mesh>
@@ -169,6 +172,8 @@ void write_collada(const fs::path& path) {
   <scene><instance_visual_scene url="#scene"/></scene>
 </COLLADA>
 )";
+  if (!from.empty()) text.replace(text.find(from), from.size(), to);
+  std::ofstream(path) << text;
 }
 
 struct ScratchPackage {
@@ -264,6 +269,92 @@ TEST(RobotModel, LoadErrorsNameLinkElementAndFile) {
   EXPECT_NE(msg.find("unsupported URI scheme 'http://'"), std::string::npos) << msg;
   msg = pkg.load_error(mesh_link("arm", "package://no_such_package/box.stl"));
   EXPECT_NE(msg.find("package 'no_such_package' not found"), std::string::npos) << msg;
+}
+
+// Mesh content that is not a usable surface: an error naming link, element and file, never a
+// crash in the hierarchy builder (one NaN vertex reached it) or a link that silently vanishes.
+TEST(RobotModel, BadMeshContentIsRefusedByName) {
+  const ScratchPackage pkg;
+  const fs::path dir = pkg.root / "test-meshes" / "meshes";
+  write_stl(dir / "nan_binary.stl", std::numeric_limits<float>::quiet_NaN());
+  write_stl(dir / "inf_binary.stl", std::numeric_limits<float>::infinity());
+  std::ofstream(dir / "nan_ascii.stl") << "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\n"
+                                          "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n";
+  std::ofstream(dir / "nan.obj") << "v nan nan nan\nv nan nan nan\nv nan nan nan\nf 1 2 3\n";
+  std::ofstream(dir / "flat.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
+  std::ofstream(dir / "far.obj") << "v 0 0 0\nv 10 0 0\nv 0 1 0\nf 1 2 3\n";
+  {
+    std::mt19937_64 rng(3);
+    std::ofstream random(dir / "random.obj", std::ios::binary);
+    for (int i = 0; i < 3000; ++i) random.put(static_cast<char>(rng() & 0xFF));
+  }
+  const std::pair<std::string, std::string> cases[] = {
+      {"nan_binary.stl", "not finite"}, {"inf_binary.stl", "not finite"}, {"nan_ascii.stl", ""},
+      {"nan.obj", ""},                  {"flat.obj", "non-zero area"},    {"random.obj", ""},
+  };
+  for (const auto& [file, reason] : cases) {
+    const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/" + file));
+    EXPECT_NE(msg.find("link 'arm', collision element 1"), std::string::npos) << file << ": " << msg;
+    EXPECT_NE(msg.find(file), std::string::npos) << msg;
+    EXPECT_NE(msg.find(reason), std::string::npos) << file << ": " << msg;
+  }
+  // Scaled beyond any robot: refused, not answered "free at distance 0".
+  const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/far.obj", "1e5 1 1"));
+  EXPECT_NE(msg.find("beyond"), std::string::npos) << msg;
+}
+
+// Hostile Collada: assimp crashed (a stride of 10^6), allocated without end (a non-integer in
+// <p>: 19 GB seen) or accepted nonsense (indices of -1 or 2^32 - 1, counts beyond the array,
+// strides of 0 or -3, an offset of -1). Each is now an error naming the file; the importer runs
+// in a child process bounded in memory and time.
+TEST(RobotModel, HostileColladaIsAnErrorNotACrashOrARunaway) {
+  const ScratchPackage pkg;
+  const fs::path dir = pkg.root / "test-meshes" / "meshes";
+  const std::pair<std::string, std::string> cases[] = {
+      {"stride=\"3\"", "stride=\"1000000\""}, {"stride=\"3\"", "stride=\"0\""},
+      {"stride=\"3\"", "stride=\"-3\""},      {"<p>0 1 2</p>", "<p>0 1 -1</p>"},
+      {"<p>0 1 2</p>", "<p>0 1 2147483648</p>"}, {"<p>0 1 2</p>", "<p>0 1 4294967295</p>"},
+      {"count=\"3\" stride", "count=\"30\" stride"}, {"offset=\"0\"", "offset=\"-1\""},
+  };
+  int i = 0;
+  for (const auto& [from, to] : cases) {
+    const std::string file = "hostile" + std::to_string(i++) + ".dae";
+    write_collada(dir / file, from, to);
+    const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/" + file));
+    EXPECT_NE(msg.find("link 'arm', collision element 1"), std::string::npos) << to << ": " << msg;
+    EXPECT_NE(msg.find(file), std::string::npos) << to << ": " << msg;
+  }
+  // The runaway allocation, stopped at a small bound here (the default is 1 GiB).
+  write_collada(dir / "runaway.dae", "<p>0 1 2</p>", "<p>0 x 2</p>");
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    load_mesh((dir / "runaway.dae").string(), Vec3::Ones(), MeshImportLimits{std::size_t(192) << 20, 60.0});
+    ADD_FAILURE() << "a Collada <p> list with a non-integer loaded";
+  } catch (const MeshLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("runaway.dae"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
+  // The memory bound itself: a valid mesh of 200,000 triangles needs far more than 8 MiB.
+  {
+    std::ofstream big(dir / "big.obj");
+    for (int i = 0; i < 100000; ++i) big << "v " << i << " 0 0\nv " << i << " 1 0\nv " << i << " 0 1\n";
+    for (int i = 0; i < 100000; ++i) big << "f " << 3 * i + 1 << " " << 3 * i + 2 << " " << 3 * i + 3 << "\n";
+    for (int i = 0; i < 100000; ++i) big << "f " << 3 * i + 1 << " " << 3 * i + 3 << " " << 3 * i + 2 << "\n";
+  }
+  try {
+    load_mesh((dir / "big.obj").string(), Vec3::Ones(), MeshImportLimits{std::size_t(8) << 20, 60.0});
+    ADD_FAILURE() << "no memory bound";
+  } catch (const MeshLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("could not be loaded within 8 MiB"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(load_mesh((dir / "big.obj").string()).triangles.size(), 200000u) << "within the default bound";
+  // A hang: a time bound of 0 s stops even a good file, with the reason.
+  try {
+    load_mesh((dir / "box.stl").string(), Vec3::Ones(), MeshImportLimits{std::size_t(1) << 30, 0.0});
+    ADD_FAILURE() << "no time bound";
+  } catch (const MeshLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("could not be loaded within 0 s"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RobotModel, MimicAndFreeJoints) {

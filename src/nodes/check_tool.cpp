@@ -42,6 +42,17 @@ double parse_number(const std::string& flag, const std::string& text) {
   return *v;
 }
 
+// A whole number of samples: the text is all digits and the value within [1, kMaxSamples].
+std::size_t parse_count(const std::string& flag, const std::string& text) {
+  constexpr std::size_t kMaxSamples = 1000000000;
+  const bool digits = !text.empty() && text.size() <= 10 && text.find_first_not_of("0123456789") == std::string::npos;
+  const unsigned long long v = digits ? std::stoull(text) : 0;
+  if (!digits || v < 1 || v > kMaxSamples) {
+    throw std::invalid_argument(flag + " needs a whole number from 1 to " + std::to_string(kMaxSamples) + ", got '" + text + "'");
+  }
+  return static_cast<std::size_t>(v);
+}
+
 Options parse_args(const std::vector<std::string>& args) {
   Options o;
   auto value = [&](std::size_t& i) {
@@ -58,7 +69,7 @@ Options parse_args(const std::vector<std::string>& args) {
     else if (a == "--print-acm") o.print_acm = true;
     else if (a == "--tolerance") o.tolerance = parse_number(a, value(i));
     else if (a == "--padding") o.padding = parse_number(a, value(i));
-    else if (a == "--sample-acm") o.sample_acm = static_cast<std::size_t>(parse_number(a, value(i)));
+    else if (a == "--sample-acm") o.sample_acm = parse_count(a, value(i));
     else if (a == "--acm-cache") o.acm_cache = value(i);
     else throw std::invalid_argument("unknown argument '" + a + "'");
   }
@@ -67,12 +78,13 @@ Options parse_args(const std::vector<std::string>& args) {
   return o;
 }
 
+// Regular files only, of bounded size (read_description_file).
 std::string read_file(const std::string& path, const char* what) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(std::string("cannot open ") + what + " file '" + path + "'");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  try {
+    return read_description_file(std::string(what) + " file", path);
+  } catch (const RobotDescriptionError& e) {
+    throw std::invalid_argument(e.what());
+  }
 }
 
 std::string pair_name(const RobotModel& m, int a, int b) {
@@ -109,6 +121,9 @@ States read_states(const std::string& path, const RobotModel& m) {
         const int j = m.joint_index(name);
         if (j < 0 || m.joints()[j].variable < 0) {
           throw std::invalid_argument(path + ":" + std::to_string(number) + ": '" + name + "' is not a movable, non-mimic joint of the robot");
+        }
+        if (std::find(s.variables.begin(), s.variables.end(), m.joints()[j].variable) != s.variables.end()) {
+          throw std::invalid_argument(path + ":" + std::to_string(number) + ": joint '" + name + "' is named twice");
         }
         s.variables.push_back(m.joints()[j].variable);
       }

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/octree/cube_walk.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -67,13 +68,6 @@ bool slab(const Vec3& p, const Vec3& u, const Vec3& inv, const Vec3& lo, const V
   return true;
 }
 
-struct Item {
-  std::int32_t node;
-  int depth;
-  OctreeKey corner;
-  std::uint64_t index;
-};
-
 }  // namespace
 
 std::optional<Octree::Leaf> Octree::locate(const Vec3& p) const {
@@ -89,49 +83,33 @@ std::optional<Octree::Leaf> Octree::locate(const Vec3& p) const {
 
 std::vector<Octree::Leaf> Octree::occupied_in_box(const Vec3& min, const Vec3& max) const {
   std::vector<Leaf> out;
-  if (nodes_.empty() || !(min.array() <= max.array()).all()) return out;
+  const auto root = occupied_root(*this);
+  if (!root || !(min.array() <= max.array()).all()) return out;
   // One voxel of slack below: a cube whose top face touches `min` belongs to the voxel under it.
   KeyRange range = key_range(grid_, min, max);
   for (auto& k : range.lo.k) k = static_cast<std::uint16_t>(k > 0 ? k - 1 : 0);
-  std::vector<Item> stack{{0, 0, OctreeKey{}, 0}};
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    if (!meets(range, it.corner, it.depth) || !occupied(nodes_[it.node].log_odds)) continue;
-    if (is_leaf(it.node)) {
-      const Vec3 lo = cube_min(it.corner), hi = lo + Vec3::Constant(cube_size(it.depth));
-      if (boxes_meet(lo, hi, min, max)) out.push_back({it.corner, it.depth, it.index, nodes_[it.node].log_odds});
-      continue;
-    }
-    for (int b = 7; b >= 0; --b) {
-      const std::int32_t c = child(it.node, b);
-      if (c >= 0) stack.push_back({c, it.depth + 1, child_corner(it.corner, it.depth, b), child_index(it.index, b)});
-    }
-  }
+  descend_while(
+      *this, *root, [&](const OctreeCube& c) { return meets(range, c.corner, c.depth) ? Visit::kEnter : Visit::kSkip; },
+      [&](const OctreeCube& c) {
+        const Vec3 lo = cube_min(c.corner), hi = lo + Vec3::Constant(cube_size(c.depth));
+        if (boxes_meet(lo, hi, min, max)) out.push_back(leaf_of(*this, c));
+        return false;
+      });
   return out;
 }
 
 std::vector<Octree::Leaf> Octree::occupied_in_sphere(const Vec3& centre, double radius, bool any) const {
   std::vector<Leaf> out;
-  if (nodes_.empty() || !(radius >= 0.0) || !centre.allFinite()) return out;
-  thread_local std::vector<Item> stack;  // robot checks ask this per link: no allocation per call
-  stack.assign(1, Item{0, 0, OctreeKey{}, 0});
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    if (!occupied(nodes_[it.node].log_odds)) continue;
-    const Vec3 lo = cube_min(it.corner), hi = lo + Vec3::Constant(cube_size(it.depth));
-    if (!sphere_intersects_box(centre, radius, lo, hi)) continue;
-    if (is_leaf(it.node)) {
-      out.push_back({it.corner, it.depth, it.index, nodes_[it.node].log_odds});
-      if (any) return out;
-      continue;
-    }
-    for (int b = 7; b >= 0; --b) {
-      const std::int32_t c = child(it.node, b);
-      if (c >= 0) stack.push_back({c, it.depth + 1, child_corner(it.corner, it.depth, b), child_index(it.index, b)});
-    }
-  }
+  const auto root = occupied_root(*this);
+  if (!root || !(radius >= 0.0) || !centre.allFinite()) return out;
+  auto visit = [&](const OctreeCube& c) {
+    const Vec3 lo = cube_min(c.corner), hi = lo + Vec3::Constant(cube_size(c.depth));
+    return sphere_intersects_box(centre, radius, lo, hi) ? Visit::kEnter : Visit::kSkip;
+  };
+  descend_while(*this, *root, visit, [&](const OctreeCube& c) {
+    out.push_back(leaf_of(*this, c));
+    return any;
+  });
   return out;
 }
 
@@ -143,37 +121,25 @@ std::optional<Octree::RayHit> Octree::cast_ray(const Vec3& origin, const Vec3& d
     return std::nullopt;
   }
   const Vec3 u = direction / length, inv = u.cwiseInverse();
-  struct Entry {
-    double t;
-    Item item;
-  };
-  std::vector<Entry> stack;
-  const auto push = [&](const Item& item) {
-    if (!occupied(nodes_[item.node].log_odds)) return false;
-    const Vec3 lo = cube_min(item.corner), hi = lo + Vec3::Constant(cube_size(item.depth));
+  const auto root = occupied_root(*this);
+  if (!root) return std::nullopt;
+  // A cube's bound is where the ray enters it (infinite when it misses): nearest first, the
+  // first leaf reached is the first hit.
+  auto entry = [&](const OctreeCube& c) {
+    const Vec3 lo = cube_min(c.corner), hi = lo + Vec3::Constant(cube_size(c.depth));
     double t0, t1;
-    if (!slab(origin, u, inv, lo, hi, max_range, t0, t1)) return false;
-    stack.push_back({t0, item});
-    return true;
+    return slab(origin, u, inv, lo, hi, max_range, t0, t1) ? t0 : std::numeric_limits<double>::infinity();
   };
-  push({0, 0, OctreeKey{}, 0});
-  while (!stack.empty()) {
-    const Entry e = stack.back();
-    stack.pop_back();
-    const Item& it = e.item;
-    if (is_leaf(it.node)) {
-      return RayHit{{it.corner, it.depth, it.index, nodes_[it.node].log_odds}, e.t, origin + e.t * u};
-    }
-    const std::size_t before = stack.size();
-    for (int b = 0; b < 8; ++b) {
-      const std::int32_t c = child(it.node, b);
-      if (c >= 0) push({c, it.depth + 1, child_corner(it.corner, it.depth, b), child_index(it.index, b)});
-    }
-    // Nearest entry on top of the stack.
-    std::sort(stack.begin() + static_cast<std::ptrdiff_t>(before), stack.end(),
-              [](const Entry& a, const Entry& b) { return a.t > b.t; });
-  }
-  return std::nullopt;
+  std::optional<RayHit> hit;
+  nearest_cubes_first(
+      *this, *root, entry,
+      [&](const OctreeCube& c) {
+        const double t = entry(c);
+        hit = RayHit{leaf_of(*this, c), t, origin + t * u};
+        return true;
+      },
+      [] { return std::numeric_limits<double>::infinity(); });
+  return hit;
 }
 
 void Octree::release_subtree(std::int32_t node) {

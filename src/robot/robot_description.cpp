@@ -1,9 +1,11 @@
 #include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/robot/urdf_validation.h"
 
 #include <console_bridge/console.h>
 #include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -41,6 +43,7 @@ void check_xml(const std::string& xml) {
     throw RobotDescriptionError(std::string("robot description has no <robot> root element (found <") +
                                 (root ? root->Name() : "nothing") + ">)");
   }
+  validate_robot_xml(*root);  // what urdfdom would drop or accept silently
 }
 
 std::string geometry_name(const urdf::Geometry& g) {
@@ -90,13 +93,30 @@ std::shared_ptr<urdf::ModelInterface> parse_robot_description(const std::string&
   return model;
 }
 
-std::shared_ptr<urdf::ModelInterface> load_robot_description_file(const std::string& path) {
+std::string read_description_file(const std::string& what, const std::string& path) {
+  // Only regular files, and not without bound: /dev/zero is read forever, a FIFO blocks.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw RobotDescriptionError("cannot open " + what + " '" + path + "'");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw RobotDescriptionError(what + " '" + path + "' is not a regular file");
+  }
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size > kMaxDescriptionBytes) {
+    throw RobotDescriptionError(what + " '" + path + "' is larger than " + std::to_string(kMaxDescriptionBytes >> 20) +
+                                " MiB");
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw RobotDescriptionError("cannot open URDF file '" + path + "'");
+  if (!in) throw RobotDescriptionError("cannot open " + what + " '" + path + "'");
   std::ostringstream text;
   text << in.rdbuf();
+  return text.str();
+}
+
+std::shared_ptr<urdf::ModelInterface> load_robot_description_file(const std::string& path) {
+  const std::string text = read_description_file("URDF file", path);
   try {
-    return parse_robot_description(text.str());
+    return parse_robot_description(text);
   } catch (const RobotDescriptionError& e) {
     throw RobotDescriptionError("URDF file '" + path + "': " + e.what());
   }

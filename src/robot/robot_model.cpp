@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "bvh_collision/robot/mesh_loader.h"
+#include "bvh_collision/robot/urdf_validation.h"
 
 namespace bvh_collision {
 namespace {
@@ -177,7 +178,14 @@ class RobotModelBuilder {
       throw RobotLoadError(where + ": mesh '" + uri + "': scale must be finite and non-zero");
     }
     auto mesh = std::make_shared<TriangleMesh>(*unscaled);
-    for (Vec3& v : mesh->vertices) v = v.cwiseProduct(scale);
+    for (std::size_t i = 0; i < mesh->vertices.size(); ++i) {
+      Vec3& v = mesh->vertices[i];
+      v = v.cwiseProduct(scale);
+      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        throw RobotLoadError(where + ": mesh '" + uri + "': vertex " + std::to_string(i) + " scaled lies beyond " +
+                             std::to_string(static_cast<long>(kMaxCoordinate)) + " m");
+      }
+    }
     if (scale.x() * scale.y() * scale.z() < 0.0) {
       for (auto& t : mesh->triangles) std::swap(t[1], t[2]);  // mirrored: keep outward winding
     }

@@ -77,7 +77,17 @@ void descend_while(const Octree& tree, const OctreeCube& start, VisitFn&& visit,
       if (leaf(c)) return;
       continue;
     }
-    for_occupied_children(tree, c, [&](const OctreeCube& child) { stack.push(child); }, children(c));
+    // Highest child bit pushed first, so child 0 is reached first (the seed's order).
+    unsigned bits = children(c) & tree.child_mask(c.node);
+    const std::int32_t first = tree.children_block(c.node);
+    while (bits) {
+      const int b = 31 - __builtin_clz(bits);
+      bits &= ~(1u << b);
+      const std::int32_t child = first + b;
+      if (tree.occupied(tree.value(child))) {
+        stack.push(OctreeCube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
+      }
+    }
   }
 }
 

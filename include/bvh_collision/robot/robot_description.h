@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -44,6 +45,13 @@ struct RobotSummary {
 // Parses URDF XML. Throws RobotDescriptionError naming the problem when the text is empty,
 // not well-formed XML, has no <robot> root element, or is rejected by urdfdom.
 std::shared_ptr<urdf::ModelInterface> parse_robot_description(const std::string& xml);
+
+// The largest URDF, SRDF or states file read (bytes): real ones are well under a megabyte.
+constexpr std::uintmax_t kMaxDescriptionBytes = std::uintmax_t(64) << 20;
+
+// A description file's text: only a regular file of at most kMaxDescriptionBytes (not a device,
+// FIFO or directory). `what` names it in the error ("URDF file", "SRDF file", ...).
+std::string read_description_file(const std::string& what, const std::string& path);
 
 // Reads and parses a URDF file; the error names the file.
 std::shared_ptr<urdf::ModelInterface> load_robot_description_file(const std::string& path);

@@ -1,0 +1,34 @@
+// What a robot description may not contain, checked on the XML before urdfdom reads it.
+//
+// urdfdom drops a <collision> element it cannot parse (a radius of "nan" or "abc", a box of two
+// numbers, an empty <geometry/>, an unknown shape) with a log line at most, and accepts numbers
+// that make the geometry vanish or overflow (1e300, 1e308). A robot that silently loses a link's
+// geometry answers "free" where it collides, so every such input is refused here, by name:
+//
+//   - every <collision> has one <geometry> holding exactly one of box, sphere, cylinder, mesh;
+//   - every number (sizes, radii, lengths, mesh scales, origins, joint origins, axes, limits) is
+//     a complete decimal number, finite, with the count its attribute needs, and within
+//     kMaxCoordinate of 0 (beyond it corners and products overflow or lose every digit);
+//   - sizes, radii and lengths are positive, mesh scales non-zero, a mesh names its file;
+//   - a joint's axis is not zero, its lower limit is not above its upper one, its parent is not its
+//     child, and no link is the child of two joints.
+//
+// The message names the link (and collision element, 1-based) or joint, the attribute and the
+// value found.
+#pragma once
+
+#include <string>
+
+namespace tinyxml2 {
+class XMLElement;
+}
+
+namespace bvh_collision {
+
+// The largest magnitude of a length or coordinate a robot description may hold (m).
+constexpr double kMaxCoordinate = 1e5;
+
+// Throws RobotDescriptionError for the first problem found under <robot>.
+void validate_robot_xml(const tinyxml2::XMLElement& robot);
+
+}  // namespace bvh_collision

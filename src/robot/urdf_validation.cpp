@@ -1,0 +1,180 @@
+#include "bvh_collision/robot/urdf_validation.h"
+
+#include <tinyxml2.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include "bvh_collision/robot/robot_description.h"
+
+namespace bvh_collision {
+namespace {
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  throw RobotDescriptionError(where + ": " + what);
+}
+
+// Whitespace-separated decimal numbers, each one complete (no trailing characters), or nothing
+// when a token is not a number.
+std::optional<std::vector<double>> parse_numbers(const char* text) {
+  std::vector<double> out;
+  std::istringstream words(text);
+  std::string word;
+  while (words >> word) {
+    errno = 0;
+    char* end = nullptr;
+    const double v = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0') return std::nullopt;
+    out.push_back(v);
+  }
+  return out;
+}
+
+enum class Sign { kAny, kPositive, kNonZero };
+
+struct Attribute {
+  const char* name;
+  std::size_t count;
+  Sign sign;
+};
+
+// The attribute's numbers, checked: the right count, finite, within kMaxCoordinate, the sign.
+// A missing optional attribute gives nothing; a missing required one is an error.
+std::optional<std::vector<double>> numbers(const tinyxml2::XMLElement& e, const Attribute& a, const std::string& where,
+                                           bool required) {
+  const char* text = e.Attribute(a.name);
+  const std::string quoted = std::string("<") + e.Name() + "> attribute '" + a.name + "'";
+  if (text == nullptr) {
+    if (required) fail(where, quoted + " is missing");
+    return std::nullopt;
+  }
+  const std::string value = std::string(" is '") + text + "'";
+  const auto v = parse_numbers(text);
+  if (!v) fail(where, quoted + value + ": not a number");
+  if (v->size() != a.count) {
+    fail(where, quoted + value + ": needs " + std::to_string(a.count) + (a.count == 1 ? " number" : " numbers") +
+                    ", got " + std::to_string(v->size()));
+  }
+  for (const double x : *v) {
+    if (!std::isfinite(x)) fail(where, quoted + value + ": not finite");
+    if (std::abs(x) > kMaxCoordinate) {
+      fail(where, quoted + value + ": beyond " + std::to_string(static_cast<long>(kMaxCoordinate)) +
+                      " (larger than any robot; its geometry would overflow)");
+    }
+    if (a.sign == Sign::kPositive && !(x > 0.0)) fail(where, quoted + value + ": must be positive");
+    if (a.sign == Sign::kNonZero && x == 0.0) fail(where, quoted + value + ": must not be zero");
+  }
+  return v;
+}
+
+void check_origin(const tinyxml2::XMLElement& parent, const std::string& where) {
+  if (const tinyxml2::XMLElement* origin = parent.FirstChildElement("origin")) {
+    numbers(*origin, {"xyz", 3, Sign::kAny}, where, false);
+    numbers(*origin, {"rpy", 3, Sign::kAny}, where, false);
+  }
+}
+
+int element_count(const tinyxml2::XMLElement& e) {
+  int n = 0;
+  for (const tinyxml2::XMLElement* c = e.FirstChildElement(); c != nullptr; c = c->NextSiblingElement()) ++n;
+  return n;
+}
+
+void check_shape(const tinyxml2::XMLElement& shape, const std::string& where) {
+  const std::string name = shape.Name();
+  if (name == "box") {
+    numbers(shape, {"size", 3, Sign::kPositive}, where, true);
+  } else if (name == "sphere") {
+    numbers(shape, {"radius", 1, Sign::kPositive}, where, true);
+  } else if (name == "cylinder") {
+    numbers(shape, {"radius", 1, Sign::kPositive}, where, true);
+    numbers(shape, {"length", 1, Sign::kPositive}, where, true);
+  } else if (name == "mesh") {
+    const char* file = shape.Attribute("filename");
+    if (file == nullptr || *file == '\0') fail(where, "<mesh> has no filename");
+    numbers(shape, {"scale", 3, Sign::kNonZero}, where, false);
+  } else {
+    fail(where, "unknown shape <" + name + "> (supported: box, sphere, cylinder, mesh)");
+  }
+}
+
+void check_collision(const tinyxml2::XMLElement& collision, const std::string& where) {
+  check_origin(collision, where);
+  const tinyxml2::XMLElement* geometry = collision.FirstChildElement("geometry");
+  if (geometry == nullptr) fail(where, "<collision> has no <geometry>");
+  const int shapes = element_count(*geometry);
+  if (shapes == 0) fail(where, "<geometry> is empty (supported shapes: box, sphere, cylinder, mesh)");
+  if (shapes > 1) fail(where, "<geometry> holds " + std::to_string(shapes) + " shapes; one per <collision>");
+  check_shape(*geometry->FirstChildElement(), where);
+}
+
+std::string name_of(const tinyxml2::XMLElement& e) {
+  const char* name = e.Attribute("name");
+  return name ? name : "";
+}
+
+std::string link_of(const tinyxml2::XMLElement& joint, const char* which) {
+  const tinyxml2::XMLElement* e = joint.FirstChildElement(which);
+  const char* link = e ? e->Attribute("link") : nullptr;
+  return link ? link : "";
+}
+
+void check_joint(const tinyxml2::XMLElement& joint, std::map<std::string, std::string>& parent_joint) {
+  const std::string name = name_of(joint), where = "joint '" + name + "'";
+  check_origin(joint, where);
+  const std::string parent = link_of(joint, "parent"), child = link_of(joint, "child");
+  if (!child.empty() && child == parent) fail(where, "its parent link '" + parent + "' is also its child");
+  if (!child.empty()) {
+    const auto [it, fresh] = parent_joint.emplace(child, name);
+    if (!fresh) fail("link '" + child + "'", "is the child of two joints, '" + it->second + "' and '" + name + "'");
+  }
+  // urdfdom reads an axis only for moving joints, and limits only for revolute and prismatic.
+  const char* type_attribute = joint.Attribute("type");
+  const std::string type = type_attribute ? type_attribute : "";
+  const bool moves = type == "revolute" || type == "continuous" || type == "prismatic" || type == "planar";
+  const tinyxml2::XMLElement* axis = moves ? joint.FirstChildElement("axis") : nullptr;
+  if (axis != nullptr) {
+    const auto xyz = numbers(*axis, {"xyz", 3, Sign::kAny}, where, false);
+    if (xyz && (*xyz)[0] == 0.0 && (*xyz)[1] == 0.0 && (*xyz)[2] == 0.0) {
+      fail(where, std::string("<axis> attribute 'xyz' is '") + axis->Attribute("xyz") + "': a zero axis has no direction");
+    }
+  }
+  const bool bounded = type == "revolute" || type == "prismatic";
+  if (const tinyxml2::XMLElement* limit = bounded ? joint.FirstChildElement("limit") : nullptr) {
+    const auto lower = numbers(*limit, {"lower", 1, Sign::kAny}, where, false);
+    const auto upper = numbers(*limit, {"upper", 1, Sign::kAny}, where, false);
+    if (lower && upper && (*lower)[0] > (*upper)[0]) {
+      fail(where, std::string("<limit> lower '") + limit->Attribute("lower") + "' is above upper '" +
+                      limit->Attribute("upper") + "'");
+    }
+  }
+  if (const tinyxml2::XMLElement* mimic = joint.FirstChildElement("mimic")) {
+    numbers(*mimic, {"multiplier", 1, Sign::kAny}, where, false);
+    numbers(*mimic, {"offset", 1, Sign::kAny}, where, false);
+  }
+}
+
+}  // namespace
+
+void validate_robot_xml(const tinyxml2::XMLElement& robot) {
+  for (const tinyxml2::XMLElement* link = robot.FirstChildElement("link"); link != nullptr;
+       link = link->NextSiblingElement("link")) {
+    int element = 0;
+    for (const tinyxml2::XMLElement* c = link->FirstChildElement("collision"); c != nullptr;
+         c = c->NextSiblingElement("collision")) {
+      check_collision(*c, "link '" + name_of(*link) + "', collision element " + std::to_string(++element));
+    }
+  }
+  std::map<std::string, std::string> parent_joint;  // child link -> the joint that has it
+  for (const tinyxml2::XMLElement* joint = robot.FirstChildElement("joint"); joint != nullptr;
+       joint = joint->NextSiblingElement("joint")) {
+    check_joint(*joint, parent_joint);
+  }
+}
+
+}  // namespace bvh_collision
