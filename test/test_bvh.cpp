@@ -340,7 +340,7 @@ TYPED_TEST(BvhOracle, AnyHitRayAgreesWithFirstHit) {
     }
     hits += first.hit;
   }
-  EXPECT_GT(hits, 30);
+  EXPECT_GT(hits, 15);  // about one ray in ten reaches the mesh within 0.5
 }
 
 TEST(BoundingVolumes, SphereBoxTestIsTheExactOne) {

@@ -99,6 +99,11 @@ TEST(CheckTool, ErrorsGoToStderrWithNonZeroExit) {
            {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "99999999999999999999"}, "--sample-acm needs a whole number"},
            {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "1.5"}, "--sample-acm needs a whole number"},
            {{"--urdf", kUrdf, "--print-acm", "--sample-acm", "0"}, "--sample-acm needs a whole number"},
+           // A malformed robot: the message the node gives too (node_bad_robot.test).
+           {{"--urdf", write_states("<robot name='r'><link name='a'><collision><geometry><cylinder radius='nan' length='1'/>"
+                                    "</geometry></collision></link></robot>"),
+             "--states", write_states("joints:\n\n")},
+            "link 'a', collision element 1: <cylinder> attribute 'radius' is 'nan': not finite"},
            // Only regular files: /dev/zero is read forever, a directory is no file.
            {{"--urdf", "/dev/zero", "--states", write_states("joints: joint1\n0\n")}, "is not a regular file"},
            {{"--urdf", kUrdf, "--states", "/dev/zero"}, "is not a regular file"},

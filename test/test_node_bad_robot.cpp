@@ -48,6 +48,20 @@ TEST(NodeBadRobot, NotAUrdf) { expect_startup_failure("not_urdf", "no <robot> ro
 
 TEST(NodeBadRobot, DanglingJoint) { expect_startup_failure("dangling_joint", "ghost"); }
 
+// Robot descriptions the node used to start with (an element dropped, a crash in the builder):
+// the same message as bvh_collision_check gives.
+TEST(NodeBadRobot, NonFiniteCylinderRadius) {
+  expect_startup_failure("nan_radius", "link 'a', collision element 1: <cylinder> attribute 'radius' is 'nan': not finite");
+}
+
+TEST(NodeBadRobot, UnknownShape) {
+  expect_startup_failure("capsule_shape", "unknown shape <capsule> (supported: box, sphere, cylinder, mesh)");
+}
+
+TEST(NodeBadRobot, NonFiniteMeshVertex) {
+  expect_startup_failure("nan_vertex", "'nan' is not a finite number");
+}
+
 TEST(NodeBadRobot, NegativeResolution) {
   expect_startup_failure("bad_resolution", "~resolution must be a positive number");
 }

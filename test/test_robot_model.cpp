@@ -264,7 +264,7 @@ TEST(RobotModel, LoadErrorsNameLinkElementAndFile) {
   EXPECT_NE(msg.find("missing.stl"), std::string::npos) << msg;
   msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/garbage.stl"));
   EXPECT_NE(msg.find("garbage.stl"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("cannot be read"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("ASCII STL: expected 'facet' or 'endsolid', found 'this'"), std::string::npos) << msg;
   msg = pkg.load_error(mesh_link("arm", "http://example.com/box.stl"));
   EXPECT_NE(msg.find("unsupported URI scheme 'http://'"), std::string::npos) << msg;
   msg = pkg.load_error(mesh_link("arm", "package://no_such_package/box.stl"));
@@ -281,6 +281,18 @@ TEST(RobotModel, BadMeshContentIsRefusedByName) {
   std::ofstream(dir / "nan_ascii.stl") << "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\n"
                                           "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n";
   std::ofstream(dir / "nan.obj") << "v nan nan nan\nv nan nan nan\nv nan nan nan\nf 1 2 3\n";
+  // ASCII STL that assimp read as far as it could: half a file, four vertices, no endloop, an
+  // exponent that overflows.
+  const std::string facet = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+  const std::string two = "solid s\n" + facet + facet + "endsolid s\n";
+  std::ofstream(dir / "half.stl") << two.substr(0, two.size() / 2);
+  std::ofstream(dir / "four.stl") << "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                                     "vertex 1 1 0\nendloop\nendfacet\nendsolid s\n";
+  std::ofstream(dir / "noendloop.stl") << "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                          "vertex 0 1 0\nendfacet\nendsolid s\n";
+  std::ofstream(dir / "exponent.stl") << "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
+                                         "vertex 1e99999999999999999999 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid s\n";
+  std::ofstream(dir / "good_ascii.stl") << two;
   std::ofstream(dir / "flat.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
   std::ofstream(dir / "far.obj") << "v 0 0 0\nv 10 0 0\nv 0 1 0\nf 1 2 3\n";
   {
@@ -291,6 +303,8 @@ TEST(RobotModel, BadMeshContentIsRefusedByName) {
   const std::pair<std::string, std::string> cases[] = {
       {"nan_binary.stl", "not finite"}, {"inf_binary.stl", "not finite"}, {"nan_ascii.stl", ""},
       {"nan.obj", ""},                  {"flat.obj", "non-zero area"},    {"random.obj", ""},
+      {"half.stl", "ASCII STL: expected"}, {"four.stl", "expected 'endloop', found 'vertex'"},
+      {"noendloop.stl", "expected 'endloop', found 'endfacet'"}, {"exponent.stl", "not a finite number"},
   };
   for (const auto& [file, reason] : cases) {
     const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/" + file));
@@ -298,6 +312,7 @@ TEST(RobotModel, BadMeshContentIsRefusedByName) {
     EXPECT_NE(msg.find(file), std::string::npos) << msg;
     EXPECT_NE(msg.find(reason), std::string::npos) << file << ": " << msg;
   }
+  EXPECT_EQ(pkg.load(mesh_link("arm", "package://test-meshes/meshes/good_ascii.stl")).links()[0].collision[0].mesh->triangles.size(), 2u);
   // Scaled beyond any robot: refused, not answered "free at distance 0".
   const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/far.obj", "1e5 1 1"));
   EXPECT_NE(msg.find("beyond"), std::string::npos) << msg;

@@ -14,10 +14,13 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <vector>
@@ -173,6 +176,106 @@ class ColladaCheck {
   std::vector<const tinyxml2::XMLElement*> accessors_;
 };
 
+// ------------------------------------------------------------ ASCII STL grammar, before import
+
+// assimp reads a truncated ASCII STL, a facet of four vertices or a missing `endloop` as far as
+// it makes sense of them and drops the rest without a word; the grammar is checked here first.
+class AsciiStlCheck {
+ public:
+  explicit AsciiStlCheck(std::istream& in) : in_(in) {}
+  void run() {
+    expect("solid");
+    skip_line();
+    for (;;) {
+      const std::string w = word();
+      if (w == "endsolid") {
+        skip_line();
+        if (word().empty()) return;  // another solid may follow
+        unread_ = true;
+        expect("solid");
+        skip_line();
+        continue;
+      }
+      if (w != "facet") fail("'facet' or 'endsolid'", w);
+      expect("normal");
+      numbers(3);
+      expect("outer");
+      expect("loop");
+      for (int k = 0; k < 3; ++k) {
+        expect("vertex");
+        numbers(3);
+      }
+      expect("endloop");
+      expect("endfacet");
+    }
+  }
+
+ private:
+  std::string word() {
+    if (unread_) {
+      unread_ = false;
+      return last_;
+    }
+    last_.clear();
+    in_ >> last_;
+    std::transform(last_.begin(), last_.end(), last_.begin(), [](unsigned char c) { return std::tolower(c); });
+    return last_;
+  }
+  void skip_line() {
+    std::string rest;
+    std::getline(in_, rest);
+  }
+  [[noreturn]] void fail(const std::string& wanted, const std::string& found) const {
+    throw MeshLoadError("ASCII STL: expected " + wanted + ", found " + (found.empty() ? "the end of the file" : "'" + found + "'"));
+  }
+  void expect(const char* keyword) {
+    const std::string w = word();
+    if (w != keyword) fail(std::string("'") + keyword + "'", w);
+  }
+  void numbers(int n) {
+    for (int i = 0; i < n; ++i) {
+      const std::string w = word();
+      char* end = nullptr;
+      const double v = std::strtod(w.c_str(), &end);
+      if (w.empty() || *end != '\0') fail("a number", w);
+      if (!std::isfinite(v)) throw MeshLoadError("ASCII STL: '" + w + "' is not a finite number");
+    }
+  }
+  std::istream& in_;
+  std::string last_;
+  bool unread_ = false;
+};
+
+// An .stl file that starts with "solid" and is not a binary STL by its size (84 + 50 n bytes).
+bool is_ascii_stl(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext != ".stl") return false;
+  std::ifstream in(path, std::ios::binary);
+  char header[84] = {};
+  in.read(header, sizeof header);
+  const std::size_t got = static_cast<std::size_t>(in.gcount());
+  std::size_t start = 0;
+  while (start < got && std::isspace(static_cast<unsigned char>(header[start]))) ++start;
+  if (got - start < 5 || std::strncmp(header + start, "solid", 5) != 0) return false;
+  if (got == sizeof header) {
+    std::uint32_t n = 0;
+    std::memcpy(&n, header + 80, 4);
+    std::error_code ec;
+    if (std::filesystem::file_size(path, ec) == 84 + 50 * std::uintmax_t(n)) return false;  // binary after all
+  }
+  return true;
+}
+
+void check_ascii_stl(const std::string& path) {
+  std::ifstream in(path);
+  try {
+    AsciiStlCheck(in).run();
+  } catch (const MeshLoadError& e) {
+    throw MeshLoadError("mesh file '" + path + "': " + e.what());
+  }
+}
+
 bool is_collada(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -206,6 +309,7 @@ TriangleMesh import_mesh(const std::string& path, const Vec3& scale) {
     throw MeshLoadError("mesh file '" + path + "': scale must be finite and non-zero");
   }
   if (is_collada(path)) check_collada(path);
+  if (is_ascii_stl(path)) check_ascii_stl(path);
   Assimp::Importer importer;
   // Keep every triangle: no degenerate or invalid-data removal (a zero-area triangle still collides).
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -220,9 +324,6 @@ TriangleMesh import_mesh(const std::string& path, const Vec3& scale) {
     check_loaded(mesh);
   } catch (const MeshLoadError& e) {
     throw MeshLoadError("mesh file '" + path + "': " + e.what());
-  }
-  if (scale.x() * scale.y() * scale.z() < 0.0) {
-    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);  // mirrored: keep outward winding
   }
   return mesh;
 }
@@ -300,7 +401,10 @@ std::string collect(int fd, pid_t pid, std::size_t baseline, const MeshImportLim
 
 }  // namespace
 
-TriangleMesh load_mesh(const std::string& path, const Vec3& scale, const MeshImportLimits& limits) {
+namespace {
+
+// The import in a child process (see MeshImportLimits), unscaled.
+TriangleMesh import_isolated(const std::string& path, const MeshImportLimits& limits) {
   int fd[2];
   if (::pipe(fd) != 0) throw MeshLoadError("mesh file '" + path + "': no pipe for the importer");
   // The child starts with the parent's pages: its own use is what it adds to them.
@@ -315,7 +419,7 @@ TriangleMesh load_mesh(const std::string& path, const Vec3& scale, const MeshImp
     ::close(fd[0]);
     std::string out;
     try {
-      out = encode(import_mesh(path, scale));
+      out = encode(import_mesh(path, Vec3::Ones()));
     } catch (const std::exception& e) {
       out = std::string("E") + e.what();
     }
@@ -336,6 +440,65 @@ TriangleMesh load_mesh(const std::string& path, const Vec3& scale, const MeshImp
   }
   if (auto mesh = decode(data)) return std::move(*mesh);
   throw MeshLoadError("mesh file '" + path + "': the importer gave no answer");
+}
+
+// Imported files by path, size and modification time: a process that loads the same robot
+// again (tests, a node reloading) imports each file once. Bounded: cleared past 4 M triangles.
+class ImportCache {
+ public:
+  std::shared_ptr<const TriangleMesh> find(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = meshes_.find(key);
+    return it == meshes_.end() ? nullptr : it->second;
+  }
+  void add(const std::string& key, std::shared_ptr<const TriangleMesh> mesh) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    triangles_ += mesh->triangles.size();
+    if (triangles_ > kMaxTriangles) {
+      meshes_.clear();
+      triangles_ = mesh->triangles.size();
+    }
+    meshes_[key] = std::move(mesh);
+  }
+
+ private:
+  static constexpr std::size_t kMaxTriangles = std::size_t(4) << 20;
+  std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<const TriangleMesh>> meshes_;
+  std::size_t triangles_ = 0;
+};
+
+std::string cache_key(const std::string& path, const MeshImportLimits& limits) {
+  std::error_code ec;
+  const auto canonical = std::filesystem::weakly_canonical(path, ec).string();
+  const auto size = std::filesystem::file_size(path, ec);
+  const auto time = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
+  return canonical + "|" + std::to_string(size) + "|" + std::to_string(time) + "|" +
+         std::to_string(limits.memory_bytes) + "|" + std::to_string(limits.seconds);
+}
+
+}  // namespace
+
+TriangleMesh load_mesh(const std::string& path, const Vec3& scale, const MeshImportLimits& limits) {
+  if (!scale.allFinite() || (scale.array() == 0.0).any()) {
+    throw MeshLoadError("mesh file '" + path + "': scale must be finite and non-zero");
+  }
+  static ImportCache cache;
+  const std::string key = cache_key(path, limits);
+  std::shared_ptr<const TriangleMesh> unscaled = cache.find(key);
+  if (!unscaled) {
+    unscaled = std::make_shared<const TriangleMesh>(import_isolated(path, limits));
+    cache.add(key, unscaled);
+  }
+  TriangleMesh mesh = *unscaled;
+  for (Vec3& v : mesh.vertices) {
+    v = v.cwiseProduct(scale);
+    if (!v.allFinite()) throw MeshLoadError("mesh file '" + path + "': a vertex scaled is not finite");
+  }
+  if (scale.x() * scale.y() * scale.z() < 0.0) {
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);  // mirrored: keep outward winding
+  }
+  return mesh;
 }
 
 }  // namespace bvh_collision
