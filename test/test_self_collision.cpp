@@ -3,6 +3,8 @@
 // allowed-collision matrix, random configurations.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <fstream>
 #include <algorithm>
 #include <random>
@@ -128,9 +130,18 @@ double primitive_link_distance(const RobotModel& m, const std::vector<Transform>
 
 class SelfCollision : public ::testing::TestWithParam<const char*> {};
 
+// One fixture per robot for the whole run: building the checker and FCL's models is most of the
+// time under the sanitizers, and every test only reads them (FCL objects are moved per state).
+const Fixture& fixture(const std::string& robot) {
+  static std::map<std::string, Fixture> built;
+  auto it = built.find(robot);
+  if (it == built.end()) it = built.emplace(robot, make_fixture(robot)).first;
+  return it->second;
+}
+
 TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   const RobotModel& m = f.checker->model();
   std::mt19937_64 rng(17);
   std::vector<Transform> poses;
@@ -183,7 +194,7 @@ TEST_P(SelfCollision, CollidingPairsAndDistanceEqualFcl) {
 // state (with unnamed joints at 0, clamped into their limits) is answered as FCL answers it.
 TEST_P(SelfCollision, SrdfNamedStates) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   const RobotModel& m = f.checker->model();
   const std::set<std::string> rest = {"home", "ready", "all-zeros", "default", "up", "extended", "tuck_left_arm", "tuck_right_arm"};
   int rest_states = 0;
@@ -221,7 +232,7 @@ TEST_P(SelfCollision, SrdfNamedStates) {
 // Batch answers equal single answers (and the batch uses every core).
 TEST_P(SelfCollision, BatchEqualsSingle) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   const RobotModel& m = f.checker->model();
   std::mt19937_64 rng(23);
   std::vector<double> states;
@@ -239,7 +250,7 @@ TEST_P(SelfCollision, BatchEqualsSingle) {
 // Distance with a tolerance: never below the exact distance, at most the tolerance above it.
 TEST_P(SelfCollision, DistanceToleranceBoundsTheError) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   std::mt19937_64 rng(31);
   SelfCollisionRequest exact;
   exact.distance = true;
@@ -270,7 +281,7 @@ TEST_P(SelfCollision, DistanceToleranceBoundsTheError) {
 // variables never change the two links' relative pose.
 TEST_P(SelfCollision, PairsMovedByAreThePairsWhoseRelativePoseChanges) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   const RobotModel& m = f.checker->model();
   std::mt19937_64 rng(37);
   const auto& pairs = f.checker->checked_pairs();
@@ -312,7 +323,7 @@ TEST_P(SelfCollision, PairsMovedByAreThePairsWhoseRelativePoseChanges) {
 // Checking only the moved pairs, plus the rigid pairs once, gives the full answer.
 TEST_P(SelfCollision, OnlyMovedPairsPlusRigidPairsOnceEqualsTheFullCheck) {
   BVH_REQUIRE_ROBOTS();
-  const Fixture f = make_fixture(GetParam());
+  const Fixture& f = fixture(GetParam());
   const RobotModel& m = f.checker->model();
   std::mt19937_64 rng(41);
   std::vector<int> group;
