@@ -6,6 +6,8 @@
 #                CI=true: both
 #   make demo    start the node on the demo robot and report what it does
 #   make bench   build and run the benchmarks (Release); build/bench/report.md with its plots
+#   make fuzz    the libFuzzer targets (clang, ./build-fuzz), FUZZ_SECONDS each (default 60);
+#                what they find lands in test/fuzz/corpus, which `make test` replays
 SHELL := /bin/bash
 # catkin needs Debian's own python3 (with catkin_pkg) ahead of any other interpreter.
 export PATH := /usr/bin:$(PATH)
@@ -23,7 +25,10 @@ DEB_PACKAGES := \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
   libkdl-parser-dev liborocos-kdl-dev python3-matplotlib
 
-.PHONY: all deps build test demo bench clean
+# Only `make fuzz` needs clang and its libFuzzer runtime.
+FUZZ_PACKAGES := clang libclang-rt-14-dev
+
+.PHONY: all deps build test demo bench fuzz clean
 all: build
 
 deps:
@@ -51,5 +56,9 @@ bench: deps build
 	@echo "== bench_node (the node's services)"; bash scripts/bench_node.sh $(BUILD)/bench
 	@python3 scripts/bench_report.py $(BUILD)/bench
 
+fuzz: deps
+	@bash scripts/install_deps.sh $(FUZZ_PACKAGES)
+	@JOBS=$(JOBS) bash scripts/fuzz.sh
+
 clean:
-	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log devel
+	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log build-fuzz build-fuzz.configure.log devel

@@ -108,5 +108,26 @@ TEST(AllowedCollisionMatrix, MalformedSrdfIsAnError) {
   }
 }
 
+// tinyxml2's DoubleAttribute read a group state's "abc", "0x10" or missing value as 0 (or 16).
+TEST(AllowedCollisionMatrix, GroupStateValuesAreFiniteNumbers) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"value=\"abc\"", "'abc' is not a finite number"}, {"value=\"nan\"", "'nan' is not a finite number"},
+      {"value=\"0x10\"", "'0x10' is not a finite number"}, {"", "value is missing"},
+      {"value=\"1e400\"", "'1e400' is not a finite number"}};
+  for (const auto& [value, reason] : cases) {
+    try {
+      parse_srdf("<robot name=\"r\"><group_state name=\"home\" group=\"arm\"><joint name=\"j1\" " + value +
+                 "/></group_state></robot>");
+      ADD_FAILURE() << value << " parsed";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("<group_state name=\"home\">"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("joint 'j1'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_DOUBLE_EQ(parse_srdf("<robot name=\"r\"><group_state name=\"h\" group=\"a\"><joint name=\"j\" value=\"+1.5e-1\"/>"
+                              "</group_state></robot>").group_states.at("h").at("j"), 0.15);
+}
+
 }  // namespace
 }  // namespace bvh_collision

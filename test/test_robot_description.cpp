@@ -183,6 +183,11 @@ TEST(RobotDescription, EveryMalformedCollisionElementIsRefusedByName) {
       {"CYLINDER", R"(<cylinder radius="" length="0.4"/>)", {"link 'link1'", "'radius'", "needs 1 number, got 0"}},
       {"CYLINDER", R"(<cylinder radius="0.05" length="nan"/>)", {"'length'", "not finite"}},
       {"CYLINDER", R"(<cylinder radius="0.05"/>)", {"'length'", "missing"}},
+      // strtod reads hexadecimal, urdfdom does not (and dropped the element): not a number here.
+      {"CYLINDER", R"(<cylinder radius="0x10" length="0.4"/>)", {"link 'link1'", "'0x10'", "not a number"}},
+      {"SPHERE", R"(<sphere radius="0X1p-3"/>)", {"link 'link2'", "not a number"}},
+      {"CYLINDER", R"(<cylinder radius="+-1" length="0.4"/>)", {"link 'link1'", "not a number"}},
+      {"SPHERE", R"(<sphere radius="1e-99999"/>)", {"link 'link2'", "positive"}},
       {"CYLINDER", R"(<cylinder radius="1e300" length="0.4"/>)", {"'1e300'", "beyond"}},
       {"CYLINDER", R"(<cylinder radius="0.05" length="-1"/>)", {"'length'", "positive"}},
       {"SPHERE", R"(<sphere radius="nan"/>)", {"link 'link2', collision element 1", "not finite"}},
@@ -236,6 +241,19 @@ TEST(RobotDescription, JointErrorsAreRefusedByName) {
   }
   // A fixed joint's axis is not read (urdfdom ignores it): zero there is no error.
   EXPECT_NO_THROW(parse_robot_description(small_robot({{"J2_TYPE", "fixed"}, {"J2_AXIS", "0 0 0"}})));
+}
+
+// urdfdom reads XML with TinyXML 1, which read the unknown entity in "b&ase" as "base" where the
+// validation (tinyxml2) read "b&ase": two documents. urdfdom now reads the validated one (found
+// by fuzz_robot_description).
+TEST(RobotDescription, UrdfdomReadsTheDocumentThatWasValidated) {
+  const std::string xml =
+      "<robot name=\"r\"><link name=\"b&ase\"><collision><geometry><box size=\"1 1 1\"/></geometry></collision></link>"
+      "<link name=\"l\"/><joint name=\"j\" type=\"fixed\"><parent link=\"b&amp;ase\"/><child link=\"l\"/></joint></robot>";
+  const auto model = parse_robot_description(xml);
+  ASSERT_TRUE(model->getLink("b&ase")) << "the link keeps the name that was validated";
+  EXPECT_EQ(model->getLink("b&ase")->collision_array.size(), 1u);
+  EXPECT_FALSE(model->getLink("base"));
 }
 
 TEST(RobotDescription, OnlyRegularFilesAreRead) {

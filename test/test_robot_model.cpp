@@ -330,6 +330,8 @@ TEST(RobotModel, HostileColladaIsAnErrorNotACrashOrARunaway) {
       {"stride=\"3\"", "stride=\"-3\""},      {"<p>0 1 2</p>", "<p>0 1 -1</p>"},
       {"<p>0 1 2</p>", "<p>0 1 2147483648</p>"}, {"<p>0 1 2</p>", "<p>0 1 4294967295</p>"},
       {"count=\"3\" stride", "count=\"30\" stride"}, {"offset=\"0\"", "offset=\"-1\""},
+      // A node that instances itself: endless recursion in assimp (found by the fuzz corpus).
+      {"<instance_geometry url=\"#tri\"/>", "<instance_geometry url=\"#tri\"/><instance_node url=\"#child\"/>"},
   };
   int i = 0;
   for (const auto& [from, to] : cases) {
@@ -338,6 +340,7 @@ TEST(RobotModel, HostileColladaIsAnErrorNotACrashOrARunaway) {
     const std::string msg = pkg.load_error(mesh_link("arm", "package://test-meshes/meshes/" + file));
     EXPECT_NE(msg.find("link 'arm', collision element 1"), std::string::npos) << to << ": " << msg;
     EXPECT_NE(msg.find(file), std::string::npos) << to << ": " << msg;
+    EXPECT_EQ(msg.find("crashed the importer"), std::string::npos) << "refused before assimp ran: " << msg;
   }
   // The runaway allocation, stopped at a small bound here (the default is 1 GiB).
   write_collada(dir / "runaway.dae", "<p>0 1 2</p>", "<p>0 x 2</p>");

@@ -14,6 +14,7 @@
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/robot/link_solidity.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/robot/urdf_validation.h"
 
 namespace bvh_collision {
 namespace {
@@ -25,15 +26,10 @@ struct Options {
   double tolerance = 0.0, padding = 0.0;
 };
 
-// The whole text as a finite number, or nothing.
+// The whole text as a finite decimal number, or nothing.
 std::optional<double> to_number(const std::string& text) {
-  std::size_t used = 0;
-  try {
-    const double v = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(v)) return v;
-  } catch (const std::exception&) {
-  }
-  return std::nullopt;
+  const std::optional<double> v = parse_decimal(text);
+  return v && std::isfinite(*v) ? v : std::nullopt;
 }
 
 double parse_number(const std::string& flag, const std::string& text) {

@@ -2,8 +2,12 @@
 
 #include <tinyxml2.h>
 
+#include <cmath>
+#include <optional>
 #include <set>
 #include <stdexcept>
+
+#include "bvh_collision/robot/urdf_validation.h"
 
 namespace bvh_collision {
 
@@ -52,6 +56,20 @@ std::string attribute(const tinyxml2::XMLElement* e, const char* name) {
   return v ? v : "";
 }
 
+// A <group_state>'s joint value: a finite decimal number, or an error naming the state, the joint
+// and the line (tinyxml2's DoubleAttribute would read "abc" or a missing value as 0).
+double joint_value(const tinyxml2::XMLElement& state, const tinyxml2::XMLElement& joint) {
+  const char* text = joint.Attribute("value");
+  const std::optional<double> v = text ? parse_decimal(text) : std::nullopt;
+  if (!v || !std::isfinite(*v)) {
+    throw std::invalid_argument("SRDF <group_state name=\"" + std::string(state.Attribute("name") ? state.Attribute("name") : "") +
+                                "\"> (line " + std::to_string(joint.GetLineNum()) + "): joint '" +
+                                (joint.Attribute("name") ? joint.Attribute("name") : "") + "' value " +
+                                (text ? "'" + std::string(text) + "' is not a finite number" : "is missing"));
+  }
+  return *v;
+}
+
 }  // namespace
 
 Srdf parse_srdf(const std::string& xml) {
@@ -73,7 +91,7 @@ Srdf parse_srdf(const std::string& xml) {
     } else if (tag == "group_state") {
       auto& state = srdf.group_states[attribute(e, "name")];
       for (const auto* j = e->FirstChildElement("joint"); j != nullptr; j = j->NextSiblingElement("joint")) {
-        state[attribute(j, "name")] = j->DoubleAttribute("value");
+        state[attribute(j, "name")] = joint_value(*e, *j);
       }
     }
   }

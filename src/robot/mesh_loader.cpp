@@ -25,6 +25,8 @@
 #include <sstream>
 #include <vector>
 
+#include "bvh_collision/robot/urdf_validation.h"
+
 namespace bvh_collision {
 namespace {
 
@@ -138,7 +140,20 @@ class ColladaCheck {
       whole_attribute(e, "set", 0);
     }
     if (name == "accessor") accessors_.push_back(&e);
+    const tinyxml2::XMLElement* outer = node_;
+    if (name == "node") enter_node(e);
+    if (name == "instance_node" && node_ && e.Attribute("url") && e.Attribute("url")[0] == '#') {
+      instances_[node_].push_back(e.Attribute("url") + 1);
+    }
     for (const tinyxml2::XMLElement* c = e.FirstChildElement(); c != nullptr; c = c->NextSiblingElement()) run(*c);
+    node_ = outer;
+  }
+  // A node that instances itself, directly or through others, sent assimp into endless
+  // recursion (a stack overflow); nodes instanced over a million times would exhaust memory.
+  void check_node_instances() {
+    std::map<const tinyxml2::XMLElement*, int> state;  // 1: being expanded, 2: done
+    std::map<const tinyxml2::XMLElement*, double> copies;
+    for (const auto& [node, unused] : children_) expand(node, state, copies, 0);
   }
   void check_accessors() const {
     for (const tinyxml2::XMLElement* a : accessors_) {
@@ -172,8 +187,37 @@ class ColladaCheck {
                           ") holds a value that is not a whole number from 0 to 2^31 - 1");
     }
   }
+  void enter_node(const tinyxml2::XMLElement& e) {
+    if (node_) children_[node_].push_back(&e);
+    children_[&e];
+    if (const char* id = e.Attribute("id")) nodes_by_id_[id] = &e;
+    node_ = &e;
+  }
+  // The number of node copies below `node` once instances are expanded (with a cycle check).
+  double expand(const tinyxml2::XMLElement* node, std::map<const tinyxml2::XMLElement*, int>& state,
+                std::map<const tinyxml2::XMLElement*, double>& copies, int depth) {
+    if (state[node] == 2) return copies[node];
+    const std::string where = "<node> (line " + std::to_string(node->GetLineNum()) + ")";
+    if (state[node] == 1) throw MeshLoadError(where + " instances itself");
+    if (depth > 256) throw MeshLoadError(where + " lies more than 256 nodes and instances deep");
+    state[node] = 1;
+    double n = 1.0;
+    for (const tinyxml2::XMLElement* c : children_[node]) n += expand(c, state, copies, depth + 1);
+    for (const std::string& id : instances_[node]) {
+      const auto it = nodes_by_id_.find(id);
+      if (it != nodes_by_id_.end()) n += expand(it->second, state, copies, depth + 1);
+    }
+    if (n > 1e6) throw MeshLoadError(where + " expands to over a million node copies");
+    state[node] = 2;
+    return copies[node] = n;
+  }
+
   std::map<std::string, long long> arrays_;
   std::vector<const tinyxml2::XMLElement*> accessors_;
+  const tinyxml2::XMLElement* node_ = nullptr;  // the innermost <node> being read
+  std::map<const tinyxml2::XMLElement*, std::vector<const tinyxml2::XMLElement*>> children_;
+  std::map<const tinyxml2::XMLElement*, std::vector<std::string>> instances_;
+  std::map<std::string, const tinyxml2::XMLElement*> nodes_by_id_;
 };
 
 // ------------------------------------------------------------ ASCII STL grammar, before import
@@ -235,10 +279,9 @@ class AsciiStlCheck {
   void numbers(int n) {
     for (int i = 0; i < n; ++i) {
       const std::string w = word();
-      char* end = nullptr;
-      const double v = std::strtod(w.c_str(), &end);
-      if (w.empty() || *end != '\0') fail("a number", w);
-      if (!std::isfinite(v)) throw MeshLoadError("ASCII STL: '" + w + "' is not a finite number");
+      const std::optional<double> v = parse_decimal(w);
+      if (!v) fail("a number", w);
+      if (!std::isfinite(*v)) throw MeshLoadError("ASCII STL: '" + w + "' is not a finite number");
     }
   }
   std::istream& in_;
@@ -291,6 +334,7 @@ void check_collada(const std::string& path) {
     ColladaCheck check;
     if (doc.RootElement()) check.run(*doc.RootElement());
     check.check_accessors();
+    check.check_node_instances();
   } catch (const MeshLoadError& e) {
     throw MeshLoadError("mesh file '" + path + "': " + e.what());
   }
@@ -485,8 +529,10 @@ TriangleMesh load_mesh(const std::string& path, const Vec3& scale, const MeshImp
   }
   static ImportCache cache;
   const std::string key = cache_key(path, limits);
-  std::shared_ptr<const TriangleMesh> unscaled = cache.find(key);
-  if (!unscaled) {
+  std::shared_ptr<const TriangleMesh> unscaled = limits.isolated ? cache.find(key) : nullptr;
+  if (!limits.isolated) {
+    unscaled = std::make_shared<const TriangleMesh>(import_mesh(path, Vec3::Ones()));
+  } else if (!unscaled) {
     unscaled = std::make_shared<const TriangleMesh>(import_isolated(path, limits));
     cache.add(key, unscaled);
   }

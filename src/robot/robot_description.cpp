@@ -32,7 +32,10 @@ std::mutex& console_mutex() {
 }
 
 // tinyxml2 gives the line of a syntax error, which urdfdom's tinyxml parse does not report.
-void check_xml(const std::string& xml) {
+// Returns the validated document as tinyxml2 prints it back, which is what urdfdom then reads:
+// urdfdom parses with TinyXML 1, which reads some text differently (an unknown entity such as
+// "b&ase" in a name), and the document checked must be the document loaded.
+std::string check_xml(const std::string& xml) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) {
     throw RobotDescriptionError("robot description is not well-formed XML (line " +
@@ -44,6 +47,9 @@ void check_xml(const std::string& xml) {
                                 (root ? root->Name() : "nothing") + ">)");
   }
   validate_robot_xml(*root);  // what urdfdom would drop or accept silently
+  tinyxml2::XMLPrinter printer(nullptr, /*compact=*/true);
+  doc.Print(&printer);
+  return std::string(printer.CStr(), static_cast<std::size_t>(printer.CStrSize() - 1));
 }
 
 std::string geometry_name(const urdf::Geometry& g) {
@@ -79,11 +85,11 @@ std::shared_ptr<urdf::ModelInterface> parse_robot_description(const std::string&
   if (xml.find_first_not_of(" \t\r\n") == std::string::npos) {
     throw RobotDescriptionError("robot description is empty");
   }
-  check_xml(xml);
+  const std::string validated = check_xml(xml);
   std::lock_guard<std::mutex> lock(console_mutex());
   CapturingOutputHandler handler;
   console_bridge::useOutputHandler(&handler);
-  std::shared_ptr<urdf::ModelInterface> model = urdf::parseURDF(xml);
+  std::shared_ptr<urdf::ModelInterface> model = urdf::parseURDF(validated);
   console_bridge::restorePreviousOutputHandler();
   if (!model) {
     throw RobotDescriptionError("urdfdom rejected the robot description: " +

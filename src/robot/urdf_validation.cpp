@@ -1,8 +1,11 @@
 #include "bvh_collision/robot/urdf_validation.h"
 
 #include <tinyxml2.h>
+#include <locale.h>
 
+#include <charconv>
 #include <cerrno>
+#include <clocale>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -26,11 +29,9 @@ std::optional<std::vector<double>> parse_numbers(const char* text) {
   std::istringstream words(text);
   std::string word;
   while (words >> word) {
-    errno = 0;
-    char* end = nullptr;
-    const double v = std::strtod(word.c_str(), &end);
-    if (end == word.c_str() || *end != '\0') return std::nullopt;
-    out.push_back(v);
+    const std::optional<double> v = parse_decimal(word);
+    if (!v) return std::nullopt;
+    out.push_back(*v);
   }
   return out;
 }
@@ -160,6 +161,23 @@ void check_joint(const tinyxml2::XMLElement& joint, std::map<std::string, std::s
 }
 
 }  // namespace
+
+std::optional<double> parse_decimal(const std::string& word) {
+  const char* begin = word.data();
+  const char* const end = word.data() + word.size();
+  if (begin != end && *begin == '+' && begin + 1 != end && begin[1] != '-') ++begin;  // from_chars takes no '+'
+  double v = 0.0;
+  const auto [stop, error] = std::from_chars(begin, end, v, std::chars_format::general);
+  if (stop != end || begin == end) return std::nullopt;
+  if (error == std::errc::result_out_of_range) {
+    // A valid decimal too large (infinity) or too small (zero) for a double: strtod in the C
+    // locale gives which, whatever the process's locale is.
+    static const locale_t c_locale = ::newlocale(LC_NUMERIC_MASK, "C", locale_t(0));
+    return ::strtod_l(word.c_str(), nullptr, c_locale);
+  }
+  if (error != std::errc()) return std::nullopt;
+  return v;
+}
 
 void validate_robot_xml(const tinyxml2::XMLElement& robot) {
   for (const tinyxml2::XMLElement* link = robot.FirstChildElement("link"); link != nullptr;

@@ -24,6 +24,9 @@ constexpr std::uintmax_t kMaxMeshFileBytes = std::uintmax_t(256) << 20;
 struct MeshImportLimits {
   std::size_t memory_bytes = std::size_t(1) << 30;  // resident memory the importer may add
   double seconds = 120.0;
+  // false: import in this process, with no bound and no cache. For the loader's fuzz target and
+  // its replay, where the sanitizers and the fuzzer's coverage must see the import itself.
+  bool isolated = true;
 };
 
 // Reads every triangle of every mesh in the file, with node transforms applied (for Collada the

@@ -17,6 +17,7 @@
 // value found.
 #pragma once
 
+#include <optional>
 #include <string>
 
 namespace tinyxml2 {
@@ -27,6 +28,12 @@ namespace bvh_collision {
 
 // The largest magnitude of a length or coordinate a robot description may hold (m).
 constexpr double kMaxCoordinate = 1e5;
+
+// One decimal number as URDF, SRDF, STL and states files write it ("-1.5e-3"; "nan" and "inf"
+// are numbers, not finite ones), independent of the C locale; nothing for anything else,
+// hexadecimal included (strtod reads "0x10" as 16, urdfdom refuses it and drops the element).
+// A magnitude too large for a double gives infinity.
+std::optional<double> parse_decimal(const std::string& word);
 
 // Throws RobotDescriptionError for the first problem found under <robot>.
 void validate_robot_xml(const tinyxml2::XMLElement& robot);

@@ -1,0 +1,193 @@
+#include "loader_targets.h"
+
+#include <tinyxml2.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include "bvh_collision/bvh/bounding_volumes.h"
+#include "bvh_collision/bvh/bvh.h"
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/robot/allowed_collision_matrix.h"
+#include "bvh_collision/robot/mesh_loader.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/robot/robot_model.h"
+
+namespace bvh_collision::fuzz {
+namespace {
+
+// <collision> elements per link name, read from the text independently of urdfdom: the count a
+// loaded model must have (a dropped element is the defect this target exists for).
+std::map<std::string, int> collision_counts(const std::string& xml) {
+  tinyxml2::XMLDocument doc;
+  std::map<std::string, int> counts;
+  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS || !doc.RootElement()) return counts;
+  for (auto* link = doc.RootElement()->FirstChildElement("link"); link; link = link->NextSiblingElement("link")) {
+    int n = 0;
+    for (auto* c = link->FirstChildElement("collision"); c; c = c->NextSiblingElement("collision")) ++n;
+    counts[link->Attribute("name") ? link->Attribute("name") : ""] += n;
+  }
+  return counts;
+}
+
+std::string check_shapes(const RobotModel& model, const std::map<std::string, int>& counts) {
+  for (const RobotLink& link : model.links()) {
+    const auto it = counts.find(link.name);
+    const int expected = it == counts.end() ? 0 : it->second;
+    if (static_cast<int>(link.collision.size()) != expected) {
+      return "link '" + link.name + "' has " + std::to_string(link.collision.size()) + " shapes for " +
+             std::to_string(expected) + " <collision> elements";
+    }
+    for (const CollisionElement& e : link.collision) {
+      const bool finite = e.origin.R.allFinite() && e.origin.t.allFinite() && std::isfinite(e.radius) && std::isfinite(e.length) &&
+                          e.size.allFinite();
+      if (!finite) return "link '" + link.name + "' has a shape that is not finite: " + e.source;
+      if (e.mesh) {
+        if (e.mesh->triangles.empty()) return "link '" + link.name + "' has an empty mesh: " + e.source;
+        for (const Vec3& v : e.mesh->vertices) {
+          if (!v.allFinite()) return "link '" + link.name + "' has a vertex that is not finite: " + e.source;
+        }
+      }
+    }
+  }
+  return "";
+}
+
+// Self checks at the lower, middle and upper joint values: finite poses, an answer that is not NaN.
+std::string check_kinematics(RobotModel model) {
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  const CollisionChecker checker(std::move(model), std::move(acm));
+  const RobotModel& m = checker.model();
+  for (const double at : {0.0, 0.5, 1.0}) {
+    std::vector<double> state(m.variable_count(), 0.0);
+    for (std::size_t v = 0; v < state.size(); ++v) {
+      const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
+      if (j.bounded) state[v] = j.lower + at * (j.upper - j.lower);
+    }
+    std::vector<Transform> poses;
+    forward_kinematics(m, state.data(), poses);
+    for (std::size_t l = 0; l < poses.size(); ++l) {
+      if (!(poses[l].R.allFinite() && poses[l].t.allFinite())) return "link '" + m.links()[l].name + "' has a pose that is not finite";
+    }
+    SelfCollisionRequest request;
+    request.distance = true;
+    request.all_pairs = true;
+    const SelfCollisionResult r = checker.check_self(state.data(), request);
+    if (std::isnan(r.min_distance)) return "the self check answered a distance of NaN";
+  }
+  return "";
+}
+
+// The package `fuzz_meshes` (test/fuzz/meshes, copied into a scratch folder once per process:
+// a package.xml in the source tree would be taken by catkin for a package of the workspace).
+struct ScratchPackage {
+  std::filesystem::path root = std::filesystem::temp_directory_path() / ("bvh_collision_fuzz_" + std::to_string(::getpid()));
+  ScratchPackage() {
+    namespace fs = std::filesystem;
+    fs::create_directories(root / "fuzz_meshes");
+    std::ofstream(root / "fuzz_meshes" / "package.xml") << "<package format=\"3\"><name>fuzz_meshes</name></package>\n";
+    fs::copy(BVH_COLLISION_FUZZ_MESHES, root / "fuzz_meshes" / "meshes", fs::copy_options::overwrite_existing);
+  }
+  ~ScratchPackage() {
+    std::error_code ec;
+    std::filesystem::remove_all(root, ec);
+  }
+};
+
+const std::string& fuzz_package_root() {
+  static const ScratchPackage package;
+  static const std::string root = package.root.string();
+  return root;
+}
+
+std::string refusal_problem(const std::string& message) {
+  return message.empty() ? "refused without a message" : "";
+}
+
+}  // namespace
+
+std::string check_robot_description(const std::uint8_t* data, std::size_t size) {
+  const std::string xml(reinterpret_cast<const char*>(data), size);
+  try {
+    RobotModel model =
+        RobotModel::from_urdf(*parse_robot_description(xml), PackageResolver({fuzz_package_root()}));
+    if (std::string problem = check_shapes(model, collision_counts(xml)); !problem.empty()) return problem;
+    return check_kinematics(std::move(model));
+  } catch (const RobotDescriptionError& e) {
+    return refusal_problem(e.what());
+  } catch (const RobotLoadError& e) {
+    return refusal_problem(e.what());
+  }
+}
+
+std::string check_mesh(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return "";
+  const char* extensions[] = {".stl", ".obj", ".dae"};
+  const int pick = data[0] == 's' ? 0 : data[0] == 'o' ? 1 : data[0] == 'd' ? 2 : data[0] % 3;
+  const std::string path = "/tmp/bvh_collision_fuzz_" + std::to_string(::getpid()) + extensions[pick];
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data + 1), std::streamsize(size - 1));
+  MeshImportLimits in_process;
+  in_process.isolated = false;
+  try {
+    const TriangleMesh mesh = load_mesh(path, Vec3::Ones(), in_process);
+    ::unlink(path.c_str());
+    if (mesh.triangles.empty()) return "loaded with no triangle";
+    bool some_area = false;
+    for (const auto& t : mesh.triangles) {
+      for (const int i : t) {
+        if (i < 0 || static_cast<std::size_t>(i) >= mesh.vertices.size()) return "loaded with an index out of range";
+      }
+      const Vec3 a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+      if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return "loaded with a vertex that is not finite";
+      some_area = some_area || (b - a).cross(c - a).squaredNorm() > 0.0;
+    }
+    if (!some_area) return "loaded with every triangle of zero area";
+    const Bvh<Obb> tree = Bvh<Obb>::build(mesh);
+    for (const Vec3& v : mesh.vertices) {
+      if (!contains(tree.nodes()[0].volume, v)) return "the hierarchy's root does not bound a vertex";
+    }
+    return "";
+  } catch (const MeshLoadError& e) {
+    ::unlink(path.c_str());
+    return std::string(e.what()).find(path) == std::string::npos ? "refused without naming the file: " + std::string(e.what())
+                                                                  : "";
+  }
+}
+
+std::string check_srdf(const std::uint8_t* data, std::size_t size) {
+  static const RobotModel robot = RobotModel::from_urdf(
+      *parse_robot_description(
+          "<robot name=\"r\"><link name=\"a\"><collision><geometry><box size=\"1 1 1\"/></geometry></collision></link>"
+          "<link name=\"b\"><collision><geometry><sphere radius=\"0.5\"/></geometry></collision></link>"
+          "<link name=\"c\"/><link name=\"d\"><collision><geometry><sphere radius=\"0.5\"/></geometry></collision></link>"
+          "<joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 1\"/>"
+          "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+          "<joint name=\"j2\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>"
+          "<joint name=\"j3\" type=\"prismatic\"><parent link=\"c\"/><child link=\"d\"/><axis xyz=\"1 0 0\"/>"
+          "<limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>"),
+      PackageResolver({}));
+  try {
+    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(robot);
+    const Srdf srdf = parse_srdf(std::string(reinterpret_cast<const char*>(data), size));
+    for (const auto& [name, values] : srdf.group_states) {
+      for (const auto& [joint, value] : values) {
+        if (!std::isfinite(value)) return "group state '" + name + "' holds a value that is not finite";
+      }
+    }
+    apply_srdf(srdf, robot, acm);
+    for (std::size_t a = 0; a < acm.size(); ++a) {
+      for (std::size_t b = 0; b < acm.size(); ++b) {
+        if (acm.allowed(int(a), int(b)) != acm.allowed(int(b), int(a))) return "the matrix is not symmetric";
+      }
+    }
+    return "";
+  } catch (const std::invalid_argument& e) {
+    return refusal_problem(e.what());
+  }
+}
+
+}  // namespace bvh_collision::fuzz

@@ -1,0 +1,31 @@
+// The loader's fuzz targets (DESIGN.md "Bad input"): a robot description (URDF text, meshes from
+// a fixed package), one mesh file, an SRDF. Each returns what went wrong, or an empty string when
+// the input was either refused by name or loaded into something valid. libFuzzer's entry points
+// (fuzz_target.cpp) abort on a non-empty answer; test_fuzz_replay runs every corpus file
+// through the same functions, so `make test` replays what `make fuzz` found.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace bvh_collision::fuzz {
+
+// URDF text. Loaded: every <collision> of every <link> became a shape of that link, every size,
+// vertex and pose finite, and a self check at the lower, middle and upper limits gives a
+// finite answer. Refused: a RobotDescriptionError or RobotLoadError with a message.
+// Meshes resolve in `package://fuzz_meshes/meshes/...` (the files of test/fuzz/meshes).
+std::string check_robot_description(const std::uint8_t* data, std::size_t size);
+
+// One mesh file: the first byte picks the extension ('s' .stl, 'o' .obj, 'd' .dae; any other
+// byte by its value mod 3), the rest is the file. Loaded: at least one triangle, indices in
+// range, finite vertices, a triangle of non-zero area, and a hierarchy whose root bounds every
+// vertex. Refused: a MeshLoadError naming the file.
+std::string check_mesh(const std::uint8_t* data, std::size_t size);
+
+// SRDF text, parsed and applied to a four-link robot. Loaded: every group state value finite, the matrix
+// symmetric.
+// Refused: std::invalid_argument with a message.
+std::string check_srdf(const std::uint8_t* data, std::size_t size);
+
+}  // namespace bvh_collision::fuzz
