@@ -54,6 +54,7 @@ if [[ $run_sanitized == 1 ]]; then
       && make -C "$SAN_BUILD" -j"$JOBS" unit_tests; then
     rm -rf "$SAN_BUILD/test_results"
     ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1} \
+      LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0} \
       UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1} \
       unit_tests "$SAN_BUILD" || status=1
     catkin_test_results "$SAN_BUILD/test_results" > /dev/null || status=1
