@@ -1,0 +1,180 @@
+// Bounded-error link proxies (checker/link_proxy.h), checked independently of how they were
+// built: (a) every vertex, a dense grid of points on every triangle and a grid of points inside
+// the solid lie in some leaf sphere (brute force over the leaves); (b) every leaf sphere's centre
+// and 200 points of its boundary (where a ball's farthest point from a set lies) are within the
+// proven bound, at most level / 2, of the link: distance by brute force over every triangle (or
+// the primitive's closest point), zero inside the solid; (c) every inner sphere holds its
+// subtree's leaves; (d) proxies_overlap equals brute force over all leaf pairs.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "bvh_collision/bvh/queries.h"
+#include "bvh_collision/checker/link_proxy.h"
+#include "bvh_collision/checker/robot_collision_model.h"
+#include "bvh_collision/geometry/distance.h"
+#include "mesh_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+std::vector<ProxySphere> leaves(const LinkProxy& p) {
+  std::vector<ProxySphere> out;
+  for (std::size_t i = 0; i < p.spheres().size(); ++i) {
+    if (p.spheres()[i].skip == static_cast<std::int32_t>(i + 1)) out.push_back(p.spheres()[i]);
+  }
+  return out;
+}
+
+bool covered(const std::vector<ProxySphere>& spheres, const Vec3& p) {
+  for (const ProxySphere& s : spheres) {
+    if ((p - s.center).norm() <= s.radius * (1.0 + 1e-12) + 1e-12) return true;
+  }
+  return false;
+}
+
+// Points on the unit sphere, evenly spread (Fibonacci).
+std::vector<Vec3> directions(int n) {
+  std::vector<Vec3> out;
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
+    out.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return out;
+}
+
+void check_tree(const LinkProxy& p) {
+  const auto& s = p.spheres();
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    for (std::int32_t k = static_cast<std::int32_t>(i) + 1; k < s[i].skip; ++k) {
+      if (s[k].skip != k + 1) continue;  // an inner sphere holds the leaves of its subtree
+      EXPECT_LE((s[k].center - s[i].center).norm() + s[k].radius, s[i].radius * (1 + 1e-12) + 1e-12) << i << " " << k;
+    }
+  }
+}
+
+// One closed mesh as a link: (a), (b), (c).
+void check_mesh_proxy(const TriangleMesh& mesh, double level) {
+  const Bvh<Obb> bvh = Bvh<Obb>::build(mesh);
+  ASSERT_TRUE(bvh.closed());
+  std::vector<LinkShape> shapes(1);
+  shapes[0].mesh = 0;
+  const LinkProxy proxy = LinkProxy::build(shapes, {bvh}, level);
+  ASSERT_FALSE(proxy.empty());
+  EXPECT_LE(proxy.hausdorff_bound(), 0.5 * level);
+  check_tree(proxy);
+  const std::vector<ProxySphere> ls = leaves(proxy);
+  EXPECT_EQ(ls.size(), proxy.leaf_count());
+  // (a) the surface (grid of 1 mm or 8 per edge) and the solid (a 4 mm grid).
+  std::size_t missed = 0, points = 0;
+  for (const auto& t : mesh.triangles) {
+    const Vec3 a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+    const int k = std::clamp(static_cast<int>(std::max({(b - a).norm(), (c - a).norm()}) / 0.001), 8, 64);
+    for (int i = 0; i <= k; ++i) {
+      for (int j = 0; i + j <= k; ++j) {
+        ++points;
+        missed += !covered(ls, a + (b - a) * i / k + (c - a) * j / k);
+      }
+    }
+  }
+  Vec3 lo = mesh.vertices[0], hi = lo;
+  for (const Vec3& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  for (double x = lo.x(); x <= hi.x(); x += 0.004) {
+    for (double y = lo.y(); y <= hi.y(); y += 0.004) {
+      for (double z = lo.z(); z <= hi.z(); z += 0.004) {
+        if (contains_point(bvh, Vec3(x, y, z))) ++points, missed += !covered(ls, Vec3(x, y, z));
+      }
+    }
+  }
+  EXPECT_EQ(missed, 0u) << "of " << points << " points of the link";
+  // (b) brute-force distance from sphere points to the solid.
+  double worst = 0.0;
+  const std::vector<Vec3> dirs = directions(200);
+  for (const ProxySphere& s : ls) {
+    std::vector<Vec3> probe{s.center};
+    for (const Vec3& d : dirs) probe.push_back(s.center + s.radius * d);
+    for (const Vec3& p : probe) {
+      if (contains_point(bvh, p)) continue;
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& t : mesh.triangles) {
+        d = std::min(d, (p - closest_point_on_triangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]])).norm());
+      }
+      worst = std::max(worst, d);
+    }
+  }
+  EXPECT_LE(worst, proxy.hausdorff_bound() + 1e-12) << "level " << level;
+  std::printf("level %.0f mm: %zu leaves, %zu points covered, farthest sphere point %.3f mm (bound %.3f mm)\n",
+              level * 1e3, ls.size(), points, worst * 1e3, proxy.hausdorff_bound() * 1e3);
+}
+
+TEST(LinkProxy, PandaHandAndFingerAreCoveredWithinTheBound) {
+  const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
+  for (const double level : {0.02, 0.01}) {
+    check_mesh_proxy(test::robot_mesh(dir + "finger.stl"), level);
+    check_mesh_proxy(test::robot_mesh(dir + "hand.stl"), level);
+  }
+}
+
+TEST(LinkProxy, PrimitivesAreCoveredWithinTheBound) {
+  const Primitive prims[] = {Primitive::box(Vec3(0.1, 0.04, 0.2)), Primitive::cylinder(0.03, 0.15),
+                             Primitive::capsule(0.02, 0.1), Primitive::sphere(0.05)};
+  for (const Primitive& prim : prims) {
+    std::vector<LinkShape> shapes(1);
+    shapes[0].primitive = prim;
+    shapes[0].origin = Transform{Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()).toRotationMatrix(), Vec3(0.1, 0, 0)};
+    const LinkProxy proxy = LinkProxy::build(shapes, {}, 0.01);
+    check_tree(proxy);
+    const std::vector<ProxySphere> ls = leaves(proxy);
+    const Transform to_shape = shapes[0].origin.inverse();
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const Vec3 half = half_extents(prim);
+    std::size_t missed = 0;
+    for (int i = 0; i < 20000; ++i) {  // points of the solid, surface points among them
+      Vec3 p(u(rng) * half.x(), u(rng) * half.y(), u(rng) * half.z());
+      if (i % 2) p = closest_point(prim, 2.0 * p);
+      if (contains(prim, p)) missed += !covered(ls, shapes[0].origin * p);
+    }
+    EXPECT_EQ(missed, 0u) << primitive_name(prim.kind);
+    double worst = 0.0;
+    for (const ProxySphere& s : ls) {
+      for (const Vec3& d : directions(200)) {
+        const Vec3 p = to_shape * (s.center + s.radius * d);
+        worst = std::max(worst, (p - closest_point(prim, p)).norm());
+      }
+    }
+    EXPECT_LE(worst, proxy.hausdorff_bound() + 1e-12) << primitive_name(prim.kind);
+    EXPECT_LE(proxy.hausdorff_bound(), 0.005);
+  }
+}
+
+TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
+  const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
+  const Bvh<Obb> finger = Bvh<Obb>::build(test::robot_mesh(dir + "finger.stl"));
+  std::vector<LinkShape> shapes(1);
+  shapes[0].mesh = 0;
+  const LinkProxy proxy = LinkProxy::build(shapes, {finger}, 0.01);
+  const std::vector<ProxySphere> ls = leaves(proxy);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-0.06, 0.06);
+  int overlaps = 0;
+  for (int i = 0; i < test::sized(400); ++i) {
+    const Transform pa = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
+    const Transform pb = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
+    const double padding = i % 3 == 0 ? 0.005 : 0.0;
+    bool brute = false;
+    for (const ProxySphere& a : ls) {
+      for (const ProxySphere& b : ls) {
+        brute = brute || ((pa * a.center) - (pb * b.center)).norm() <= a.radius + b.radius + padding;
+      }
+    }
+    EXPECT_EQ(proxies_overlap(proxy, pa, proxy, pb, padding), brute) << i;
+    overlaps += brute;
+  }
+  EXPECT_GT(overlaps, 0);
+  EXPECT_LT(overlaps, test::sized(400));
+}
+
+}  // namespace
+}  // namespace bvh_collision
