@@ -57,7 +57,7 @@ void check_tree(const LinkProxy& p) {
 // One closed mesh as a link: (a), (b), (c).
 void check_mesh_proxy(const TriangleMesh& mesh, double level) {
   const Bvh<Obb> bvh = Bvh<Obb>::build(mesh);
-  ASSERT_TRUE(bvh.closed());
+  const bool solid = bvh.closed();  // an open mesh is its surface: no interior points
   std::vector<LinkShape> shapes(1);
   shapes[0].mesh = 0;
   const LinkProxy proxy = LinkProxy::build(shapes, {bvh}, level);
@@ -83,7 +83,7 @@ void check_mesh_proxy(const TriangleMesh& mesh, double level) {
   for (double x = lo.x(); x <= hi.x(); x += 0.004) {
     for (double y = lo.y(); y <= hi.y(); y += 0.004) {
       for (double z = lo.z(); z <= hi.z(); z += 0.004) {
-        if (contains_point(bvh, Vec3(x, y, z))) ++points, missed += !covered(ls, Vec3(x, y, z));
+        if (solid && contains_point(bvh, Vec3(x, y, z))) ++points, missed += !covered(ls, Vec3(x, y, z));
       }
     }
   }
@@ -95,7 +95,7 @@ void check_mesh_proxy(const TriangleMesh& mesh, double level) {
     std::vector<Vec3> probe{s.center};
     for (const Vec3& d : dirs) probe.push_back(s.center + s.radius * d);
     for (const Vec3& p : probe) {
-      if (contains_point(bvh, p)) continue;
+      if (solid && contains_point(bvh, p)) continue;
       double d = std::numeric_limits<double>::infinity();
       for (const auto& t : mesh.triangles) {
         d = std::min(d, (p - closest_point_on_triangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]])).norm());
@@ -114,6 +114,15 @@ TEST(LinkProxy, PandaHandAndFingerAreCoveredWithinTheBound) {
     check_mesh_proxy(test::robot_mesh(dir + "finger.stl"), level);
     check_mesh_proxy(test::robot_mesh(dir + "hand.stl"), level);
   }
+}
+
+// An open mesh bounds no solid: its proxy covers the surface alone, every sphere within the bound
+// of the surface.
+TEST(LinkProxy, OpenMeshIsCoveredAsASurface) {
+  TriangleMesh hand = test::robot_mesh("panda/moveit_resources_panda_description/meshes/collision/hand.stl");
+  hand.triangles.resize(hand.triangles.size() - 3);
+  ASSERT_FALSE(Bvh<Obb>::build(hand).closed());
+  check_mesh_proxy(hand, 0.02);
 }
 
 TEST(LinkProxy, PrimitivesAreCoveredWithinTheBound) {

@@ -8,6 +8,7 @@
 
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/checker/robot_collision_model.h"
+#include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
@@ -65,6 +66,8 @@ Vec3 nearest_surface_point(const Primitive& prim, const Vec3& p) {
 // and whether the point is in the solid.
 struct ShapeField {
   const Bvh<Obb>* mesh = nullptr;
+  // The exact boundary when it is made of triangles (a closed mesh, a box); empty otherwise.
+  std::vector<Triangle> faces;
   Primitive primitive;
 
   bool solid() const { return mesh == nullptr || mesh->closed(); }
@@ -185,17 +188,22 @@ class ShapeCover {
 // primitive's surface.
 std::vector<std::pair<Vec3, Vec3>> surface_samples(const ShapeField& field, double spacing) {
   std::vector<std::pair<Vec3, Vec3>> out;
-  if (field.mesh) {
-    for (const Triangle& t : field.mesh->triangles()) {
+  if (!field.faces.empty() || field.mesh) {
+    for (const Triangle& t : field.faces.empty() ? field.mesh->triangles() : field.faces) {
       const Vec3 normal = (t[1] - t[0]).cross(t[2] - t[0]);
       const Vec3 inward = normal.norm() > 0.0 ? Vec3(-normal.normalized()) : Vec3::Zero();
-      const double edge = std::max({(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()});
-      const int k = std::max(1, static_cast<int>(std::ceil(edge / spacing)));
-      for (int i = 0; i <= k; ++i) {
-        for (int j = 0; i + j <= k; ++j) {
-          const double u = double(i) / k, v = double(j) / k;
-          out.emplace_back(t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]), inward);
-        }
+      // Along the edges every `spacing`, inside one point per spacing^2 of area (a long sliver
+      // gets a line of points, not a grid).
+      for (int e = 0; e < 3; ++e) {
+        const Vec3 a = t[e], b = t[(e + 1) % 3];
+        const int k = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
+        for (int i = 0; i < k; ++i) out.emplace_back(a + (b - a) * (double(i) / k), inward);
+      }
+      const int inner = static_cast<int>(0.5 * normal.norm() / (spacing * spacing));
+      for (int i = 0; i < inner; ++i) {  // a low-discrepancy fold of the unit square onto the triangle
+        double u = std::fmod(0.5 + i * 0.7548776662466927, 1.0), v = std::fmod(0.5 + i * 0.5698402909980532, 1.0);
+        if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+        out.emplace_back(t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]), inward);
       }
     }
     return out;
@@ -246,8 +254,8 @@ class SeedBuilder {
   std::optional<Chosen> medial_sphere(const Vec3& q, const Vec3& inward, double size) const {
     auto fits = [&](double t) {
       const Vec3 c = q + t * inward;
-      return field_.inside(c) &&
-             field_.surface_distance(c, true, std::numeric_limits<double>::infinity(), nullptr) >= t * (1.0 - 1e-3);
+      const double need = t * (1.0 - 1e-3);  // a bounded query: it stops at the first closer triangle
+      return field_.inside(c) && field_.surface_distance(c, true, need, nullptr) >= need;
     };
     double good = 0.0, bad = 0.25 * half_level_;
     while (bad <= size && fits(bad)) good = bad, bad *= 2.0;
@@ -267,7 +275,6 @@ class SeedBuilder {
 // Greedy set cover of sample points by candidate spheres. Only an efficiency step: ShapeCover
 // proves the cover afterwards and fills whatever the samples missed.
 std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, double margin) {
-  if (!field.solid()) return {};
   const double size = field.box().second.maxCoeff();
   const double spacing = std::max(half_level, size / 24.0);
   const SeedBuilder builder(field, half_level);
@@ -277,6 +284,10 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
   for (const auto& [q, inward] : surface_samples(field, spacing)) {
     targets.push_back(q);
     // Candidates from every third sample: as good a cover (measured), a third of the build.
+    if (!field.solid()) {  // a surface only: balls of radius e/2 centred on it
+      candidates.push_back({q, half_level * (1.0 - kVolumeMargin) - kVolumeMargin});
+      continue;
+    }
     if (sample++ % 3 == 0 && inward.squaredNorm() > 0.0) {
       if (auto s = builder.medial_sphere(q, inward, 2.0 * size)) candidates.push_back(*s);
     }
@@ -314,22 +325,24 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
 }
 
 
-// The cover of a closed mesh, proven on its surface and then in its volume (see link_proxy.h):
+// The cover of a shape whose boundary is triangles (a mesh, a box), proven on its surface and,
+// for a solid, in its volume (see link_proxy.h):
 //   surface: every triangle lies, with margin delta, inside one chosen sphere (all three corners
 //     within radius - delta: the triangle then by convexity), after splitting it in four as often
 //     as needed; a piece that no sphere holds gets a sphere of its own. Every point within delta
-//     of the surface is then covered.
+//     of the surface is then covered. An open mesh is only its surface: done.
 //   volume: cubes from the box down; a cube inside one chosen sphere is done, one with no point
 //     of the solid is dropped, one whose points all lie within delta of the surface (d + h <
 //     delta) is done by the surface step, one deep inside gets the interior sphere at its centre;
 //     the others are split.
-class ClosedMeshCover {
+class PolyhedralCover {
  public:
-  ClosedMeshCover(const ShapeField& field, double half_level, std::vector<Chosen> seed)
+  PolyhedralCover(const ShapeField& field, double half_level, std::vector<Chosen> seed)
       : field_(field), half_level_(half_level), delta_(0.125 * half_level), chosen_(std::move(seed)), builder_(field, half_level) {}
 
   void run() {
-    for (const Triangle& t : field_.mesh->triangles()) surface(t[0], t[1], t[2], 0);
+    for (const Triangle& t : field_.faces) surface(t[0], t[1], t[2], 0);
+    if (!field_.solid()) return;  // an open mesh is its surface: nothing inside to cover
     const auto [center, half] = field_.box();
     std::vector<std::pair<Vec3, double>> level{{center, half.maxCoeff() * (1.0 + 1e-9) + 1e-12}}, next;
     for (int depth = 0; !level.empty(); ++depth) {
@@ -374,7 +387,7 @@ class ClosedMeshCover {
     // else the ball of radius e/2 around the centroid (a surface point: within e/2 of the link).
     const Vec3 g = (a + b + c) / 3.0;
     const Vec3 normal = (b - a).cross(c - a);
-    if (normal.norm() > 0.0) {
+    if (field_.solid() && normal.norm() > 0.0) {
       if (auto s = builder_.medial_sphere(g, -normal.normalized(), 2.0 * field_.box().second.maxCoeff())) {
         if (holds(*s, a, delta_) && holds(*s, b, delta_) && holds(*s, c, delta_)) {
           chosen_.push_back(*s);
@@ -453,11 +466,20 @@ LinkProxy LinkProxy::build(const std::vector<LinkShape>& shapes, const std::vect
     if (shape.mesh >= 0) field.mesh = &meshes[shape.mesh];
     field.primitive = shape.primitive;
     if (field.mesh && field.mesh->empty()) continue;
+    if (!field.mesh && shape.primitive.kind == Primitive::Kind::kSphere) {
+      leaves.push_back({shape.origin.t, shape.primitive.radius});  // its own exact proxy
+      continue;
+    }
+    if (field.mesh) field.faces = field.mesh->triangles();  // closed: the solid's boundary; open: the link
+    if (!field.mesh && shape.primitive.kind == Primitive::Kind::kBox) {
+      const TriangleMesh box = box_mesh(2.0 * shape.primitive.half);
+      for (const auto& t : box.triangles) field.faces.push_back({box.vertices[t[0]], box.vertices[t[1]], box.vertices[t[2]]});
+    }
     std::vector<Chosen> chosen;
-    if (field.mesh && field.mesh->closed()) {
+    if (!field.faces.empty()) {
       // The seed covers its samples with twice the surface margin, so that the proof rarely
       // needs a sphere of its own (measured: 0-5 per panda link at 20 mm).
-      ClosedMeshCover cover(field, half_level, greedy_seed(field, half_level, 0.25 * half_level));
+      PolyhedralCover cover(field, half_level, greedy_seed(field, half_level, 0.25 * half_level));
       cover.run();
       chosen = cover.chosen();
     } else {
@@ -483,20 +505,29 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   const Transform b_in_a = pose_a.inverse() * pose_b;
   const double margin = pose_margin(pose_a.t.norm() + pose_b.t.norm() + sa[0].center.norm() + sa[0].radius +
                                     sb[0].center.norm() + sb[0].radius);
-  thread_local std::vector<std::pair<std::int32_t, std::int32_t>> stack;
-  stack.clear();
-  stack.emplace_back(0, 0);
-  while (!stack.empty()) {
-    const auto [i, j] = stack.back();
-    stack.pop_back();
+  // A local stack: each step pops one pair and pushes at most the children of one sphere, so
+  // it never holds more than (tree depth) x (children) pairs; past 256 it spills to a vector.
+  std::pair<std::int32_t, std::int32_t> local[256];
+  std::vector<std::pair<std::int32_t, std::int32_t>> spill;
+  int top = 0;
+  auto push = [&](std::int32_t i, std::int32_t j) {
+    if (top < 256) local[top++] = {i, j};
+    else spill.emplace_back(i, j);
+  };
+  push(0, 0);
+  while (top > 0 || !spill.empty()) {
+    std::pair<std::int32_t, std::int32_t> next;
+    if (!spill.empty()) next = spill.back(), spill.pop_back();
+    else next = local[--top];
+    const auto [i, j] = next;
     const double reach = sa[i].radius + sb[j].radius + padding + margin;
     if ((sa[i].center - b_in_a * sb[j].center).squaredNorm() > reach * reach) continue;
     const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
     if (leaf_a && leaf_b) return true;
     if (!leaf_a && (leaf_b || sa[i].radius >= sb[j].radius)) {
-      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.emplace_back(k, j);
+      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) push(k, j);
     } else {
-      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.emplace_back(i, k);
+      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) push(i, k);
     }
   }
   return false;

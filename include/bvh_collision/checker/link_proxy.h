@@ -6,17 +6,23 @@
 // most e apart: a query at tolerance t >= e may answer from the proxies alone and keep the
 // contract (collision whenever d <= padding, free whenever d > padding + t, no false negative).
 //
-// How the bound is proven at build time: the link's box is cut into cubes, octree fashion. For a
-// cube with centre c and half-diagonal h, d = the exact distance from c to the link's surface
-// (point-to-mesh distance over the BVH, or the primitive's closed form). If c is outside the link
-// and d > h, no point of the cube belongs to the link: the cube is dropped. If d + h <= e/2, every
-// point of the cube's ball is within e/2 of the surface: a leaf. If c is inside the solid (exact
-// winding number, or the primitive's test) and h <= d + e/2, every point of the ball is in the
-// solid or within h - d <= e/2 of it (a segment from c leaves the solid only after d): a leaf.
-// Otherwise the cube is split. Every cube that holds a point of the link is a leaf or split, so
-// the leaves cover the link; every leaf satisfies its inequality, so (b) holds. The inequalities
-// are tested with the margins of geometry/safety_margin.h and with e slightly below the level,
-// so that rounding in the build and in the queries cannot break them.
+// How it is built and proven. Every sphere chosen satisfies (b) by construction: an interior
+// sphere is centred at a point c inside the solid (exact winding number, or the primitive's own
+// test) with radius depth(c) + e/2, depth(c) being the exact distance from c to the surface, so a
+// segment from c leaves the solid only after depth(c) and no point of the sphere is farther than
+// e/2 from it; a surface sphere is centred on the link with radius e/2. A greedy set cover of
+// sample points picks spheres (the largest interior sphere through each sampled surface point,
+// interior spheres on a grid); it only guides. The proof of (a) follows for a boundary made of
+// triangles (meshes, boxes): every triangle, split in four as often as needed, lies with a
+// margin delta inside one chosen sphere (all three corners inside it: convexity), and a piece
+// no sphere holds gets one of its own; then cubes from the box down: a cube inside one sphere,
+// with no point of the solid, or within delta of the surface (covered by the margin) is done,
+// one deep inside gets the interior sphere at its centre, the rest are split. Cylinders and
+// capsules are covered by cubes alone (a cube with centre c and half-diagonal h: dropped when c
+// is outside and farther than h from the link, a sphere of its own when d(c) + h <= e/2 or, c
+// inside, h <= depth(c) + e/2). A sphere primitive is its own proxy. The inequalities carry the
+// margins of geometry/safety_margin.h and e slightly below the level, so that rounding in the
+// build and in the queries cannot break them.
 #pragma once
 
 #include <cstdint>
