@@ -7,12 +7,14 @@
 // subtree's leaves; (d) proxies_overlap equals brute force over all leaf pairs.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <random>
 
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/checker/link_proxy.h"
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/distance.h"
+#include "checker_fixtures.h"
 #include "mesh_fixtures.h"
 #include "robot_data.h"
 
@@ -183,6 +185,52 @@ TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
   }
   EXPECT_GT(overlaps, 0);
   EXPECT_LT(overlaps, test::sized(400));
+}
+
+// The self check through the proxies keeps DESIGN.md's contract against the exact check, on
+// panda's uniform random states and on the near-contact ones among them (exact distance under
+// 4 cm): no false negative, and every collision it reports is within padding + tolerance.
+TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {
+  for (const double padding : {0.0, 0.005}) {
+    CheckerOptions exact_options, proxy_options;
+    exact_options.padding = proxy_options.padding = padding;
+    proxy_options.proxy_levels = {0.02, 0.01};
+    const CollisionChecker exact = test::load_checker("panda", exact_options);
+    const CollisionChecker proxied = test::load_checker("panda", proxy_options);
+    ASSERT_EQ(proxied.collision_model().proxy_levels().size(), 2u);
+    EXPECT_EQ(proxied.collision_model().proxies_for(0.009), nullptr);
+    EXPECT_EQ(proxied.collision_model().proxies_for(0.015)->level, 0.01);
+    EXPECT_EQ(proxied.collision_model().proxies_for(0.5)->level, 0.02);
+    std::mt19937_64 rng(11);
+    int near = 0, collide = 0;
+    std::map<double, int> false_positives;
+    for (int i = 0; i < test::sized(2000); ++i) {
+      const std::vector<double> q = random_configuration(exact.model(), rng);
+      SelfCollisionRequest request;
+      request.distance = true;
+      const SelfCollisionResult truth = exact.check_self(q.data(), request);
+      const double d = truth.collision ? 0.0 : truth.min_distance;
+      near += d > 0.0 && d < 0.04;
+      collide += truth.collision;
+      for (const double t : {0.01, 0.015, 0.02, 0.03}) {
+        SelfCollisionRequest at;
+        at.tolerance = t;
+        const bool answer = proxied.check_self(q.data(), at).collision;
+        if (truth.collision) {
+          EXPECT_TRUE(answer) << "a false negative at tolerance " << t << ", state " << i;
+        }
+        if (answer) {
+          EXPECT_LE(d, 2.0 * padding + t + 1e-9) << "tolerance " << t << ", state " << i;
+        }
+        false_positives[t] += answer && !truth.collision;
+      }
+    }
+    EXPECT_GT(near, test::sized(2000) / 20);
+    EXPECT_GT(collide, test::sized(2000) / 20);
+    std::printf("padding %.3f: %d colliding, %d within 4 cm; proxy false positives at 10/15/20/30 mm: %d %d %d %d\n",
+                padding, collide, near, false_positives[0.01], false_positives[0.015], false_positives[0.02],
+                false_positives[0.03]);
+  }
 }
 
 }  // namespace

@@ -110,9 +110,15 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       if (d2 <= reach * reach) order.emplace_back(d2 / (reach * reach), p);
     }
     if (!request.all_pairs) std::sort(order.begin(), order.end());
+    // At a tolerance a proxy level fits, the proxies answer alone (checker/link_proxy.h): apart
+    // means the links are apart, overlapping means they are within padding + level.
+    const ProxyLevel* proxies = request.solids && request.max_contacts == 0 ? m_->proxies_for(request.tolerance) : nullptr;
     for (const auto& [key, p] : order) {
       const auto [a, b] = m_->checked_pairs()[p];
-      if (pair_collides(a, b, poses, request, result)) {
+      const bool hit = proxies ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
+                                                 m_->paddings()[a] + m_->paddings()[b])
+                               : pair_collides(a, b, poses, request, result);
+      if (hit) {
         result.collision = true;
         result.colliding_pairs.emplace_back(a, b);
         if (!request.all_pairs) break;

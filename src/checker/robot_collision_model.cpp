@@ -1,6 +1,7 @@
 #include "bvh_collision/checker/robot_collision_model.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 
@@ -62,6 +63,37 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
   build_shapes(options, needed);
   kinematics_ = KinematicsPlan(robot_, needed);
   compute_motion_rates();
+  build_proxies(options.proxy_levels);
+}
+
+void RobotCollisionModel::build_proxies(std::vector<double> levels) {
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  for (const double level : levels) {
+    if (!(level > 0.0) || !std::isfinite(level)) {
+      throw std::invalid_argument("proxy level " + std::to_string(level) + " m: must be a positive number of metres");
+    }
+    const auto start = std::chrono::steady_clock::now();
+    ProxyLevel out;
+    out.level = level;
+    out.links.resize(shapes_.size());
+    for (std::size_t l = 0; l < shapes_.size(); ++l) {
+      if (shapes_[l].empty()) continue;
+      out.links[l] = LinkProxy::build(shapes_[l], meshes_, level);
+      out.leaves += out.links[l].leaf_count();
+      out.memory_bytes += out.links[l].memory_bytes();
+    }
+    out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    proxy_levels_.push_back(std::move(out));
+  }
+}
+
+const ProxyLevel* RobotCollisionModel::proxies_for(double tolerance) const {
+  const ProxyLevel* best = nullptr;
+  for (const ProxyLevel& p : proxy_levels_) {
+    if (p.level <= tolerance) best = &p;
+  }
+  return best;
 }
 
 // Exact primitives stay primitives; each distinct mesh gets one hierarchy and one hull, shared by

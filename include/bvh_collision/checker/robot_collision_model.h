@@ -7,12 +7,14 @@
 #pragma once
 
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/checker/detail/shape_pairs.h"
+#include "bvh_collision/checker/link_proxy.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
@@ -26,6 +28,19 @@ struct CheckerOptions {
   // How link BVHs are built: two triangles per leaf took 6-15% fewer instructions than one for
   // boolean and distance self-collision on panda, ur5e and pr2 (three was worse on pr2).
   BuildOptions bvh = {BuildMethod::kSah, 2};
+  // Proxy levels e (m) for bounded-error sphere proxies (checker/link_proxy.h), built at
+  // construction. A boolean self check at tolerance t >= e answers from the coarsest such level.
+  // Empty by default: on panda and ur5e the proxies are about as fast as the exact check today
+  // (issue 18 is under way), and their build takes seconds.
+  std::vector<double> proxy_levels;
+};
+
+// One proxy level as built: its link proxies and what they cost.
+struct ProxyLevel {
+  double level = 0.0;
+  std::vector<LinkProxy> links;  // per link (empty for links without geometry)
+  std::size_t leaves = 0, memory_bytes = 0;
+  double build_seconds = 0.0;
 };
 
 // One collision element of a link.
@@ -67,6 +82,10 @@ class RobotCollisionModel {
   const std::vector<std::vector<double>>& motion_turns() const { return motion_turns_; }
   const std::vector<std::vector<SlideBound>>& motion_slides() const { return motion_slides_; }
   double reach() const { return reach_; }
+  // The proxy levels built (CheckerOptions::proxy_levels), finest first; the coarsest level
+  // whose e is at most `tolerance`, or null.
+  const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
+  const ProxyLevel* proxies_for(double tolerance) const;
 
   // A shape as the shape-pair dispatch takes it.
   detail::ShapeRef ref(const LinkShape& s) const {
@@ -77,6 +96,7 @@ class RobotCollisionModel {
  private:
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);
   void compute_motion_rates();
+  void build_proxies(std::vector<double> levels);
 
   RobotModel robot_;
   AllowedCollisionMatrix acm_;
@@ -91,6 +111,7 @@ class RobotCollisionModel {
   std::vector<std::vector<double>> motion_turns_;
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
+  std::vector<ProxyLevel> proxy_levels_;
 };
 
 }  // namespace bvh_collision
