@@ -115,6 +115,9 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
     const ProxyLevel* proxies = request.solids && request.max_contacts == 0 ? m_->proxies_for(request.tolerance) : nullptr;
     for (const auto& [key, p] : order) {
       const auto [a, b] = m_->checked_pairs()[p];
+      // A pair whose proven clearance in this state exceeds its padding cannot collide and has
+      // no contact (checker/pair_clearance.h).
+      if (m_->pair_clearance().lower_bound(p, state) > m_->paddings()[a] + m_->paddings()[b]) continue;
       const bool hit = proxies ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
                                                  m_->paddings()[a] + m_->paddings()[b])
                                : pair_collides(a, b, poses, request, result);

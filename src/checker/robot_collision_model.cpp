@@ -64,6 +64,7 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
   kinematics_ = KinematicsPlan(robot_, needed);
   compute_motion_rates();
   build_proxies(options.proxy_levels);
+  if (options.pair_clearance_cells > 0) pair_clearance_ = PairClearance::build(*this, options.pair_clearance_cells);
 }
 
 void RobotCollisionModel::build_proxies(std::vector<double> levels) {

@@ -15,6 +15,7 @@
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/checker/detail/shape_pairs.h"
 #include "bvh_collision/checker/link_proxy.h"
+#include "bvh_collision/checker/pair_clearance.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
@@ -33,6 +34,10 @@ struct CheckerOptions {
   // Empty by default: on panda and ur5e the proxies are about as fast as the exact check today
   // (issue 18 is under way), and their build takes seconds.
   std::vector<double> proxy_levels;
+  // Grids of proven clearance for the self pairs one or two variables move
+  // (checker/pair_clearance.h): a boolean self check skips such a pair with one lookup when its
+  // bound clears the padding. 0 cells: none built.
+  std::size_t pair_clearance_cells = 4096;
 };
 
 // One proxy level as built: its link proxies and what they cost.
@@ -86,6 +91,7 @@ class RobotCollisionModel {
   // whose e is at most `tolerance`, or null.
   const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
   const ProxyLevel* proxies_for(double tolerance) const;
+  const PairClearance& pair_clearance() const { return pair_clearance_; }
 
   // A shape as the shape-pair dispatch takes it.
   detail::ShapeRef ref(const LinkShape& s) const {
@@ -112,6 +118,7 @@ class RobotCollisionModel {
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
   std::vector<ProxyLevel> proxy_levels_;
+  PairClearance pair_clearance_;
 };
 
 }  // namespace bvh_collision

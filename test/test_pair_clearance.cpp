@@ -1,0 +1,171 @@
+// Proven clearance grids of the self pairs one or two variables move (checker/pair_clearance.h),
+// checked against the exact routines: in random states, near-contact states, states on cell
+// edges and continuous joints beyond one turn, no grid's bound exceeds the pair's exact distance
+// (solids), and a pair the grid skips is free by the exact boolean check of that pair alone;
+// boolean self checks answer the same with and without the grids.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/detail/shape_pairs.h"
+#include "checker_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+CheckerOptions without_grids() {
+  CheckerOptions o;
+  o.pair_clearance_cells = 0;
+  return o;
+}
+
+// The exact distance of a pair's links (solids), by the shape-pair routine, when below `limit`
+// (else `limit` or more: the query may stop once it shows that).
+double exact_distance(const RobotCollisionModel& m, int a, int b, const double* state, double limit) {
+  std::vector<Transform> poses;
+  m.kinematics().compute(state, poses);
+  double best = limit;
+  QueryStats stats;
+  for (const LinkShape& sa : m.shapes()[a]) {
+    for (const LinkShape& sb : m.shapes()[b]) {
+      Vec3 wa, wb;
+      best = std::min(best, detail::shapes_distance(m.ref(sa), poses[a] * sa.origin, m.ref(sb), poses[b] * sb.origin, best, true,
+                                                    wa, wb, stats));
+    }
+  }
+  return best;
+}
+
+// States that stress the grids: uniform ones, then per grid its variables on cell edges, and
+// (continuous joints) a whole number of turns away from the grid.
+std::vector<std::vector<double>> stress_states(const CollisionChecker& c, int count, std::mt19937_64& rng) {
+  std::vector<std::vector<double>> out;
+  for (int i = 0; i < count; ++i) out.push_back(random_configuration(c.model(), rng));
+  const auto& grids = c.collision_model().pair_clearance().grids();
+  for (int i = 0; i < count; ++i) {
+    std::vector<double> s = random_configuration(c.model(), rng);
+    const PairClearanceGrid& g = grids[static_cast<std::size_t>(i) % grids.size()];
+    for (int k = 0; k < g.dims; ++k) {
+      const int edge = std::uniform_int_distribution<int>(0, g.cells[k])(rng);
+      s[g.variable[k]] = g.lower[k] + edge * g.cell[k];
+      if (g.periodic[k]) s[g.variable[k]] += 2.0 * M_PI * std::uniform_int_distribution<int>(-3, 3)(rng);
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+class PairClearanceOnRobot : public ::testing::TestWithParam<std::string> {};
+
+// The claim itself: every bound is at most the exact distance, in every state tried.
+TEST_P(PairClearanceOnRobot, BoundsNeverExceedTheExactDistance) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::load_checker(GetParam());
+  const RobotCollisionModel& m = c.collision_model();
+  ASSERT_FALSE(m.pair_clearance().grids().empty()) << GetParam() << ": no pair has a grid";
+  std::mt19937_64 rng(41);
+  std::size_t bounded = 0;
+  for (const auto& s : stress_states(c, test::sized(1500), rng)) {
+    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+      const double bound = m.pair_clearance().lower_bound(g.pair, s.data());
+      if (!std::isfinite(bound)) continue;
+      ++bounded;
+      const auto [a, b] = m.checked_pairs()[g.pair];
+      // Only whether d reaches the bound is asked: the distance query may stop there.
+      const double d = exact_distance(m, a, b, s.data(), bound + 1e-6);
+      ASSERT_LE(bound, d) << m.robot().links()[a].name << "-" << m.robot().links()[b].name;
+    }
+  }
+  EXPECT_GT(bounded, 0u);
+  RecordProperty("bounded", static_cast<int>(bounded));
+}
+
+// A skipped pair is free by the exact check of that pair alone, and whole boolean self checks
+// (any tolerance) answer as without the grids.
+TEST_P(PairClearanceOnRobot, SkippingChangesNoAnswer) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker with = test::load_checker(GetParam());
+  const CollisionChecker without = test::load_checker(GetParam(), without_grids());
+  const RobotCollisionModel& m = with.collision_model();
+  std::mt19937_64 rng(43);
+  std::size_t skipped = 0;
+  for (const auto& s : stress_states(with, test::sized(1000), rng)) {
+    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+      const auto [a, b] = m.checked_pairs()[g.pair];
+      if (m.pair_clearance().lower_bound(g.pair, s.data()) <= m.paddings()[a] + m.paddings()[b]) continue;
+      ++skipped;
+      const std::vector<std::size_t> only{g.pair};
+      SelfCollisionRequest one;
+      one.only_pairs = &only;
+      ASSERT_FALSE(without.check_self(s.data(), one).collision) << m.robot().links()[a].name << "-" << m.robot().links()[b].name;
+    }
+    for (const double tolerance : {0.0, 0.01}) {
+      SelfCollisionRequest r{tolerance};
+      ASSERT_EQ(with.check_self(s.data(), r).collision, without.check_self(s.data(), r).collision);
+    }
+  }
+  EXPECT_GT(skipped, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Robots, PairClearanceOnRobot, ::testing::Values("panda", "ur5e", "pr2"));
+
+// Why the grids exist: on panda the wrist pairs (link6-hand, link5-link7) and the fingers sit
+// close in every state, and most random states settle them with one lookup.
+TEST(PairClearance, SettlesPandasAlwaysNearPairs) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::load_checker("panda");
+  const RobotCollisionModel& m = c.collision_model();
+  const RobotModel& robot = c.model();
+  std::mt19937_64 rng(47);
+  for (const auto& [x, y] : {std::pair<const char*, const char*>{"panda_link6", "panda_hand"}, {"panda_link5", "panda_link7"},
+                             {"panda_leftfinger", "panda_rightfinger"}}) {
+    const int a = robot.link_index(x), b = robot.link_index(y);
+    std::size_t pair = m.checked_pairs().size();
+    for (std::size_t p = 0; p < m.checked_pairs().size(); ++p) {
+      if (m.checked_pairs()[p] == std::pair<int, int>(std::min(a, b), std::max(a, b))) pair = p;
+    }
+    ASSERT_LT(pair, m.checked_pairs().size()) << x << "-" << y << " is not checked";
+    int settled = 0;
+    for (int i = 0; i < 1000; ++i) {
+      const auto s = random_configuration(robot, rng);
+      settled += m.pair_clearance().lower_bound(pair, s.data()) > 0.0;
+    }
+    EXPECT_GT(settled, 800) << x << "-" << y;
+  }
+}
+
+// Values the grid does not span get no bound: beyond a revolute joint's limits, NaN.
+TEST(PairClearance, NoBoundOutsideTheGrid) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::load_checker("panda");
+  const PairClearance& table = c.collision_model().pair_clearance();
+  ASSERT_FALSE(table.grids().empty());
+  std::mt19937_64 rng(53);
+  for (const PairClearanceGrid& g : table.grids()) {
+    auto s = random_configuration(c.model(), rng);
+    ASSERT_FALSE(g.periodic[0]);
+    s[g.variable[0]] = g.lower[0] - 1e-9;
+    EXPECT_EQ(table.lower_bound(g.pair, s.data()), -std::numeric_limits<double>::infinity());
+    s[g.variable[0]] = g.lower[0] + g.cell[0] * g.cells[0] + 1e-9;
+    EXPECT_EQ(table.lower_bound(g.pair, s.data()), -std::numeric_limits<double>::infinity());
+    s[g.variable[0]] = std::nan("");
+    EXPECT_EQ(table.lower_bound(g.pair, s.data()), -std::numeric_limits<double>::infinity());
+  }
+  // A pair no grid covers (two variables or more apart from panda_link0... link7) has no bound.
+  std::size_t ungridded = 0;
+  const auto s = random_configuration(c.model(), rng);
+  for (std::size_t p = 0; p < c.collision_model().checked_pairs().size(); ++p) {
+    bool gridded = false;
+    for (const PairClearanceGrid& g : table.grids()) gridded |= g.pair == p;
+    if (gridded) continue;
+    ++ungridded;
+    EXPECT_EQ(table.lower_bound(p, s.data()), -std::numeric_limits<double>::infinity());
+  }
+  EXPECT_GT(ungridded, 0u);
+}
+
+}  // namespace
+}  // namespace bvh_collision
