@@ -129,6 +129,7 @@ TEST_F(BenchReport, GeneratorRefusesFiguresThatBreakTheSemantics) {
   expect_refused(dir_, "stability_scale", "ours wrong answers", 1, "scale sweep");
   expect_refused(dir_, "stability_cylinders", "ours", 1, "cylinder case");
   expect_refused(dir_, "scene_model_pr2", "wrong answers", 1, "only moved pairs", 4);
+  expect_refused(dir_, "speed_error", "false_negatives", 1, "speed_error: a false negative", 9);
 }
 
 }  // namespace
