@@ -496,15 +496,29 @@ LinkProxy LinkProxy::build(const std::vector<LinkShape>& shapes, const std::vect
   return proxy;
 }
 
+namespace {
+
+// r * p + t written out: at -O2 GCC leaves Eigen's 3x3 product as a call, and this runs once per
+// sphere pair visited.
+inline Vec3 apply(const Mat3& r, const Vec3& t, const Vec3& p) {
+  return Vec3(r(0, 0) * p[0] + r(0, 1) * p[1] + r(0, 2) * p[2] + t[0], r(1, 0) * p[0] + r(1, 1) * p[1] + r(1, 2) * p[2] + t[1],
+              r(2, 0) * p[0] + r(2, 1) * p[1] + r(2, 2) * p[2] + t[2]);
+}
+
+}  // namespace
+
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
                      double padding) {
   if (a.empty() || b.empty()) return false;
-  const std::vector<ProxySphere>& sa = a.spheres();
-  const std::vector<ProxySphere>& sb = b.spheres();
+  const ProxySphere* sa = a.spheres().data();
+  const ProxySphere* sb = b.spheres().data();
   // b's spheres in a's frame: one transform per sphere of b visited.
-  const Transform b_in_a = pose_a.inverse() * pose_b;
+  const Transform b_in_a = relative_transform(pose_a, pose_b);
+  const Mat3& r = b_in_a.R;
+  const Vec3& t = b_in_a.t;
   const double margin = pose_margin(pose_a.t.norm() + pose_b.t.norm() + sa[0].center.norm() + sa[0].radius +
                                     sb[0].center.norm() + sb[0].radius);
+  const double slack = padding + margin;
   // A local stack: each step pops one pair and pushes at most the children of one sphere, so
   // it never holds more than (tree depth) x (children) pairs; past 256 it spills to a vector.
   std::pair<std::int32_t, std::int32_t> local[256];
@@ -520,8 +534,8 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
     if (!spill.empty()) next = spill.back(), spill.pop_back();
     else next = local[--top];
     const auto [i, j] = next;
-    const double reach = sa[i].radius + sb[j].radius + padding + margin;
-    if ((sa[i].center - b_in_a * sb[j].center).squaredNorm() > reach * reach) continue;
+    const double reach = sa[i].radius + sb[j].radius + slack;
+    if ((sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach) continue;
     const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
     if (leaf_a && leaf_b) return true;
     if (!leaf_a && (leaf_b || sa[i].radius >= sb[j].radius)) {
