@@ -80,6 +80,14 @@ TEST(NodeBadRobot, PaddingForAnUnknownLink) {
   expect_startup_failure("bad_padding", "~link_padding names unknown link 'elbow'");
 }
 
+TEST(NodeBadRobot, ProxyLevelBelowAMillimetre) {
+  expect_startup_failure("bad_proxy_levels", "~proxy_levels: every level must lie in [0.001, 1] m, got 0.000100");
+}
+
+TEST(NodeBadRobot, ProxyLevelsNotAList) {
+  expect_startup_failure("proxy_levels_not_list", "~proxy_levels must be a list of numbers (m)");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

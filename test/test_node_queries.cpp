@@ -63,6 +63,31 @@ TEST_F(NodeQueries, FreeAndSelfCollidingConfigurations) {
   for (const Contact& c : b.contacts) EXPECT_GE(c.depth, 0.0);
 }
 
+// DESIGN.md section 2 through the service, whatever serves the tolerance (the link proxies when
+// the .test file builds them): collision whenever the exact distance is 0, free beyond it.
+TEST_F(NodeQueries, TolerantAnswersKeepTheContract) {
+  std::mt19937_64 rng(17);
+  int colliding = 0, far = 0;
+  for (int i = 0; i < 300; ++i) {
+    const auto q = random_configuration(checker().model(), rng);
+    const double d = library_distance(q);
+    auto request = state_request(checker(), q, CheckState::Request::SELF);
+    request.tolerance = 0.02;
+    const auto r = call<CheckState>("check_state", request).response;
+    ASSERT_EQ(r.error, "");
+    if (d <= 0.0) {
+      ++colliding;
+      EXPECT_TRUE(r.self_collision) << "state " << i << " collides";
+    }
+    if (d > 0.02) {
+      ++far;
+      EXPECT_FALSE(r.self_collision) << "state " << i << " is " << d << " m from collision";
+    }
+  }
+  EXPECT_GT(colliding, 0);
+  EXPECT_GT(far, 0);
+}
+
 TEST_F(NodeQueries, DistancesMatchTheLibrary) {
   std::mt19937_64 rng(12);
   for (int i = 0; i < 25; ++i) {

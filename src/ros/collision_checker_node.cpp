@@ -78,7 +78,15 @@ void CollisionCheckerNode::load_robot() {
   CheckerOptions options;
   options.padding = params_.padding;
   options.link_padding = params_.link_padding;
+  options.proxy_levels = params_.proxy_levels;
   checker_ = std::make_unique<const CollisionChecker>(std::move(model), std::move(acm), options);
+  for (const ProxyLevel& level : checker_->collision_model().proxy_levels()) {
+    ROS_INFO("collision_checker: proxy level %.4g m: %zu spheres, %.1f KiB, built in %.2f s", level.level, level.leaves,
+             level.memory_bytes / 1024.0, level.build_seconds);
+  }
+  const PairClearance& grids = checker_->collision_model().pair_clearance();
+  ROS_INFO("collision_checker: clearance grids for %zu of %zu checked pairs, %.1f KiB, built in %.2f s", grids.grids().size(),
+           checker_->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());
   joint_map_ = std::make_unique<const JointValueMap>(checker_->model());
 }
 

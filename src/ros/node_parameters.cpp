@@ -62,6 +62,26 @@ void read_link_padding(const ros::NodeHandle& nh, NodeParameters& p) {
   }
 }
 
+// Levels below a millimetre would take minutes and gigabytes to build (the sphere count grows
+// as 1/e^2 on a surface); more than a handful buys nothing.
+void read_proxy_levels(const ros::NodeHandle& nh, NodeParameters& p) {
+  constexpr double kFinest = 0.001, kCoarsest = 1.0;
+  constexpr std::size_t kMostLevels = 8;
+  if (!nh.hasParam("proxy_levels")) return;
+  if (!nh.getParam("proxy_levels", p.proxy_levels)) {
+    throw NodeStartupError("parameter ~proxy_levels must be a list of numbers (m), e.g. [0.01, 0.02]");
+  }
+  if (p.proxy_levels.size() > kMostLevels) {
+    throw NodeStartupError("parameter ~proxy_levels: at most " + std::to_string(kMostLevels) + " levels, got " +
+                           std::to_string(p.proxy_levels.size()));
+  }
+  for (const double level : p.proxy_levels) {
+    if (!(level >= kFinest && level <= kCoarsest)) {
+      throw NodeStartupError("parameter ~proxy_levels: every level must lie in [0.001, 1] m, got " + std::to_string(level));
+    }
+  }
+}
+
 }  // namespace
 
 OccupancyModel NodeParameters::occupancy_model() const {
@@ -80,6 +100,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.padding = read_number(nh, "padding", p.padding, false);
   read_link_padding(nh, p);
   p.tolerance = read_number(nh, "tolerance", p.tolerance, false);
+  read_proxy_levels(nh, p);
   read_workspace(nh, p);
   p.max_range = read_number(nh, "max_range", p.max_range, true);
   p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);

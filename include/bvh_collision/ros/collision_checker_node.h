@@ -57,6 +57,10 @@ struct NodeParameters {
   double padding = 0.0;
   std::map<std::string, double> link_padding;
   double tolerance = 0.0;
+  // Bounded-error link proxy levels (m) built at start-up (checker/link_proxy.h); a boolean self
+  // check at tolerance t >= e answers from the coarsest such level. Empty by default: the build
+  // takes seconds per level (panda: 0.8 s at 20 mm, 52 s at 2 mm).
+  std::vector<double> proxy_levels;
   // Octree bounds in world_frame; unset: a cube of half-edge reach + 0.5 m around the root link.
   std::optional<Vec3> workspace_min, workspace_max;
   double max_range = 5.0;
