@@ -413,6 +413,60 @@ void queries_section(const Robot& robot, const CollisionChecker& checker, const 
   table.write(dir);
 }
 
+// States near a self contact, on both sides: bisection between a free and a colliding random
+// state, keeping the midpoints from the fifth on (the segment is then 1/16 of a random motion,
+// a few centimetres at the links, down to micrometres at the last).
+std::vector<std::vector<double>> near_contact_states(const CollisionChecker& checker, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  auto collides = [&](const std::vector<double>& q) { return checker.check_self(q.data()).collision; };
+  std::vector<std::vector<double>> out;
+  while (out.size() < count) {
+    std::vector<double> a = random_configuration(checker.model(), rng), b = random_configuration(checker.model(), rng);
+    const bool ca = collides(a);
+    if (ca == collides(b)) continue;
+    if (ca) std::swap(a, b);  // a free, b colliding
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 24 && out.size() < count; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      std::vector<double> q(a.size());
+      for (std::size_t j = 0; j < a.size(); ++j) q[j] = a[j] + mid * (b[j] - a[j]);
+      (collides(q) ? hi : lo) = mid;
+      if (k >= 4) out.push_back(std::move(q));
+    }
+  }
+  return out;
+}
+
+// Point 4 of the proxies' contract, checked exactly on many states: at each level e, a boolean
+// self check at tolerance e (answered by that level) against the exact solid distance: no false
+// negative, and no reported collision farther than e.
+void proxy_proof_rows(const Robot& robot, const CollisionChecker& checker, std::size_t count, Table& table) {
+  const std::vector<std::vector<double>> uniform = random_states(checker.model(), count, 1234);
+  const std::vector<std::vector<double>> near = near_contact_states(checker, count, 4321);
+  SelfCollisionRequest exact;
+  exact.distance = true;
+  for (const auto& [kind, states] : {std::pair{"uniform", &uniform}, std::pair{"near_contact", &near}}) {
+    std::vector<double> truth(states->size());
+    std::size_t colliding = 0;
+    for (std::size_t i = 0; i < states->size(); ++i) {
+      truth[i] = checker.check_self((*states)[i].data(), exact).min_distance;
+      colliding += truth[i] <= 0.0;
+    }
+    for (const ProxyLevel& level : checker.collision_model().proxy_levels()) {
+      std::size_t fn = 0, beyond = 0, fp = 0;
+      double farthest = 0.0;
+      for (std::size_t i = 0; i < states->size(); ++i) {
+        const bool hit = checker.check_self((*states)[i].data(), SelfCollisionRequest{level.level}).collision;
+        fn += truth[i] <= 0.0 && !hit;
+        if (hit && truth[i] > 0.0) ++fp, farthest = std::max(farthest, truth[i]);
+        beyond += hit && truth[i] > level.level;
+      }
+      table.row({robot.name, level.level * 1000, kind, static_cast<double>(states->size()), static_cast<double>(colliding),
+                 static_cast<double>(fn), static_cast<double>(fp), farthest * 1000, static_cast<double>(beyond)});
+    }
+  }
+}
+
 // ------------------------------------------------ section 1b: the speed-against-error curve
 
 // Proxy levels built per robot. The quick run builds the 20 mm level only, on panda and demo.
@@ -426,7 +480,7 @@ std::vector<double> proxy_levels_for(const std::string& robot, bool quick) {
 // built, one state at a time and as one batch (check_batch: the shared thread pool), against the
 // exact solid distances: one row per tolerance and mode of the table speed_error.
 void speed_error_rows(const Robot& robot, FclPipeline& fcl_pipeline, const std::vector<std::vector<double>>& states,
-                      const Sizes& sizes, bool quick, Table& table) {
+                      const Sizes& sizes, bool quick, Table& table, Table& proof) {
   CheckerOptions options;
   options.proxy_levels = proxy_levels_for(robot.name, quick);
   if (options.proxy_levels.empty()) return;
@@ -476,9 +530,11 @@ void speed_error_rows(const Robot& robot, FclPipeline& fcl_pipeline, const std::
                  level ? static_cast<double>(level->leaves) : 0.0, level ? level->build_seconds : 0.0});
     }
   }
+  proxy_proof_rows(robot, checker, quick ? 60 : 10000, proof);
 }
 
-void run_robot(const std::string& name, const Sizes& sizes, const std::string& dir, bool quick, Table& speed_error) {
+void run_robot(const std::string& name, const Sizes& sizes, const std::string& dir, bool quick, Table& speed_error,
+               Table& proof) {
   const Robot robot = robot_files(name);
   const CollisionChecker checker = make_checker(robot, Matrix::kSrdf);
   FclPipeline fcl_pipeline;
@@ -494,7 +550,7 @@ void run_robot(const std::string& name, const Sizes& sizes, const std::string& d
   distance_section(robot, checker, fcl_pipeline, states, truth, sizes, dir);
   scene_model_section(robot, states, sizes, dir);
   queries_section(robot, checker, states, sizes, dir);
-  speed_error_rows(robot, fcl_pipeline, states, sizes, quick, speed_error);
+  speed_error_rows(robot, fcl_pipeline, states, sizes, quick, speed_error, proof);
 }
 
 }  // namespace
@@ -510,7 +566,16 @@ int main(int argc, char** argv) {
                     {"robot", "scene", "tolerance_mm", "mode", "us_per_state", "false_positive_pct", "false_negatives",
                      "farthest_false_positive_mm", "fcl_exact_us_per_state", "proxy_level_mm", "proxy_leaves",
                      "proxy_build_s"});
-  for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) run_robot(robot, sizes, bench::output_dir(argc, argv), quick, speed_error);
+  Table proof("proxy_proof", "The proxies' contract on many states: each level at tolerance = level against exact solid distances",
+              {"robot", "level mm", "states", "count", "colliding", "false negatives", "false positives",
+               "farthest false positive mm", "beyond the tolerance"});
+  for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) {
+    run_robot(robot, sizes, bench::output_dir(argc, argv), quick, speed_error, proof);
+  }
+  proof.note("Uniform random states and states from centimetres down to micrometres of a self contact on both sides (bisection between a "
+             "free and a colliding state), SRDF matrix, padding 0. A false negative (a colliding state answered free) "
+             "or a reported collision farther than the tolerance would break DESIGN.md section 2; both must be 0.");
+  proof.write(bench::output_dir(argc, argv));
   speed_error.note("Uniform random states (the same as section 1), SRDF matrix, solids; the truth is our exact solid "
                    "distance. Tolerance 0 is the exact check; at tolerance t the coarsest proxy level e <= t answers "
                    "(checker/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "

@@ -128,6 +128,9 @@ def check_promises(tables):
             raise ReportError(f"{robot}: checking only moved pairs disagreed with the full check")
     if any(v and v > 0 for v in column(need(tables, "speed_error"), "false_negatives")):
         raise ReportError("speed_error: a false negative at some tolerance")
+    proof = need(tables, "proxy_proof")
+    if any(v and v > 0 for v in column(proof, "false negatives") + column(proof, "beyond the tolerance")):
+        raise ReportError("proxy_proof: a proxy level broke the tolerance contract")
     if any(v != "yes" for v in column(need(tables, "env_insert"), "identical trees")):
         raise ReportError("an octree differs from OctoMap's")
     for table_id in ["env_resolution", "env_clutter"]:
@@ -403,7 +406,7 @@ def build_report(tables, bench_dir, quick):
     out += [markdown(need(tables, f"self_tolerance_{r}")) for r in ROBOTS]
     out += ["Solids, the node's default, with the link proxies (checker/link_proxy.h) answering at tolerances "
             "from their level up; `build/bench/tables/speed_error.json` holds these rows.", "",
-            markdown(need(tables, "speed_error"))]
+            markdown(need(tables, "speed_error")), markdown(need(tables, "proxy_proof"))]
 
     out += ["## 2. Distance: time against the allowed error", "", headline_distance(tables), "",
             f"![distance against allowed error]({plot_self(tables, plots_dir, 'distance')})", ""]

@@ -130,6 +130,7 @@ TEST_F(BenchReport, GeneratorRefusesFiguresThatBreakTheSemantics) {
   expect_refused(dir_, "stability_cylinders", "ours", 1, "cylinder case");
   expect_refused(dir_, "scene_model_pr2", "wrong answers", 1, "only moved pairs", 4);
   expect_refused(dir_, "speed_error", "false_negatives", 1, "speed_error: a false negative", 9);
+  expect_refused(dir_, "proxy_proof", "beyond the tolerance", 1, "proxy_proof: a proxy level broke", 1);
 }
 
 }  // namespace
