@@ -64,7 +64,6 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   });
-  ++clouds_.inserted;
   clouds_.points += stats.points;
   clouds_.skipped_invalid += stats.skipped_invalid;
   clouds_.skipped_outside += stats.skipped_outside;
@@ -72,6 +71,9 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   clouds_.on_robot += filtered.on_robot;
   clouds_.shadowed += filtered.shadowed;
   clouds_.last_insert_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Last: diagnostics read this first, so a cloud counted inserted has its points counted and its
+  // octree in the store.
+  ++clouds_.inserted;
 }
 
 bool CollisionCheckerNode::clear_environment(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {

@@ -144,10 +144,14 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   clouds_lost_reported_ = dropped + rejected;
   environment.level = new_losses ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK;
   environment.message = new_losses ? "clouds were dropped or rejected (see the log)" : "ok";
+  // The counters before the snapshot: a cloud is counted inserted only after its octree is in the
+  // store, so the snapshot then holds every cloud counted (the other order once showed one cloud
+  // inserted and an empty octree).
+  const std::uint64_t received = clouds_.received.load(), inserted = clouds_.inserted.load();
   const std::shared_ptr<const Environment> env = store_->snapshot();
   environment.values = {
-      kv("clouds received", std::to_string(clouds_.received.load())),
-      kv("clouds inserted", std::to_string(clouds_.inserted.load())),
+      kv("clouds received", std::to_string(received)),
+      kv("clouds inserted", std::to_string(inserted)),
       kv("clouds dropped (no transform)", std::to_string(dropped)),
       kv("clouds rejected (malformed)", std::to_string(rejected)),
       kv("points received", std::to_string(clouds_.points.load())),
