@@ -63,8 +63,8 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
   build_shapes(options, needed);
   kinematics_ = KinematicsPlan(robot_, needed);
   compute_motion_rates();
-  build_proxies(options.proxy_levels);
   if (options.pair_clearance_cells > 0) pair_clearance_ = PairClearance::build(*this, options.pair_clearance_cells);
+  build_proxies(options.proxy_levels);  // after the grids: the batch plans note which pairs have one
 }
 
 void RobotCollisionModel::build_proxies(std::vector<double> levels) {
@@ -84,6 +84,7 @@ void RobotCollisionModel::build_proxies(std::vector<double> levels) {
       out.leaves += out.links[l].leaf_count();
       out.memory_bytes += out.links[l].memory_bytes();
     }
+    out.batch = ProxyBatch(*this, out);
     out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     proxy_levels_.push_back(std::move(out));
   }

@@ -1,6 +1,7 @@
 // Boolean checks of many states at once (CollisionChecker::check_batch): the request.
 #pragma once
 
+#include "bvh_collision/checker/proxy_batch.h"
 #include "bvh_collision/geometry/types.h"
 
 namespace bvh_collision {
@@ -10,6 +11,9 @@ struct BatchRequest {
   bool self = true, environment = true;
   double tolerance = 0.0;  // DESIGN.md section 2
   Transform root_pose;     // the root link in the world frame
+  // At a tolerance a proxy level fits, self checks run four states at a time in SIMD lanes
+  // (checker/proxy_batch.h) on this kernel; kAuto: AVX2 where the CPU has it.
+  SimdPath simd = SimdPath::kAuto;
 };
 
 }  // namespace bvh_collision

@@ -47,6 +47,7 @@ class PairClearance {
     const int g = grid_of_.empty() ? -1 : grid_of_[pair];
     return g < 0 ? -std::numeric_limits<double>::infinity() : grid_bound(grids_[g], state);
   }
+  bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
   const std::vector<PairClearanceGrid>& grids() const { return grids_; }
   std::size_t memory_bytes() const;
   double build_seconds() const { return build_seconds_; }

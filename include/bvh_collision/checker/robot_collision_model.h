@@ -16,6 +16,7 @@
 #include "bvh_collision/checker/detail/shape_pairs.h"
 #include "bvh_collision/checker/link_proxy.h"
 #include "bvh_collision/checker/pair_clearance.h"
+#include "bvh_collision/checker/proxy_batch.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
@@ -46,6 +47,7 @@ struct ProxyLevel {
   std::vector<LinkProxy> links;  // per link (empty for links without geometry)
   std::size_t leaves = 0, memory_bytes = 0;
   double build_seconds = 0.0;
+  ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
 };
 
 // One collision element of a link.

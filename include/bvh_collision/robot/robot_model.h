@@ -113,7 +113,7 @@ class KinematicsPlan {
                const std::vector<Transform>* free_joint_poses = nullptr) const;
   std::size_t steps() const { return steps_.size(); }
 
- private:
+  // One computed link: its pose is parent's * fixed * the joint's motion.
   struct Step {
     int link = -1, parent = -1;  // computed link and the computed link it hangs from
     Transform fixed;             // parent link -> joint frame, fixed joints folded in
@@ -124,6 +124,13 @@ class KinematicsPlan {
     double multiplier = 1.0, offset = 0.0;
     int joint = -1;              // for floating and planar joints
   };
+  // The steps in order (a parent before its children), for code that computes the same poses
+  // another way (checker/proxy_batch.h); the root link is at identity.
+  const std::vector<Step>& step_list() const { return steps_; }
+  int root() const { return root_; }
+  std::size_t link_count() const { return links_; }
+
+ private:
   std::vector<Step> steps_;
   int root_ = 0;
   std::size_t links_ = 0;

@@ -1,0 +1,340 @@
+// The batch kernel of the link proxies (checker/proxy_batch.h), written once over GCC vector
+// types of four doubles and compiled twice: proxy_batch_generic.cpp (the default -O2 build: SSE2,
+// each operation two instructions) and proxy_batch_avx2.cpp (-mavx2: one). The unit that
+// includes it defines PROXY_BATCH_ISA (generic or avx2), which names its entry points.
+//
+// Four states run in the lanes: forward kinematics, the bounding-sphere broad phase and a proxy
+// tree traversal shared by the lanes, each pair of spheres tested in every lane at once and kept
+// while some lane still overlaps (a lane mask travels with each entry of the stack). A lane found
+// colliding leaves every later test.
+//
+// Floating point: no fused multiply-add (the units are built with -ffp-contract=off and without
+// -mfma), so the two builds round alike and answer alike. The sphere tests are those of
+// proxies_overlap (checker/link_proxy.cpp) with its margin, kPoseMargin of the poses' magnitude,
+// which covers the rounding of poses carried down a chain of ~100 joints at a few units in the
+// last place each; the sine and cosine below are within 1e-15 of exact (bound below), so the
+// poses they give round like those of the C library's and the same margin covers them.
+//
+// Everything here has internal linkage, and only plain types and builtins are used (see
+// proxy_batch_plan.h on why).
+#include <cstring>
+
+#include "bvh_collision/checker/detail/proxy_batch_plan.h"
+
+#ifndef PROXY_BATCH_ISA
+#error "define PROXY_BATCH_ISA before including proxy_batch_kernel.h"
+#endif
+#define PROXY_BATCH_CAT2(a, b) a##_##b
+#define PROXY_BATCH_CAT(a, b) PROXY_BATCH_CAT2(a, b)
+#define PROXY_BATCH_NAME(name) PROXY_BATCH_CAT(name, PROXY_BATCH_ISA)
+
+// Four doubles are passed between this unit's own inline functions only (internal linkage), so
+// GCC's note that their calling convention differs with and without AVX does not apply.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+namespace bvh_collision::proxy_batch {
+namespace {
+
+typedef double V __attribute__((vector_size(32)));
+typedef long long M __attribute__((vector_size(32)));
+
+inline V splat(double x) { return V{x, x, x, x}; }
+inline unsigned lane_bits(M m) {
+  return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+}
+inline V load(const double* p) {
+  V v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// m ? a : b lane by lane, in bit operations (GCC and clang both take them).
+inline V select(M m, V a, V b) {
+  M ai, bi;
+  std::memcpy(&ai, &a, sizeof a);
+  std::memcpy(&bi, &b, sizeof b);
+  const M r = (m & ai) | (~m & bi);
+  V out;
+  std::memcpy(&out, &r, sizeof out);
+  return out;
+}
+constexpr unsigned kAllLanes = (1u << kLanes) - 1;
+
+// sin and cos of four values. x = k pi/2 + r with k = round(2x/pi) and |r| <= pi/4 (+ rounding);
+// pi/2 in three parts: hi (26 significant bits) and mid (27) sum to the double nearest pi/2, and
+// lo = pi/2 - (hi + mid) to double precision. For |k| <= 2^20, k hi and k mid are exact, x - k hi
+// is exact (Sterbenz), and r carries at most ~3 ulp of r plus |k| 1e-32. Taylor series through
+// r^17 (sine) and r^18 (cosine): the first omitted terms are below 1e-19 at |r| = 0.786, and
+// Horner's rounding adds a few ulp. So each result is within ~5e-16 of exact for |x| <= 1.6e6;
+// lanes beyond that (or not finite) take the C library's.
+constexpr double kTwoOverPi = 0.6366197723675814;
+constexpr double kPiOver2Hi = 1.5707963109016418;
+constexpr double kPiOver2Mid = 1.5893254712295857e-08;
+constexpr double kPiOver2Lo = 6.123233995736766e-17;
+constexpr double kRoundShift = 6755399441055744.0;  // 1.5 * 2^52: y + shift holds round(y) in its low bits
+constexpr double kReducedRange = 1.6e6;
+
+inline void sincos4(V x, V& s, V& c) {
+  const V shifted = x * splat(kTwoOverPi) + splat(kRoundShift);
+  M quadrant;
+  std::memcpy(&quadrant, &shifted, sizeof quadrant);
+  const V k = shifted - splat(kRoundShift);
+  const V r = ((x - k * splat(kPiOver2Hi)) - k * splat(kPiOver2Mid)) - k * splat(kPiOver2Lo);
+  const V r2 = r * r;
+  // 1/n! for n = 3, 5, ..., 17 and n = 2, 4, ..., 18, signs alternating.
+  V ps = splat(1.0 / 355687428096000.0);
+  ps = ps * r2 - splat(1.0 / 1307674368000.0);
+  ps = ps * r2 + splat(1.0 / 6227020800.0);
+  ps = ps * r2 - splat(1.0 / 39916800.0);
+  ps = ps * r2 + splat(1.0 / 362880.0);
+  ps = ps * r2 - splat(1.0 / 5040.0);
+  ps = ps * r2 + splat(1.0 / 120.0);
+  ps = ps * r2 - splat(1.0 / 6.0);
+  const V sin_r = r + r * r2 * ps;
+  V pc = splat(1.0 / 6402373705728000.0);
+  pc = pc * r2 - splat(1.0 / 20922789888000.0);
+  pc = pc * r2 + splat(1.0 / 87178291200.0);
+  pc = pc * r2 - splat(1.0 / 479001600.0);
+  pc = pc * r2 + splat(1.0 / 3628800.0);
+  pc = pc * r2 - splat(1.0 / 40320.0);
+  pc = pc * r2 + splat(1.0 / 720.0);
+  pc = pc * r2 - splat(1.0 / 24.0);
+  pc = pc * r2 + splat(0.5);
+  const V cos_r = splat(1.0) - r2 * pc;
+  // Quadrant k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+  const M zero = {0, 0, 0, 0};
+  const M swap = (quadrant & 1) != zero;
+  const M negate_sin = (quadrant & 2) != zero;
+  const M negate_cos = ((quadrant + 1) & 2) != zero;
+  const V s0 = select(swap, cos_r, sin_r);
+  const V c0 = select(swap, sin_r, cos_r);
+  s = select(negate_sin, -s0, s0);
+  c = select(negate_cos, -c0, c0);
+  const V magnitude = select(x < splat(0.0), -x, x);
+  const unsigned outside = lane_bits(~(magnitude <= splat(kReducedRange)));
+  if (outside != 0) {
+    for (int l = 0; l < kLanes; ++l) {
+      if (outside & (1u << l)) s[l] = __builtin_sin(x[l]), c[l] = __builtin_cos(x[l]);
+    }
+  }
+}
+
+// A link pose in the lanes: rotation row-major in [0, 9), translation in [9, 12).
+struct Pose {
+  V m[12];
+};
+
+// parent * fixed (fixed the same in every lane).
+inline void compose_fixed(const Pose& p, const double* f, Pose& out) {
+  for (int r = 0; r < 3; ++r) {
+    const V a = p.m[r * 3], b = p.m[r * 3 + 1], c = p.m[r * 3 + 2];
+    for (int col = 0; col < 3; ++col) out.m[r * 3 + col] = a * f[col] + b * f[3 + col] + c * f[6 + col];
+    out.m[9 + r] = a * f[9] + b * f[10] + c * f[11] + p.m[9 + r];
+  }
+}
+
+inline V joint_value(const Step& step, const double* const* lanes) {
+  V q;
+  for (int l = 0; l < kLanes; ++l) q[l] = lanes[l][step.variable];
+  return q * splat(step.multiplier) + splat(step.offset);
+}
+
+// out = out * rotation(q) about the step's axis.
+inline void apply_rotation(const Step& step, V q, Pose& out) {
+  V s, c;
+  sincos4(q, s, c);
+  if (step.kind == kAxisRotation) {
+    // About +-e_k: e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j (columns i and j mix).
+    s = s * splat(step.sign);
+    const int i = (step.axis_index + 1) % 3, j = (step.axis_index + 2) % 3;
+    for (int r = 0; r < 3; ++r) {
+      const V a = out.m[r * 3 + i], b = out.m[r * 3 + j];
+      out.m[r * 3 + i] = c * a + s * b;
+      out.m[r * 3 + j] = c * b - s * a;
+    }
+    return;
+  }
+  // Rodrigues: R = c I + s [a]x + (1 - c) a a^T.
+  const double x = step.axis[0], y = step.axis[1], z = step.axis[2];
+  const V t = splat(1.0) - c;
+  const V rot[9] = {c + t * (x * x),     t * (x * y) - s * z, t * (x * z) + s * y,
+                    t * (x * y) + s * z, c + t * (y * y),     t * (y * z) - s * x,
+                    t * (x * z) - s * y, t * (y * z) + s * x, c + t * (z * z)};
+  for (int r = 0; r < 3; ++r) {
+    const V a = out.m[r * 3], b = out.m[r * 3 + 1], d = out.m[r * 3 + 2];
+    for (int col = 0; col < 3; ++col) out.m[r * 3 + col] = a * rot[col] + b * rot[3 + col] + d * rot[6 + col];
+  }
+}
+
+void forward_kinematics(const Plan& plan, const double* const* lanes, Pose* poses) {
+  Pose& root = poses[plan.root];
+  for (int e = 0; e < 12; ++e) root.m[e] = splat(e < 9 && e % 4 == 0 ? 1.0 : 0.0);
+  for (int k = 0; k < plan.step_count; ++k) {
+    const Step& step = plan.steps[k];
+    Pose& out = poses[step.link];
+    compose_fixed(poses[step.parent], step.fixed, out);
+    if (step.kind == kFixedStep || step.variable < 0) continue;
+    const V q = joint_value(step, lanes);
+    if (step.kind == kSlide) {
+      for (int r = 0; r < 3; ++r) {
+        out.m[9 + r] += (out.m[r * 3] * splat(step.axis[0]) + out.m[r * 3 + 1] * splat(step.axis[1]) +
+                         out.m[r * 3 + 2] * splat(step.axis[2])) * q;
+      }
+    } else {
+      apply_rotation(step, q, out);
+    }
+  }
+}
+
+// b's proxy spheres tested against a's in the lanes of `live`: the lanes where some pair of leaf
+// spheres comes within padding (plus the pose margin), as proxies_overlap decides one state.
+unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const Pose& pb, unsigned live,
+                       std::int32_t* stack) {
+  const Link& la = plan.links[pair.a];
+  const Link& lb = plan.links[pair.b];
+  const Sphere* sa = plan.spheres + la.first;
+  const Sphere* sb = plan.spheres + lb.first;
+  // b in a's frame: R = Ra^T Rb, t = Ra^T (tb - ta).
+  V r[9], t[3];
+  const V dt[3] = {pb.m[9] - pa.m[9], pb.m[10] - pa.m[10], pb.m[11] - pa.m[11]};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r[i * 3 + j] = pa.m[i] * pb.m[j] + pa.m[3 + i] * pb.m[3 + j] + pa.m[6 + i] * pb.m[6 + j];
+    t[i] = pa.m[i] * dt[0] + pa.m[3 + i] * dt[1] + pa.m[6 + i] * dt[2];
+  }
+  V norm_a, norm_b;
+  const V na2 = pa.m[9] * pa.m[9] + pa.m[10] * pa.m[10] + pa.m[11] * pa.m[11];
+  const V nb2 = pb.m[9] * pb.m[9] + pb.m[10] * pb.m[10] + pb.m[11] * pb.m[11];
+  for (int l = 0; l < kLanes; ++l) norm_a[l] = __builtin_sqrt(na2[l]), norm_b[l] = __builtin_sqrt(nb2[l]);
+  const V slack = splat(pair.padding) +
+                  splat(plan.pose_margin) * (splat(1.0) + (norm_a + norm_b + splat(la.extent + lb.extent)));
+  unsigned hits = 0;
+  int top = 0;
+  stack[0] = 0, stack[1] = 0, stack[2] = static_cast<std::int32_t>(live);
+  top = 1;
+  while (top > 0) {
+    --top;
+    const std::int32_t i = stack[3 * top], j = stack[3 * top + 1];
+    const unsigned mask = static_cast<unsigned>(stack[3 * top + 2]) & ~hits;
+    if (mask == 0) continue;
+    const Sphere& a = sa[i];
+    const Sphere& b = sb[j];
+    const V dx = splat(a.c[0]) - (r[0] * b.c[0] + r[1] * b.c[1] + r[2] * b.c[2] + t[0]);
+    const V dy = splat(a.c[1]) - (r[3] * b.c[0] + r[4] * b.c[1] + r[5] * b.c[2] + t[1]);
+    const V dz = splat(a.c[2]) - (r[6] * b.c[0] + r[7] * b.c[1] + r[8] * b.c[2] + t[2]);
+    const V reach = splat(a.r + b.r) + slack;
+    // Not "apart" (a NaN stays in, as in proxies_overlap).
+    const unsigned near = mask & ~lane_bits(dx * dx + dy * dy + dz * dz > reach * reach);
+    if (near == 0) continue;
+    const bool leaf_a = a.skip == i + 1, leaf_b = b.skip == j + 1;
+    if (leaf_a && leaf_b) {
+      hits |= near;
+      if (hits == live) break;
+      continue;
+    }
+    auto push = [&](std::int32_t x, std::int32_t y) {
+      stack[3 * top] = x, stack[3 * top + 1] = y, stack[3 * top + 2] = static_cast<std::int32_t>(near);
+      ++top;
+    };
+    if (!leaf_a && (leaf_b || a.r >= b.r)) {
+      for (std::int32_t k = i + 1; k < a.skip; k = sa[k].skip) push(k, j);
+    } else {
+      for (std::int32_t k = j + 1; k < b.skip; k = sb[k].skip) push(i, k);
+    }
+  }
+  return hits;
+}
+
+// The lanes where pair's bounding spheres come within reach, and the smallest (distance /
+// reach)^2 among them: check_self's broad phase.
+unsigned broad_phase(const Plan& plan, const Pair& pair, const double* centers, unsigned live, double& key) {
+  const double* ca = centers + 3 * kLanes * pair.a;
+  const double* cb = centers + 3 * kLanes * pair.b;
+  const V dx = load(ca) - load(cb), dy = load(ca + kLanes) - load(cb + kLanes),
+          dz = load(ca + 2 * kLanes) - load(cb + 2 * kLanes);
+  const double reach = pair.reach + plan.tolerance;
+  const V d2 = dx * dx + dy * dy + dz * dz;
+  const unsigned near = live & lane_bits(d2 <= splat(reach * reach));
+  if (near == 0) return 0;
+  double closest = reach * reach;
+  for (int l = 0; l < kLanes; ++l) {
+    if ((near & (1u << l)) && d2[l] < closest) closest = d2[l];
+  }
+  key = closest / (reach * reach);
+  return near;
+}
+
+// Lanes whose clearance grid of the pair clears its padding leave it (checker/pair_clearance.h).
+unsigned graded_lanes(const Plan& plan, const Pair& pair, const double* const* lanes, unsigned near) {
+  for (int l = 0; l < kLanes; ++l) {
+    if ((near & (1u << l)) && plan.clearance(plan.clearance_context, pair.index, lanes[l]) > pair.padding) {
+      near &= ~(1u << l);
+    }
+  }
+  return near;
+}
+
+// The pairs in reach of some lane, deepest overlap first (those collide most often, and a lane
+// leaves at its first collision), as check_self orders them for one state.
+int pairs_in_reach(const Plan& plan, const double* centers, Candidate* out) {
+  int count = 0;
+  for (int k = 0; k < plan.pair_count; ++k) {
+    const Pair& pair = plan.pairs[k];
+    if (plan.links[pair.a].count == 0 || plan.links[pair.b].count == 0) continue;
+    double key;
+    const unsigned near = broad_phase(plan, pair, centers, kAllLanes, key);
+    if (near == 0) continue;
+    int at = count++;
+    for (; at > 0 && out[at - 1].key > key; --at) out[at] = out[at - 1];  // insertion: tens of pairs
+    out[at] = {key, k, near};
+  }
+  return count;
+}
+
+void link_centers(const Plan& plan, const Pose* poses, double* centers) {
+  for (int l = 0; l < plan.link_count; ++l) {
+    const Link& link = plan.links[l];
+    if (link.bound_r < 0) continue;
+    const Pose& p = poses[l];
+    for (int i = 0; i < 3; ++i) {
+      const V c = p.m[i * 3] * link.bound_c[0] + p.m[i * 3 + 1] * link.bound_c[1] + p.m[i * 3 + 2] * link.bound_c[2] +
+                  p.m[9 + i];
+      std::memcpy(centers + 3 * kLanes * l + kLanes * i, &c, sizeof c);
+    }
+  }
+}
+
+}  // namespace
+
+void PROXY_BATCH_NAME(forward_kinematics)(const Plan& plan, const double* const* lanes, const Scratch& scratch) {
+  forward_kinematics(plan, lanes, reinterpret_cast<Pose*>(scratch.poses));
+}
+
+void PROXY_BATCH_NAME(check_block)(const Plan& plan, const double* const* lanes, unsigned char* out,
+                                   const Scratch& scratch) {
+  Pose* poses = reinterpret_cast<Pose*>(scratch.poses);
+  forward_kinematics(plan, lanes, poses);
+  link_centers(plan, poses, scratch.centers);
+  const int count = pairs_in_reach(plan, scratch.centers, scratch.candidates);
+  unsigned hits = 0;
+  for (int k = 0; k < count && hits != kAllLanes; ++k) {
+    const Pair& pair = plan.pairs[scratch.candidates[k].pair];
+    unsigned near = scratch.candidates[k].lanes & ~hits;
+    if (near != 0 && pair.graded) near = graded_lanes(plan, pair, lanes, near);
+    if (near != 0) hits |= traverse_pair(plan, pair, poses[pair.a], poses[pair.b], near, scratch.stack);
+  }
+  for (int l = 0; l < kLanes; ++l) out[l] = (hits >> l) & 1;
+}
+
+void PROXY_BATCH_NAME(sincos)(const double* x, double* s, double* c) {
+  V vs, vc;
+  sincos4(load(x), vs, vc);
+  std::memcpy(s, &vs, sizeof vs);
+  std::memcpy(c, &vc, sizeof vc);
+}
+
+}  // namespace bvh_collision::proxy_batch
+
+#undef PROXY_BATCH_NAME
+#undef PROXY_BATCH_CAT
+#undef PROXY_BATCH_CAT2
