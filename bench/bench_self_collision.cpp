@@ -581,7 +581,9 @@ int main(int argc, char** argv) {
                    "(checker/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
                    "clearance grid clears the padding (checker/pair_clearance.h). batch: check_batch over all states on "
                    "the shared thread pool (" + std::to_string(ThreadPool::shared().capacity()) +
-                   " threads), not yet vectorised over states. FCL: exact, surfaces, one state at a time. The scene "
+                   " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (checker/proxy_batch.h, " +
+                   (avx2_available() ? "AVX2" : "this CPU has no AVX2: one state at a time") +
+                   "). FCL: exact, surfaces, one state at a time. The scene "
                    "`octree` rows are not measured yet: the proxies answer self checks only.");
   speed_error.write(bench::output_dir(argc, argv));
   return 0;
