@@ -19,7 +19,7 @@ export ROS_MASTER_URI="http://127.0.0.1:$port"
 log=$(mktemp /tmp/bvh_collision_bench.XXXXXX.log)
 roslaunch --port "$port" bvh_collision collision_checker.launch \
   robot_description_file:="$robots/panda/robot.urdf" \
-  robot_description_semantic_file:="$robots/panda/robot.srdf" > "$log" 2>&1 &
+  robot_description_semantic_file:="$robots/panda/robot.srdf" proxy_levels:="[0.01]" > "$log" 2>&1 &
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null; wait $launch_pid 2>/dev/null || true' EXIT
 devel/lib/bvh_collision/bench_node _urdf_file:="$robots/panda/robot.urdf" _output_dir:="$out" \

@@ -42,7 +42,25 @@ def load_tables(bench_dir):
             with open(os.path.join(folder, name)) as f:
                 t = json.load(f)
             tables[t["id"]] = t
+    merge_speed_error(tables, folder)
     return tables
+
+
+def merge_speed_error(tables, folder):
+    """The octree rows (bench_environment's speed_error_octree) join the self rows
+    (bench_self_collision's speed_error) in speed_error.json: one table, one row per robot,
+    scene, tolerance and mode."""
+    self_rows, octree = tables.get("speed_error"), tables.get("speed_error_octree")
+    if self_rows is None or octree is None:
+        return
+    if octree["columns"] != self_rows["columns"]:
+        raise ReportError("speed_error_octree: its columns differ from speed_error's")
+    keep = [r for r in self_rows["rows"] if r[self_rows["columns"].index("scene")] != "octree"]
+    self_rows["rows"] = keep + octree["rows"]
+    notes = [n for n in self_rows.get("notes", []) if not n.startswith("Octree rows: ")]
+    self_rows["notes"] = notes + ["Octree rows: " + n for n in octree.get("notes", [])]
+    with open(os.path.join(folder, "speed_error.json"), "w") as f:
+        json.dump(self_rows, f, indent=1)
 
 
 def need(tables, table_id):
