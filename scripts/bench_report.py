@@ -424,7 +424,8 @@ def build_report(tables, bench_dir, quick):
     out += [markdown(need(tables, f"self_tolerance_{r}")) for r in ROBOTS]
     out += ["Solids, the node's default, with the link proxies (checker/link_proxy.h) answering at tolerances "
             "from their level up; `build/bench/tables/speed_error.json` holds these rows.", "",
-            markdown(need(tables, "speed_error")), markdown(need(tables, "proxy_proof"))]
+            markdown(need(tables, "speed_error")), markdown(need(tables, "proxy_proof")),
+            markdown(need(tables, "motion_speed_error"))]
 
     out += ["## 2. Distance: time against the allowed error", "", headline_distance(tables), "",
             f"![distance against allowed error]({plot_self(tables, plots_dir, 'distance')})", ""]
