@@ -582,7 +582,7 @@ int main(int argc, char** argv) {
                    "clearance grid clears the padding (checker/pair_clearance.h). batch: check_batch over all states on "
                    "the shared thread pool (" + std::to_string(ThreadPool::shared().capacity()) +
                    " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (checker/proxy_batch.h, " +
-                   (avx2_available() ? "AVX2" : "this CPU has no AVX2: one state at a time") +
+                   (avx2_available() ? "AVX2, four lanes" : "SSE2, two lanes: this CPU has no AVX2") +
                    "). FCL: exact, surfaces, one state at a time. The scene "
                    "`octree` rows are bench_environment's (table speed_error_octree), merged in by the report.");
   speed_error.write(bench::output_dir(argc, argv));

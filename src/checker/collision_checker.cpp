@@ -185,11 +185,8 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   const std::size_t stride = m_->robot().variable_count();
   const ProxyLevel* proxies = request.self ? m_->proxies_for(request.tolerance) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment
-  // only for the states found free. Without AVX2 the one-state path is taken unless a kernel is
-  // named: the SSE2 build of the four-lane kernel spills its relative transforms out of the 16
-  // registers and measured 1.5 us a panda state where the one-state proxy check takes 0.8.
-  const bool lanes = request.simd != SimdPath::kAuto || avx2_available();
-  if (proxies != nullptr && !proxies->batch.empty() && lanes) {
+  // only for the states found free.
+  if (proxies != nullptr && !proxies->batch.empty()) {
     constexpr std::size_t kBlock = 16;
     ThreadPool::shared().for_each((count + kBlock - 1) / kBlock, 1, [&](std::size_t block) {
       const std::size_t begin = block * kBlock, n = std::min(kBlock, count - begin);

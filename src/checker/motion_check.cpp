@@ -65,15 +65,15 @@ bool collides_with_environment(const CollisionChecker& checker, const double* st
 }
 
 // The states in order, the first colliding one ends the motion. Where a proxy level fits the
-// tolerance (and the CPU has AVX2), self checks run on blocks of states in the SIMD lanes
-// (checker/proxy_batch.h), the same answers as one state at a time.
+// tolerance, self checks run on blocks of states in the SIMD lanes (checker/proxy_batch.h), the
+// same answers as one state at a time.
 MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, const Environment& env,
                              const MotionRequest& request) {
   MotionResult result;
   const auto steps = static_cast<std::size_t>(std::max(1.0, std::ceil(segment.longest() / request.resolution)));
   const RobotCollisionModel& model = checker.collision_model();
   const ProxyLevel* proxies = request.self ? model.proxies_for(request.tolerance) : nullptr;
-  const bool lanes = proxies != nullptr && !proxies->batch.empty() && avx2_available();
+  const bool lanes = proxies != nullptr && !proxies->batch.empty();
   constexpr std::size_t kBlock = 16;
   const std::size_t n = checker.model().variable_count();
   std::vector<double> block(lanes ? kBlock * n : 0);

@@ -178,9 +178,10 @@ std::vector<double> ProxyBatch::poses(const RobotCollisionModel& model, const do
   const pb::Scratch scratch = batch_scratch().get(p);
   const double* lanes[pb::kLanes];
   for (std::size_t l = 0; l < pb::kLanes; ++l) lanes[l] = states + std::min(l, count - 1) * stride_;
-  if (use_avx2(path)) pb::forward_kinematics_avx2(p, lanes, scratch);
-  else pb::forward_kinematics_generic(p, lanes, scratch);
-  return std::vector<double>(scratch.poses, scratch.poses + links_.size() * 12 * pb::kLanes);
+  std::vector<double> out(links_.size() * 12 * pb::kLanes);
+  if (use_avx2(path)) pb::forward_kinematics_avx2(p, lanes, scratch, out.data());
+  else pb::forward_kinematics_generic(p, lanes, scratch, out.data());
+  return out;
 }
 
 void ProxyBatch::sincos(const double* x, double* s, double* c, SimdPath path) {

@@ -1,9 +1,10 @@
 // The batch kernel of the link proxies (checker/proxy_batch.h), written once over GCC vector
-// types of four doubles and compiled twice: proxy_batch_generic.cpp (the default -O2 build: SSE2,
-// each operation two instructions) and proxy_batch_avx2.cpp (-mavx2: one). The unit that
-// includes it defines PROXY_BATCH_ISA (generic or avx2), which names its entry points.
+// types of W doubles and compiled twice: proxy_batch_generic.cpp (the default -O2 build, W = 2,
+// the SSE2 registers x86-64 always has) and proxy_batch_avx2.cpp (-mavx2, W = 4). The unit that
+// includes it defines PROXY_BATCH_ISA (generic or avx2), which names its entry points, and
+// PROXY_BATCH_WIDTH (W).
 //
-// Four states run in the lanes: forward kinematics, the bounding-sphere broad phase and a proxy
+// W states run in the lanes: forward kinematics, the bounding-sphere broad phase and a proxy
 // tree traversal shared by the lanes, each pair of spheres tested in every lane at once and kept
 // while some lane still overlaps (a lane mask travels with each entry of the stack). A lane found
 // colliding leaves every later test.
@@ -21,8 +22,8 @@
 
 #include "bvh_collision/checker/detail/proxy_batch_plan.h"
 
-#ifndef PROXY_BATCH_ISA
-#error "define PROXY_BATCH_ISA before including proxy_batch_kernel.h"
+#if !defined(PROXY_BATCH_ISA) || !defined(PROXY_BATCH_WIDTH)
+#error "define PROXY_BATCH_ISA and PROXY_BATCH_WIDTH before including proxy_batch_kernel.h"
 #endif
 #define PROXY_BATCH_CAT2(a, b) a##_##b
 #define PROXY_BATCH_CAT(a, b) PROXY_BATCH_CAT2(a, b)
@@ -37,12 +38,17 @@
 namespace bvh_collision::proxy_batch {
 namespace {
 
-typedef double V __attribute__((vector_size(32)));
-typedef long long M __attribute__((vector_size(32)));
+// W states per vector: the kernel's kLanes states run as kLanes / W groups of W.
+constexpr int W = PROXY_BATCH_WIDTH;
+static_assert(kLanes % W == 0, "the lane groups must fill kLanes");
+typedef double V __attribute__((vector_size(8 * W)));
+typedef long long M __attribute__((vector_size(8 * W)));
 
-inline V splat(double x) { return V{x, x, x, x}; }
+inline V splat(double x) { return V{} + x; }
 inline unsigned lane_bits(M m) {
-  return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+  unsigned bits = 0;
+  for (int l = 0; l < W; ++l) bits |= static_cast<unsigned>(m[l] & 1) << l;
+  return bits;
 }
 inline V load(const double* p) {
   V v;
@@ -59,7 +65,7 @@ inline V select(M m, V a, V b) {
   std::memcpy(&out, &r, sizeof out);
   return out;
 }
-constexpr unsigned kAllLanes = (1u << kLanes) - 1;
+constexpr unsigned kAllLanes = (1u << W) - 1;
 
 // sin and cos of four values. x = k pi/2 + r with k = round(2x/pi) and |r| <= pi/4 (+ rounding);
 // pi/2 in three parts: hi (26 significant bits) and mid (27) sum to the double nearest pi/2, and
@@ -75,7 +81,7 @@ constexpr double kPiOver2Lo = 6.123233995736766e-17;
 constexpr double kRoundShift = 6755399441055744.0;  // 1.5 * 2^52: y + shift holds round(y) in its low bits
 constexpr double kReducedRange = 1.6e6;
 
-inline void sincos4(V x, V& s, V& c) {
+inline void sincos_lanes(V x, V& s, V& c) {
   const V shifted = x * splat(kTwoOverPi) + splat(kRoundShift);
   M quadrant;
   std::memcpy(&quadrant, &shifted, sizeof quadrant);
@@ -103,7 +109,7 @@ inline void sincos4(V x, V& s, V& c) {
   pc = pc * r2 + splat(0.5);
   const V cos_r = splat(1.0) - r2 * pc;
   // Quadrant k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
-  const M zero = {0, 0, 0, 0};
+  const M zero = {};
   const M swap = (quadrant & 1) != zero;
   const M negate_sin = (quadrant & 2) != zero;
   const M negate_cos = ((quadrant + 1) & 2) != zero;
@@ -114,7 +120,7 @@ inline void sincos4(V x, V& s, V& c) {
   const V magnitude = select(x < splat(0.0), -x, x);
   const unsigned outside = lane_bits(~(magnitude <= splat(kReducedRange)));
   if (outside != 0) {
-    for (int l = 0; l < kLanes; ++l) {
+    for (int l = 0; l < W; ++l) {
       if (outside & (1u << l)) s[l] = __builtin_sin(x[l]), c[l] = __builtin_cos(x[l]);
     }
   }
@@ -136,14 +142,14 @@ inline void compose_fixed(const Pose& p, const double* f, Pose& out) {
 
 inline V joint_value(const Step& step, const double* const* lanes) {
   V q;
-  for (int l = 0; l < kLanes; ++l) q[l] = lanes[l][step.variable];
+  for (int l = 0; l < W; ++l) q[l] = lanes[l][step.variable];
   return q * splat(step.multiplier) + splat(step.offset);
 }
 
 // out = out * rotation(q) about the step's axis.
 inline void apply_rotation(const Step& step, V q, Pose& out) {
   V s, c;
-  sincos4(q, s, c);
+  sincos_lanes(q, s, c);
   if (step.kind == kAxisRotation) {
     // About +-e_k: e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j (columns i and j mix).
     s = s * splat(step.sign);
@@ -205,7 +211,7 @@ unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const
   V norm_a, norm_b;
   const V na2 = pa.m[9] * pa.m[9] + pa.m[10] * pa.m[10] + pa.m[11] * pa.m[11];
   const V nb2 = pb.m[9] * pb.m[9] + pb.m[10] * pb.m[10] + pb.m[11] * pb.m[11];
-  for (int l = 0; l < kLanes; ++l) norm_a[l] = __builtin_sqrt(na2[l]), norm_b[l] = __builtin_sqrt(nb2[l]);
+  for (int l = 0; l < W; ++l) norm_a[l] = __builtin_sqrt(na2[l]), norm_b[l] = __builtin_sqrt(nb2[l]);
   const V slack = splat(pair.padding) +
                   splat(plan.pose_margin) * (splat(1.0) + (norm_a + norm_b + splat(la.extent + lb.extent)));
   unsigned hits = 0;
@@ -248,16 +254,15 @@ unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const
 // The lanes where pair's bounding spheres come within reach, and the smallest (distance /
 // reach)^2 among them: check_self's broad phase.
 unsigned broad_phase(const Plan& plan, const Pair& pair, const double* centers, unsigned live, double& key) {
-  const double* ca = centers + 3 * kLanes * pair.a;
-  const double* cb = centers + 3 * kLanes * pair.b;
-  const V dx = load(ca) - load(cb), dy = load(ca + kLanes) - load(cb + kLanes),
-          dz = load(ca + 2 * kLanes) - load(cb + 2 * kLanes);
+  const double* ca = centers + 3 * W * pair.a;
+  const double* cb = centers + 3 * W * pair.b;
+  const V dx = load(ca) - load(cb), dy = load(ca + W) - load(cb + W), dz = load(ca + 2 * W) - load(cb + 2 * W);
   const double reach = pair.reach + plan.tolerance;
   const V d2 = dx * dx + dy * dy + dz * dz;
   const unsigned near = live & lane_bits(d2 <= splat(reach * reach));
   if (near == 0) return 0;
   double closest = reach * reach;
-  for (int l = 0; l < kLanes; ++l) {
+  for (int l = 0; l < W; ++l) {
     if ((near & (1u << l)) && d2[l] < closest) closest = d2[l];
   }
   key = closest / (reach * reach);
@@ -266,7 +271,7 @@ unsigned broad_phase(const Plan& plan, const Pair& pair, const double* centers, 
 
 // Lanes whose clearance grid of the pair clears its padding leave it (checker/pair_clearance.h).
 unsigned graded_lanes(const Plan& plan, const Pair& pair, const double* const* lanes, unsigned near) {
-  for (int l = 0; l < kLanes; ++l) {
+  for (int l = 0; l < W; ++l) {
     if ((near & (1u << l)) && plan.clearance(plan.clearance_context, pair.index, lanes[l]) > pair.padding) {
       near &= ~(1u << l);
     }
@@ -299,19 +304,13 @@ void link_centers(const Plan& plan, const Pose* poses, double* centers) {
     for (int i = 0; i < 3; ++i) {
       const V c = p.m[i * 3] * link.bound_c[0] + p.m[i * 3 + 1] * link.bound_c[1] + p.m[i * 3 + 2] * link.bound_c[2] +
                   p.m[9 + i];
-      std::memcpy(centers + 3 * kLanes * l + kLanes * i, &c, sizeof c);
+      std::memcpy(centers + 3 * W * l + W * i, &c, sizeof c);
     }
   }
 }
 
-}  // namespace
-
-void PROXY_BATCH_NAME(forward_kinematics)(const Plan& plan, const double* const* lanes, const Scratch& scratch) {
-  forward_kinematics(plan, lanes, reinterpret_cast<Pose*>(scratch.poses));
-}
-
-void PROXY_BATCH_NAME(check_block)(const Plan& plan, const double* const* lanes, unsigned char* out,
-                                   const Scratch& scratch) {
+// One group of W states: the lanes among them that collide.
+unsigned check_group(const Plan& plan, const double* const* lanes, const Scratch& scratch) {
   Pose* poses = reinterpret_cast<Pose*>(scratch.poses);
   forward_kinematics(plan, lanes, poses);
   link_centers(plan, poses, scratch.centers);
@@ -323,14 +322,43 @@ void PROXY_BATCH_NAME(check_block)(const Plan& plan, const double* const* lanes,
     if (near != 0 && pair.graded) near = graded_lanes(plan, pair, lanes, near);
     if (near != 0) hits |= traverse_pair(plan, pair, poses[pair.a], poses[pair.b], near, scratch.stack);
   }
-  for (int l = 0; l < kLanes; ++l) out[l] = (hits >> l) & 1;
+  return hits;
+}
+
+}  // namespace
+
+// Each entry takes kLanes states and runs them as groups of W; a lane's answer does not depend
+// on the group it ran in (every pair in reach of it is tested until one overlaps), so the builds
+// answer alike whatever their width.
+void PROXY_BATCH_NAME(forward_kinematics)(const Plan& plan, const double* const* lanes, const Scratch& scratch,
+                                          double* out) {
+  auto copy = [&](int link, int group) {
+    for (int i = link * 12; i < link * 12 + 12; ++i) {
+      for (int l = 0; l < W; ++l) out[i * kLanes + group + l] = scratch.poses[i * W + l];
+    }
+  };
+  for (int group = 0; group < kLanes; group += W) {
+    forward_kinematics(plan, lanes + group, reinterpret_cast<Pose*>(scratch.poses));
+    copy(plan.root, group);  // the computed links only: the others hold whatever was there
+    for (int k = 0; k < plan.step_count; ++k) copy(plan.steps[k].link, group);
+  }
+}
+
+void PROXY_BATCH_NAME(check_block)(const Plan& plan, const double* const* lanes, unsigned char* out,
+                                   const Scratch& scratch) {
+  for (int group = 0; group < kLanes; group += W) {
+    const unsigned hits = check_group(plan, lanes + group, scratch);
+    for (int l = 0; l < W; ++l) out[group + l] = (hits >> l) & 1;
+  }
 }
 
 void PROXY_BATCH_NAME(sincos)(const double* x, double* s, double* c) {
-  V vs, vc;
-  sincos4(load(x), vs, vc);
-  std::memcpy(s, &vs, sizeof vs);
-  std::memcpy(c, &vc, sizeof vc);
+  for (int group = 0; group < kLanes; group += W) {
+    V vs, vc;
+    sincos_lanes(load(x + group), vs, vc);
+    std::memcpy(s + group, &vs, sizeof vs);
+    std::memcpy(c + group, &vc, sizeof vc);
+  }
 }
 
 }  // namespace bvh_collision::proxy_batch

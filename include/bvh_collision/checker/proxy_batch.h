@@ -1,9 +1,9 @@
 // Batches of boolean self checks on the link proxies, vectorised over states (issue 18, point 3):
-// four states at a time in the lanes of one kernel (src/checker/proxy_batch_kernel.h) that does
-// their forward kinematics, the bounding-sphere broad phase, the clearance grids and one proxy
-// tree traversal for all four lanes. The kernel is built twice, for SSE2 (any x86-64, the default
-// -O2 build) and for AVX2, and the AVX2 one is taken at run time where the CPU has it; both round
-// alike (no fused multiply-add), so they answer alike (test_proxy_batch).
+// states in the lanes of one kernel (src/checker/proxy_batch_kernel.h) that does their forward
+// kinematics, the bounding-sphere broad phase, the clearance grids and one proxy tree traversal
+// for all lanes. The kernel is built twice, for SSE2 (two lanes; any x86-64, the default -O2
+// build) and for AVX2 (four lanes), and the AVX2 one is taken at run time where the CPU has it;
+// both round alike (no fused multiply-add), so they answer alike (test_proxy_batch).
 //
 // Answers keep the proxies' contract (checker/link_proxy.h): a state whose proxies are apart in
 // every checked pair is free (exact distance > padding); one reported colliding has some pair
@@ -42,7 +42,8 @@ class ProxyBatch {
   void check(const RobotCollisionModel& model, const double* states, std::size_t count, double tolerance, char* out,
              SimdPath path = SimdPath::kAuto) const;
   // The kernel's link poses for up to four states (tests): per link 12 values (rotation
-  // row-major, translation) per state, as poses[((link * 12) + e) * 4 + lane].
+  // row-major, translation) per state, as poses[((link * 12) + e) * 4 + lane]; zero for the links
+  // the kinematics plan does not compute.
   std::vector<double> poses(const RobotCollisionModel& model, const double* states, std::size_t count,
                             SimdPath path = SimdPath::kAuto) const;
   // The kernel's sine and cosine of four values (tests).

@@ -64,8 +64,8 @@ struct Plan {
   std::int32_t stack_capacity = 0;  // traversal entries a pair can need at most
 };
 
-// Working memory of one thread: link poses (12 x kLanes doubles per link, 32-byte aligned),
-// link bound centres (3 x kLanes per link, aligned), the traversal stack (3 ints per entry) and
+// Working memory of one thread: link poses (12 x kLanes doubles per link, 32-byte aligned; a
+// kernel of lane width W uses 12 x W), link bound centres (3 x kLanes per link, aligned), the traversal stack (3 ints per entry) and
 // the pairs in reach.
 struct Candidate {
   double key;           // the smallest (centre distance / reach)^2 over the lanes in reach
@@ -83,9 +83,10 @@ struct Scratch {
 // within its padding in that state. Same arithmetic in both, so the same answers.
 void check_block_generic(const Plan& plan, const double* const* lanes, unsigned char* out, const Scratch& scratch);
 void check_block_avx2(const Plan& plan, const double* const* lanes, unsigned char* out, const Scratch& scratch);
-// Forward kinematics alone (tests, benchmarks): the poses of kLanes states into scratch.poses.
-void forward_kinematics_generic(const Plan& plan, const double* const* lanes, const Scratch& scratch);
-void forward_kinematics_avx2(const Plan& plan, const double* const* lanes, const Scratch& scratch);
+// Forward kinematics alone (tests): the poses of kLanes states into out[(link * 12 + e) * kLanes
+// + lane] (rotation row-major, then translation).
+void forward_kinematics_generic(const Plan& plan, const double* const* lanes, const Scratch& scratch, double* out);
+void forward_kinematics_avx2(const Plan& plan, const double* const* lanes, const Scratch& scratch, double* out);
 // sin and cos of kLanes values (tests: against the C library).
 void sincos_generic(const double* x, double* s, double* c);
 void sincos_avx2(const double* x, double* s, double* c);
