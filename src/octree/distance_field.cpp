@@ -1,0 +1,142 @@
+// OctreeDistanceField (octree/distance_field.h): the grid, the occupied voxels from the tree's
+// leaves, and the exact squared distance transform, one axis at a time.
+#include "bvh_collision/octree/distance_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "bvh_collision/geometry/safety_margin.h"
+
+namespace bvh_collision {
+namespace {
+
+constexpr std::uint32_t kFar = std::numeric_limits<std::uint32_t>::max();
+
+// A breakpoint of the lower envelope, num / den with den > 0, or +-infinity.
+struct Breakpoint {
+  std::int64_t num = 0, den = 1;
+  int infinite = 0;  // -1, 0, +1
+};
+bool less_equal(const Breakpoint& a, const Breakpoint& b) {
+  if (a.infinite != 0 || b.infinite != 0) return a.infinite == -1 || b.infinite == 1;
+  return a.num * b.den <= b.num * a.den;
+}
+bool less_than(const Breakpoint& a, std::int64_t q) {
+  if (a.infinite != 0) return a.infinite == -1;
+  return a.num < q * a.den;
+}
+
+// d(q) = min over p with f(p) finite of (q - p)^2 + f(p), f and d over `count` values `stride`
+// apart (Felzenszwalb and Huttenlocher's lower envelope of parabolas, with the intersections
+// kept as exact fractions: every value is an integer below 2^40, so their products fit).
+void transform_line(std::uint32_t* line, std::int64_t count, std::int64_t stride, std::vector<std::int64_t>& f,
+                    std::vector<std::int64_t>& v, std::vector<Breakpoint>& z) {
+  f.resize(count);
+  v.resize(count);
+  z.resize(count + 1);
+  for (std::int64_t q = 0; q < count; ++q) f[q] = line[q * stride] == kFar ? -1 : std::int64_t(line[q * stride]);
+  std::int64_t k = -1;
+  for (std::int64_t q = 0; q < count; ++q) {
+    if (f[q] < 0) continue;
+    Breakpoint s;
+    while (k >= 0) {
+      const std::int64_t p = v[k];
+      s = {(f[q] + q * q) - (f[p] + p * p), 2 * (q - p), 0};  // where q's parabola goes below p's
+      if (!less_equal(s, z[k])) break;
+      --k;
+    }
+    ++k;
+    v[k] = q;
+    z[k] = k == 0 ? Breakpoint{0, 1, -1} : s;
+    z[k + 1] = Breakpoint{0, 1, 1};
+  }
+  if (k < 0) return;  // no occupied voxel on the line: it stays kFar
+  k = 0;
+  for (std::int64_t q = 0; q < count; ++q) {
+    while (less_than(z[k + 1], q)) ++k;
+    const std::int64_t d = (q - v[k]) * (q - v[k]) + f[v[k]];
+    line[q * stride] = static_cast<std::uint32_t>(std::min<std::int64_t>(d, kFar - 1));
+  }
+}
+
+std::int64_t voxel_of(double x, double resolution) { return static_cast<std::int64_t>(std::floor(x / resolution)); }
+
+}  // namespace
+
+OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& lo, const Vec3& hi, double cap,
+                                               std::size_t max_cells) {
+  if (!lo.allFinite() || !hi.allFinite() || (hi - lo).minCoeff() < 0.0) {
+    throw std::invalid_argument("distance field: the box must be finite and not empty");
+  }
+  if (!(cap > 0.0) || !std::isfinite(cap)) throw std::invalid_argument("distance field: the cap must be positive and finite");
+  OctreeDistanceField field;
+  const double res = tree.resolution();
+  field.resolution_ = res;
+  field.cap_ = cap;
+  const std::int64_t pad = static_cast<std::int64_t>(std::ceil(cap / res)) + 1;
+  std::size_t cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    field.inner_lo_[a] = voxel_of(lo[a], res);
+    field.inner_hi_[a] = voxel_of(hi[a], res);
+    field.grid_lo_[a] = field.inner_lo_[a] - pad;
+    field.size_[a] = field.inner_hi_[a] - field.inner_lo_[a] + 1 + 2 * pad;
+    if (field.size_[a] > 60000 || cells * std::size_t(field.size_[a]) > max_cells) {
+      throw std::invalid_argument("distance field: the box and cap need more than " + std::to_string(max_cells) +
+                                  " cells at this resolution");
+    }
+    cells *= std::size_t(field.size_[a]);
+  }
+  field.squared_.assign(cells, kFar);
+  const std::int64_t sx = field.size_[0], sy = field.size_[1], sz = field.size_[2];
+  auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return (x * sy + y) * sz + z; };
+  // The occupied voxels: every voxel of each occupied leaf (a pruned leaf is a cube of them).
+  const Vec3 grid_min = Vec3(double(field.grid_lo_[0]), double(field.grid_lo_[1]), double(field.grid_lo_[2])) * res;
+  const Vec3 grid_max = grid_min + Vec3(double(sx), double(sy), double(sz)) * res;
+  for (const Octree::Leaf& leaf : tree.occupied_in_box(grid_min, grid_max)) {
+    const std::int64_t side = std::int64_t(1) << (kOctreeDepth - leaf.depth);
+    std::int64_t b[3], e[3];
+    for (int a = 0; a < 3; ++a) {
+      const std::int64_t first = std::int64_t(leaf.key.k[a]) - kOctreeKeyOffset - field.grid_lo_[a];
+      b[a] = std::max<std::int64_t>(0, first);
+      e[a] = std::min<std::int64_t>(field.size_[a], first + side);
+    }
+    for (std::int64_t x = b[0]; x < e[0]; ++x) {
+      for (std::int64_t y = b[1]; y < e[1]; ++y) {
+        for (std::int64_t z = b[2]; z < e[2]; ++z) field.squared_[at(x, y, z)] = 0;
+      }
+    }
+  }
+  // Separable: along z, then y, then x (a squared distance sums its axes' squares).
+  std::vector<std::int64_t> f, v;
+  std::vector<Breakpoint> zs;
+  std::uint32_t* d = field.squared_.data();
+  for (std::int64_t x = 0; x < sx; ++x) {
+    for (std::int64_t y = 0; y < sy; ++y) transform_line(d + at(x, y, 0), sz, 1, f, v, zs);
+  }
+  for (std::int64_t x = 0; x < sx; ++x) {
+    for (std::int64_t z = 0; z < sz; ++z) transform_line(d + at(x, 0, z), sy, sz, f, v, zs);
+  }
+  for (std::int64_t y = 0; y < sy; ++y) {
+    for (std::int64_t z = 0; z < sz; ++z) transform_line(d + at(0, y, z), sx, sy * sz, f, v, zs);
+  }
+  return field;
+}
+
+double OctreeDistanceField::lower_bound(const Vec3& p) const {
+  if (squared_.empty() || !p.allFinite()) return 0.0;
+  std::int64_t i[3];
+  for (int a = 0; a < 3; ++a) {
+    i[a] = voxel_of(p[a], resolution_);
+    if (i[a] < inner_lo_[a] || i[a] > inner_hi_[a]) return 0.0;
+    i[a] -= grid_lo_[a];
+  }
+  const std::uint32_t squared = squared_[(i[0] * size_[1] + i[1]) * size_[2] + i[2]];
+  const double bound =
+      squared == kFar ? cap_ : std::min((std::sqrt(double(squared)) - std::sqrt(3.0)) * resolution_, cap_);
+  // The margin covers p / res rounded across a voxel face and the square root's rounding.
+  return std::max(0.0, bound - kVolumeMargin * (1.0 + p.lpNorm<Eigen::Infinity>() + cap_));
+}
+
+}  // namespace bvh_collision
