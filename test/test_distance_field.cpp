@@ -8,7 +8,12 @@
 #include <cmath>
 #include <random>
 
+#include <sstream>
+
+#include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/robot/package_resolver.h"
+#include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/octree/distance_field.h"
 #include "robot_data.h"
 
@@ -124,6 +129,115 @@ TEST(OctreeDistanceField, OutsideItsBoxItKnowsNothingAndEmptyTreesAreFarEverywhe
   EXPECT_THROW(OctreeDistanceField::build(tree, Vec3::Zero(), Vec3::Ones(), 0.0), std::invalid_argument);
   EXPECT_THROW(OctreeDistanceField::build(tree, Vec3::Zero(), Vec3(std::nan(""), 1, 1), 0.1), std::invalid_argument);
   EXPECT_THROW(OctreeDistanceField::build(tree, Vec3::Zero(), Vec3::Constant(100.0), 0.1), std::invalid_argument);
+}
+
+// The revision that keeps a field with its tree: every change gives a new one, a copy keeps it.
+TEST(OctreeRevision, EveryChangeGivesANewOneAndACopyKeepsIt) {
+  Octree tree(0.05);
+  std::uint64_t last = tree.revision();
+  auto changed = [&] {
+    const bool fresh = tree.revision() != last;
+    last = tree.revision();
+    return fresh;
+  };
+  tree.update(key_at(1, 2, 3), true);
+  EXPECT_TRUE(changed());
+  tree.update_sorted({key_at(4, 4, 4)}, true);
+  EXPECT_TRUE(changed());
+  const Octree copy = tree;
+  EXPECT_EQ(copy.revision(), tree.revision());
+  tree.clear_box(Vec3::Constant(-1.0), Vec3::Constant(1.0));
+  EXPECT_TRUE(changed());
+  EXPECT_NE(copy.revision(), tree.revision());
+  tree.update(key_at(1, 2, 3), true);
+  EXPECT_TRUE(changed());
+  tree.clear();
+  EXPECT_TRUE(changed());
+  std::stringstream stream;
+  copy.write_nodes(stream);
+  const Octree read = Octree::read_nodes(stream, 0.05);
+  EXPECT_NE(read.revision(), copy.revision());  // equal voxels, but no revision is ever reused
+  EXPECT_NE(Octree(0.05).revision(), Octree(0.05).revision());
+}
+
+TEST(OctreeDistanceField, TheEnvironmentKeepsItUntilTheOctreeChanges) {
+  Environment env(0.05);
+  env.octree().update(key_at(3, 3, 3), true);
+  const auto a = env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2);
+  ASSERT_NE(a, nullptr);
+  EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-0.4), Vec3::Constant(0.5), 0.1), a);  // covered
+  const Environment copy = env;
+  EXPECT_EQ(copy.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2), a);  // shared
+  EXPECT_NE(env.octree_distance_field(Vec3::Constant(-0.6), Vec3::Constant(0.5), 0.2), a);  // a larger box
+  env.octree().update(key_at(-3, 3, 3), true);
+  const auto b = env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2);
+  ASSERT_NE(b, nullptr);
+  EXPECT_NE(b, a);
+  EXPECT_LE(b->lower_bound(Vec3(-0.125, 0.175, 0.175)), 0.0);  // the new voxel is seen
+  EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-50.0), Vec3::Constant(50.0), 0.2), nullptr);  // too many cells
+  env.octree().update(key_at(-4, 3, 3), true);
+  EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2, 1 << 24, false), nullptr);
+  const auto c = env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2);
+  EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2, 1 << 24, false), c);
+}
+
+// Environment checks with the field answer as without it, state by state (at tolerance 0 the
+// answers are exact, so equal), on the demo arm amid random boxes, with a moved base, and after
+// the octree changes under a kept field.
+TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
+  RobotModel m = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
+                                       PackageResolver({}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
+  CheckerOptions options;
+  options.padding = 0.01;
+  const CollisionChecker checker(std::move(m), std::move(acm), options);
+  Environment env(0.02);
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int box = 0; box < 40; ++box) {
+    const Vec3 lo(u(rng), u(rng), 0.5 * (u(rng) + 1.0));
+    for (double x = 0; x < 0.1; x += 0.01) {
+      for (double y = 0; y < 0.1; y += 0.01) env.octree().update(*env.octree().grid().key(lo + Vec3(x, y, 0.0)), true);
+    }
+  }
+  int cleared_some = 0;
+  for (int round = 0; round < 3; ++round) {
+    if (round == 1) {  // the kept field is stale now: voxels go, and new ones come near the arm
+      env.octree().clear_box(Vec3(-1.0, -1.0, 0.0), Vec3(0.0, 1.0, 1.0));
+      for (double x = -0.4; x < 0.4; x += 0.02) {
+        for (double y = -0.4; y < 0.4; y += 0.02) env.octree().update(*env.octree().grid().key(Vec3(x, y, 0.45)), true);
+      }
+    }
+    for (int i = 0; i < test::sized(600); ++i) {
+      const std::vector<double> q = random_configuration(checker.model(), rng);
+      EnvironmentRequest plain;
+      if (round == 2) plain.root_pose.t = Vec3(0.1, -0.2, 0.05);
+      plain.all_links = i % 2 == 0;
+      EnvironmentRequest with = plain;
+      with.distance_field = EnvironmentRequest::DistanceField::kBuild;
+      const EnvironmentResult a = checker.check_environment(q.data(), env, plain);
+      const EnvironmentResult b = checker.check_environment(q.data(), env, with);
+      ASSERT_EQ(a.collision, b.collision) << "round " << round << ", state " << i;
+      if (plain.all_links) {
+        ASSERT_EQ(a.contacts.size(), b.contacts.size()) << "round " << round << ", state " << i;
+      }
+      // That the field did clear links: the same test the check makes, on the link centres (a
+      // copy builds its own, so the environment's kept field stays the checker's).
+      if (i % 50 != 0) continue;
+      const Environment probe = env;
+      const Vec3 reach = Vec3::Constant(checker.collision_model().reach());
+      const auto field = probe.octree_distance_field(plain.root_pose.t - reach, plain.root_pose.t + reach, 0.3);
+      ASSERT_NE(field, nullptr);
+      std::vector<Transform> poses;
+      checker.collision_model().kinematics().compute(q.data(), poses);
+      for (std::size_t l = 0; l < poses.size(); ++l) {
+        const LinkBound& bound = checker.collision_model().bounds()[l];
+        if (bound.radius < 0) continue;
+        cleared_some += field->lower_bound(plain.root_pose * (poses[l] * bound.center)) > bound.radius + 0.01;
+      }
+    }
+  }
+  EXPECT_GT(cleared_some, 0);
 }
 
 }  // namespace

@@ -173,6 +173,10 @@ std::vector<bool> CollisionChecker::check_self_batch(const double* states, std::
   return std::vector<bool>(out.begin(), out.end());
 }
 
+namespace {
+constexpr std::size_t kFieldBatch = 20000;
+}  // namespace
+
 std::vector<char> CollisionChecker::check_batch(const double* states, std::size_t count, const Environment* env,
                                                 const BatchRequest& request) const {
   if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
@@ -182,6 +186,11 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   EnvironmentRequest environment;
   environment.tolerance = request.tolerance;
   environment.root_pose = request.root_pose;
+  // The octree's distance field lets most links skip the octree (answers unchanged): a batch
+  // uses one already kept for this octree, and builds it when large enough to pay for it
+  // (~48 ms for panda at 2 cm against ~2.7 us saved a state).
+  environment.distance_field = count >= kFieldBatch ? EnvironmentRequest::DistanceField::kBuild
+                                                    : EnvironmentRequest::DistanceField::kIfKept;
   const std::size_t stride = m_->robot().variable_count();
   const ProxyLevel* proxies = request.self ? m_->proxies_for(request.tolerance) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment

@@ -1,6 +1,7 @@
 #include "bvh_collision/checker/environment.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 
@@ -84,6 +85,38 @@ CollisionObject make_object(const std::string& id, const ObjectShape& shape, con
 }  // namespace
 
 Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
+
+Environment::Environment(const Environment& other)
+    : octree_(other.octree_), objects_(other.objects_), field_(std::atomic_load(&other.field_)) {}
+
+Environment& Environment::operator=(const Environment& other) {
+  if (this == &other) return *this;
+  octree_ = other.octree_;
+  objects_ = other.objects_;
+  std::atomic_store(&field_, std::atomic_load(&other.field_));
+  return *this;
+}
+
+std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
+                                                                              std::size_t max_cells, bool build) const {
+  const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
+  if (kept && kept->revision == octree_.revision() && kept->cap >= cap && (kept->lo.array() <= lo.array()).all() &&
+      (kept->hi.array() >= hi.array()).all()) {
+    return std::shared_ptr<const OctreeDistanceField>(kept, &kept->field);
+  }
+  if (!build) return nullptr;
+  auto fresh = std::make_shared<FieldCache>();
+  fresh->revision = octree_.revision();
+  fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
+  try {
+    fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
+  } catch (const std::invalid_argument&) {
+    return nullptr;  // too large a box at this resolution (or not finite): no field
+  }
+  std::shared_ptr<const FieldCache> out = std::move(fresh);
+  std::atomic_store(&field_, out);
+  return std::shared_ptr<const OctreeDistanceField>(out, &out->field);
+}
 
 void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
   CollisionObject o = make_object(id, shape, pose);  // throws before anything changes

@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
 namespace {
@@ -106,6 +107,17 @@ double CollisionChecker::link_object_distance(int link, const Transform& pose, c
   return best;
 }
 
+// The distance field over the robot's reach around its root (RobotCollisionModel::reach: every
+// link point of a state within limits), far enough for the largest link bound and padding.
+std::shared_ptr<const OctreeDistanceField> CollisionChecker::octree_field(const Environment& env, const Transform& root_pose,
+                                                                        bool build) const {
+  double cap = 0.0;
+  for (std::size_t l = 0; l < m_->bounds().size(); ++l) cap = std::max(cap, m_->bounds()[l].radius + m_->paddings()[l]);
+  const Vec3 reach = Vec3::Constant(m_->reach());
+  return env.octree_distance_field(root_pose.t - reach, root_pose.t + reach, cap + env.octree().resolution(),
+                                   std::size_t(1) << 24, build);
+}
+
 EnvironmentResult CollisionChecker::check_environment(const double* state, const Environment& env,
                                                       const EnvironmentRequest& request) const {
   EnvironmentResult result;
@@ -117,10 +129,19 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
   }
   const bool use_octree = request.octree && !env.octree().empty();
   const bool stop_early = !request.all_links && !request.distance;
+  using Field = EnvironmentRequest::DistanceField;
+  const std::shared_ptr<const OctreeDistanceField> field =
+      use_octree && request.distance_field != Field::kOff
+          ? octree_field(env, request.root_pose, request.distance_field == Field::kBuild)
+          : nullptr;
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
     if (m_->shapes()[l].empty()) continue;
     const int link = static_cast<int>(l);
-    bool hit = use_octree && link_meets_octree(link, poses[l], env.octree(), request, result);
+    // Cleared: every point of the link is farther than its padding from every occupied cube.
+    const LinkBound& bound = m_->bounds()[l];
+    const bool cleared = field && field->lower_bound(poses[l] * bound.center) >
+                                      grown_radius(bound.radius + m_->paddings()[l]) + pose_margin(poses[l].t.norm() + bound.center.norm());
+    bool hit = use_octree && !cleared && link_meets_octree(link, poses[l], env.octree(), request, result);
     for (std::size_t o = 0; request.objects && o < env.objects().size() && !(hit && !request.all_links); ++o) {
       hit = link_meets_object(link, poses[l], env.objects()[o], request, result) || hit;
     }

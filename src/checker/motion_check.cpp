@@ -61,6 +61,7 @@ bool collides_with_environment(const CollisionChecker& checker, const double* st
   EnvironmentRequest r;
   r.tolerance = request.tolerance;
   r.root_pose = request.root_pose;
+  r.distance_field = EnvironmentRequest::DistanceField::kIfKept;  // one already built for this octree
   return checker.check_environment(state, env, r).collision;
 }
 

@@ -1,6 +1,7 @@
 #include "bvh_collision/octree/octree.h"
 
 #include <algorithm>
+#include <atomic>
 #include <istream>
 #include <limits>
 #include <ostream>
@@ -16,7 +17,13 @@ Octree::Octree(double resolution, const OccupancyModel& model) : grid_(resolutio
   }
 }
 
+std::uint64_t Octree::next_revision() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
 void Octree::clear() {
+  revision_ = next_revision();
   nodes_.clear();
   nodes_.shrink_to_fit();
   free_blocks_.clear();
@@ -77,6 +84,7 @@ void Octree::update(const OctreeKey& key, float change) {
   if (const auto found = find(key)) {
     if (at_clamp(found->log_odds, change)) return;
   }
+  revision_ = next_revision();
   bool created_root = false;
   if (nodes_.empty()) {
     nodes_.push_back(Node{});
@@ -119,6 +127,7 @@ std::int32_t Octree::add_child(std::int32_t node, int b) {
 
 void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
   if (keys.empty()) return;
+  revision_ = next_revision();
   bool created_root = false;
   if (nodes_.empty()) {
     nodes_.push_back(Node{});
@@ -245,6 +254,7 @@ Octree Octree::read_nodes(std::istream& in, double resolution, const OccupancyMo
   tree.nodes_.push_back(Node{});
   tree.node_count_ = 1;
   tree.read_below(0, 0, in);
+  tree.revision_ = next_revision();
   return tree;
 }
 

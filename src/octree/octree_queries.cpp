@@ -185,6 +185,7 @@ void Octree::clear_box(const Vec3& min, const Vec3& max) {
   if (nodes_.empty() || !min.allFinite() || !max.allFinite() || !(min.array() <= max.array()).all()) return;
   const KeyRange range = key_range(grid_, min, max);
   if (!meets(range, OctreeKey{}, 0)) return;
+  revision_ = next_revision();
   if (clear_below(0, OctreeKey{}, 0, range.lo, range.hi)) clear();
 }
 

@@ -9,6 +9,7 @@
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/octree/distance_field.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -48,6 +49,11 @@ class Environment {
  public:
   // Throws std::invalid_argument for a resolution that is not a positive finite number.
   explicit Environment(double octree_resolution, const OccupancyModel& model = {});
+  // Copies share the distance field already built (it belongs to the octree's revision).
+  Environment(const Environment& other);
+  Environment& operator=(const Environment& other);
+  Environment(Environment&&) = default;
+  Environment& operator=(Environment&&) = default;
 
   Octree& octree() { return octree_; }
   const Octree& octree() const { return octree_; }
@@ -63,9 +69,25 @@ class Environment {
   const std::vector<CollisionObject>& objects() const { return objects_; }
   const CollisionObject* find_object(const std::string& id) const;
 
+  // The octree's distance field (octree/distance_field.h) over at least [lo, hi] with at least
+  // `cap`, built on the first call and kept until the octree changes (its revision) or a box or
+  // cap it does not cover is asked for; null when that would take more than `max_cells` cells.
+  // Safe to call from several threads on one environment (two may build it; one is kept).
+  // With build = false, only a field already kept (else null).
+  std::shared_ptr<const OctreeDistanceField> octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
+                                                                   std::size_t max_cells = std::size_t(1) << 24,
+                                                                   bool build = true) const;
+
  private:
+  struct FieldCache {
+    std::uint64_t revision = 0;
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+    double cap = 0.0;
+    OctreeDistanceField field;
+  };
   Octree octree_;
   std::vector<CollisionObject> objects_;
+  mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
 };
 
 }  // namespace bvh_collision

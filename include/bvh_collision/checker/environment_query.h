@@ -19,6 +19,14 @@ struct EnvironmentRequest {
   bool octree = true;      // check against the octree...
   bool objects = true;     // ...and against the collision objects
   Transform root_pose;     // the root link in the environment's (world) frame: a moving base
+  // Boolean checks: a link whose bounding sphere the octree's distance field clears (the field
+  // proves every occupied cube farther than its radius + padding) skips the octree. The field
+  // covers the robot's reach around the root; it is built on first use (tens of ms for a 2 cm
+  // map around an arm) and kept until the octree changes (Environment::octree_distance_field),
+  // so it pays for large batches and for many queries on one environment (a 2 cm map around
+  // panda: 48 ms to build, then 6.4 -> 3.7 us a state). Answers are unchanged.
+  enum class DistanceField { kOff, kIfKept, kBuild };
+  DistanceField distance_field = DistanceField::kOff;  // kIfKept: only a field already built
 };
 
 struct EnvironmentContact {

@@ -114,6 +114,10 @@ class Octree {
   static Octree read_nodes(std::istream& in, double resolution, const OccupancyModel& model = {});
 
   bool empty() const { return nodes_.empty(); }
+  // Changes with every update, clear and read, and is never reused by any tree of the process:
+  // two trees (a tree and its copy) with the same revision hold the same voxels, so what is
+  // computed from a tree (a distance field) can be kept with its revision.
+  std::uint64_t revision() const { return revision_; }
   std::size_t node_count() const { return node_count_; }
   std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + free_blocks_.capacity() * sizeof(std::int32_t); }
   void clear();
@@ -147,6 +151,8 @@ class Octree {
   std::vector<Node> nodes_;               // nodes_[0] is the root once anything was observed
   std::vector<std::int32_t> free_blocks_;  // released blocks, reused first
   std::size_t node_count_ = 0;
+  std::uint64_t revision_ = next_revision();
+  static std::uint64_t next_revision();
 };
 
 }  // namespace bvh_collision
