@@ -223,7 +223,7 @@ TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
       }
       // That the field did clear links: the same test the check makes, on the link centres (a
       // copy builds its own, so the environment's kept field stays the checker's).
-      if (i % 50 != 0) continue;
+      if (i % 150 != 0) continue;
       const Environment probe = env;
       const Vec3 reach = Vec3::Constant(checker.collision_model().reach());
       const auto field = probe.octree_distance_field(plain.root_pose.t - reach, plain.root_pose.t + reach, 0.3);
@@ -238,6 +238,56 @@ TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
     }
   }
   EXPECT_GT(cleared_some, 0);
+}
+
+// check_batch checks the links no joint moves once (the demo arm's base): with a slab through
+// the base every state collides, with the slab 1 mm below it the batch answers as one state at a
+// time; with the distance field kept and without.
+TEST(OctreeDistanceField, BatchesCheckTheFixedLinksOnceAndAnswerAsOneByOne) {
+  RobotModel m = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
+                                       PackageResolver({}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
+  const CollisionChecker checker(std::move(m), std::move(acm));
+  std::mt19937_64 rng(37);
+  std::vector<double> flat;
+  const int count = test::sized(400);
+  for (int i = 0; i < count; ++i) {
+    const std::vector<double> q = random_configuration(checker.model(), rng);
+    flat.insert(flat.end(), q.begin(), q.end());
+  }
+  for (const double slab : {0.01, -0.03}) {  // the base is the box z in [0, 0.1]; slab voxels 2 cm
+    Environment env(0.02);
+    for (double x = -0.6; x < 0.6; x += 0.01) {
+      for (double y = -0.6; y < 0.6; y += 0.01) env.octree().update(*env.octree().grid().key(Vec3(x, y, slab)), true);
+    }
+    for (int box = 0; box < 20; ++box) {
+      const Vec3 c(std::uniform_real_distribution<double>(-0.8, 0.8)(rng), std::uniform_real_distribution<double>(-0.8, 0.8)(rng),
+                   std::uniform_real_distribution<double>(0.2, 0.9)(rng));
+      env.octree().update(*env.octree().grid().key(c), true);
+    }
+    for (const bool field : {false, true}) {
+      if (field) {
+        EnvironmentRequest build;
+        build.distance_field = EnvironmentRequest::DistanceField::kBuild;
+        checker.check_environment(flat.data(), env, build);
+      }
+      BatchRequest request;
+      request.self = false;
+      const std::vector<char> batch = checker.check_batch(flat.data(), count, &env, request);
+      int colliding = 0;
+      for (int i = 0; i < count; ++i) {
+        const bool one = checker.check_environment(flat.data() + i * checker.model().variable_count(), env).collision;
+        ASSERT_EQ(batch[i] != 0, one) << "slab at " << slab << ", state " << i << ", field " << field;
+        colliding += one;
+      }
+      if (slab > 0) {
+        EXPECT_EQ(colliding, count);
+      } else {
+        EXPECT_LT(colliding, count);
+        EXPECT_GT(colliding, 0);
+      }
+    }
+  }
 }
 
 }  // namespace

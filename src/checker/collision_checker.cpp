@@ -177,6 +177,25 @@ namespace {
 constexpr std::size_t kFieldBatch = 20000;
 }  // namespace
 
+// Per link with geometry: moved by some joint (a revolute, continuous, prismatic, floating or
+// planar joint on its chain to the root), or fixed. False when no link is fixed.
+bool CollisionChecker::split_fixed_links(std::vector<char>& moving, std::vector<char>& fixed) const {
+  const RobotModel& robot = m_->robot();
+  moving.assign(robot.links().size(), 0);
+  fixed.assign(robot.links().size(), 0);
+  bool any = false;
+  for (std::size_t l = 0; l < robot.links().size(); ++l) {
+    if (m_->shapes()[l].empty()) continue;
+    bool moves = false;
+    for (int j = robot.links()[l].parent_joint; j >= 0 && !moves; j = robot.links()[robot.joints()[j].parent_link].parent_joint) {
+      moves = robot.joints()[j].type != JointType::kFixed;
+    }
+    (moves ? moving : fixed)[l] = 1;
+    any = any || !moves;
+  }
+  return any;
+}
+
 std::vector<char> CollisionChecker::check_batch(const double* states, std::size_t count, const Environment* env,
                                                 const BatchRequest& request) const {
   if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
@@ -192,6 +211,15 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   environment.distance_field = count >= kFieldBatch ? EnvironmentRequest::DistanceField::kBuild
                                                     : EnvironmentRequest::DistanceField::kIfKept;
   const std::size_t stride = m_->robot().variable_count();
+  // Links no joint moves (the root's, and those fixed to it) sit where the root pose puts them in
+  // every state: checked once for the batch, and a collision there is every state's.
+  std::vector<char> moving, fixed;
+  if (request.environment && count > 1 && split_fixed_links(moving, fixed)) {
+    EnvironmentRequest once = environment;
+    once.only_links = &fixed;
+    if (check_environment(states, *env, once).collision) return std::vector<char>(count, 1);
+    environment.only_links = &moving;
+  }
   const ProxyLevel* proxies = request.self ? m_->proxies_for(request.tolerance) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment
   // only for the states found free.

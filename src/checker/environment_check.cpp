@@ -134,8 +134,9 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
       use_octree && request.distance_field != Field::kOff
           ? octree_field(env, request.root_pose, request.distance_field == Field::kBuild)
           : nullptr;
+  const std::vector<char>* only = request.only_links;
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
-    if (m_->shapes()[l].empty()) continue;
+    if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);
     // Cleared: every point of the link is farther than its padding from every occupied cube.
     const LinkBound& bound = m_->bounds()[l];
@@ -150,7 +151,7 @@ EnvironmentResult CollisionChecker::check_environment(const double* state, const
   if (!request.distance) return result;
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
-    if (m_->shapes()[l].empty()) continue;
+    if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);
     if (use_octree) best = link_octree_distance(link, poses[l], env.octree(), best, request.solids, result);
     for (std::size_t o = 0; request.objects && o < env.objects().size(); ++o) {

@@ -111,6 +111,7 @@ class CollisionChecker {
   double pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
                        const SelfCollisionRequest& request, SelfCollisionResult& result) const;
 
+  bool split_fixed_links(std::vector<char>& moving, std::vector<char>& fixed) const;
   std::shared_ptr<const OctreeDistanceField> octree_field(const Environment& env, const Transform& root_pose,
                                                           bool build) const;
   bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,
