@@ -302,15 +302,9 @@ void speed_error_octree_table(const std::vector<ScanPoint>& scan, const Vec3& ca
       t_batch.push_back(bench::us_per_item(n, [&] { many = checker.check_batch(flat.data(), n, &env, batch); }));
     }
     for (const auto& [mode, hits, times] : {std::tuple{"single", &single, &t_single}, std::tuple{"batch", &many, &t_batch}}) {
-      std::size_t fp = 0, fn = 0;
-      double farthest = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const bool hit = (*hits)[i] != 0, colliding = distance[i] <= 0.0;
-        fn += colliding && !hit;
-        if (hit && !colliding) ++fp, farthest = std::max(farthest, distance[i]);
-      }
-      table.row({"panda", "octree", mm, mode, bench::spread(*times).median, 100.0 * fp / n, static_cast<double>(fn),
-                 farthest * 1000, exact.fcl.median, 0.0, 0.0, 0.0});
+      const bench::AnswerErrors e = bench::answer_errors(*hits, distance);
+      table.row({"panda", "octree", mm, mode, bench::spread(*times).median, 100.0 * e.false_positives / n,
+                 static_cast<double>(e.false_negatives), e.farthest_false_positive * 1000, exact.fcl.median, 0.0, 0.0, 0.0});
     }
   }
   table.note(std::to_string(n) + " uniform random panda states, solids, adjacent-link matrix; the truth is our exact "

@@ -518,15 +518,9 @@ void speed_error_rows(const Robot& robot, FclPipeline& fcl_pipeline, const std::
     const Spread batch_time = bench::spread(runs);
     const ProxyLevel* level = checker.collision_model().proxies_for(tolerances_mm[t] * 1e-3);
     for (const auto& [mode, hits, time] : {std::tuple{"single", &single[t], times[t]}, std::tuple{"batch", &batch[t], batch_time}}) {
-      std::size_t fp = 0, fn = 0;
-      double farthest = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const bool hit = (*hits)[i] != 0, colliding = truth[i] <= 0.0;
-        fn += colliding && !hit;
-        if (hit && !colliding) ++fp, farthest = std::max(farthest, truth[i]);
-      }
-      table.row({robot.name, "self", tolerances_mm[t], mode, time.median, 100.0 * fp / n, static_cast<double>(fn),
-                 farthest * 1000, times.back().median, level ? level->level * 1000 : 0.0,
+      const bench::AnswerErrors e = bench::answer_errors(*hits, truth);
+      table.row({robot.name, "self", tolerances_mm[t], mode, time.median, 100.0 * e.false_positives / n,
+                 static_cast<double>(e.false_negatives), e.farthest_false_positive * 1000, times.back().median, level ? level->level * 1000 : 0.0,
                  level ? static_cast<double>(level->leaves) : 0.0, level ? level->build_seconds : 0.0});
     }
   }

@@ -99,6 +99,22 @@ double us_per_item(std::size_t count, F&& f) {
   return time_us(std::forward<F>(f)) / static_cast<double>(std::max<std::size_t>(count, 1));
 }
 
+// Boolean answers against exact distances (<= 0: colliding): false positives, false negatives
+// and the farthest false positive, as the speed-against-error tables report them.
+struct AnswerErrors {
+  std::size_t false_positives = 0, false_negatives = 0;
+  double farthest_false_positive = 0.0;
+};
+inline AnswerErrors answer_errors(const std::vector<char>& hits, const std::vector<double>& distance) {
+  AnswerErrors e;
+  for (std::size_t i = 0; i < hits.size(); ++i) {
+    const bool hit = hits[i] != 0, colliding = distance[i] <= 0.0;
+    e.false_negatives += colliding && !hit;
+    if (hit && !colliding) ++e.false_positives, e.farthest_false_positive = std::max(e.farthest_false_positive, distance[i]);
+  }
+  return e;
+}
+
 // One table of the report: columns, rows of numbers or text, notes. Written as
 // <dir>/tables/<id>.json ({id, title, machine, columns, rows, notes}; a number that is not
 // finite is null) and printed as markdown, so that a benchmark's console output reads alone.

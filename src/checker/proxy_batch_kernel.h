@@ -88,25 +88,16 @@ inline void sincos_lanes(V x, V& s, V& c) {
   const V k = shifted - splat(kRoundShift);
   const V r = ((x - k * splat(kPiOver2Hi)) - k * splat(kPiOver2Mid)) - k * splat(kPiOver2Lo);
   const V r2 = r * r;
-  // 1/n! for n = 3, 5, ..., 17 and n = 2, 4, ..., 18, signs alternating.
-  V ps = splat(1.0 / 355687428096000.0);
-  ps = ps * r2 - splat(1.0 / 1307674368000.0);
-  ps = ps * r2 + splat(1.0 / 6227020800.0);
-  ps = ps * r2 - splat(1.0 / 39916800.0);
-  ps = ps * r2 + splat(1.0 / 362880.0);
-  ps = ps * r2 - splat(1.0 / 5040.0);
-  ps = ps * r2 + splat(1.0 / 120.0);
-  ps = ps * r2 - splat(1.0 / 6.0);
+  // Horner over 1/n!, signs alternating: sine n = 17, 15, ..., 3, cosine n = 18, 16, ..., 2.
+  constexpr double kSine[] = {1.0 / 355687428096000.0, -1.0 / 1307674368000.0, 1.0 / 6227020800.0, -1.0 / 39916800.0,
+                              1.0 / 362880.0, -1.0 / 5040.0, 1.0 / 120.0, -1.0 / 6.0};
+  constexpr double kCosine[] = {1.0 / 6402373705728000.0, -1.0 / 20922789888000.0, 1.0 / 87178291200.0,
+                                -1.0 / 479001600.0, 1.0 / 3628800.0, -1.0 / 40320.0, 1.0 / 720.0, -1.0 / 24.0, 0.5};
+  V ps = splat(kSine[0]);
+  for (int i = 1; i < 8; ++i) ps = ps * r2 + splat(kSine[i]);
   const V sin_r = r + r * r2 * ps;
-  V pc = splat(1.0 / 6402373705728000.0);
-  pc = pc * r2 - splat(1.0 / 20922789888000.0);
-  pc = pc * r2 + splat(1.0 / 87178291200.0);
-  pc = pc * r2 - splat(1.0 / 479001600.0);
-  pc = pc * r2 + splat(1.0 / 3628800.0);
-  pc = pc * r2 - splat(1.0 / 40320.0);
-  pc = pc * r2 + splat(1.0 / 720.0);
-  pc = pc * r2 - splat(1.0 / 24.0);
-  pc = pc * r2 + splat(0.5);
+  V pc = splat(kCosine[0]);
+  for (int i = 1; i < 9; ++i) pc = pc * r2 + splat(kCosine[i]);
   const V cos_r = splat(1.0) - r2 * pc;
   // Quadrant k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
   const M zero = {};
