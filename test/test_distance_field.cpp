@@ -77,6 +77,43 @@ Truth brute_force(const Octree& tree, const Vec3& p) {
   return t;
 }
 
+// The grid's own occupancy answers "does this ball meet an occupied cube?" exactly: against the
+// brute-force distance to every occupied leaf (the pruned block included), balls on faces and
+// corners and touching cubes; nothing when the ball leaves the grid.
+TEST(OctreeDistanceField, BallTestEqualsBruteForce) {
+  for (const std::uint64_t seed : {4u, 5u}) {
+    const Octree tree = scene(seed);
+    const double res = tree.resolution(), cap = 0.3;
+    const Vec3 lo(-0.5, -0.45, -0.5), hi(0.5, 0.55, 0.45);
+    const OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, cap);
+    std::mt19937_64 rng(seed + 20);
+    std::uniform_real_distribution<double> x(lo.x(), hi.x()), y(lo.y(), hi.y()), z(lo.z(), hi.z()), radius(0.0, 0.2);
+    std::uniform_int_distribution<int> face(-9, 9);
+    int meets = 0, misses = 0;
+    for (int i = 0; i < test::sized(3000); ++i) {
+      Vec3 p(x(rng), y(rng), z(rng));
+      if (i % 3 == 1) p.x() = face(rng) * res;
+      if (i % 3 == 2) p = Vec3(face(rng), face(rng), face(rng)) * res;
+      const double d = brute_force(tree, p).distance;
+      // Half the balls just reach their nearest cube (touching counts).
+      const double r = i % 2 == 0 ? std::min(d, 0.25) : radius(rng);
+      const std::optional<bool> answer = field.ball_meets_occupied(p, r);
+      ASSERT_TRUE(answer.has_value()) << "p = " << p.transpose() << ", r = " << r;
+      if (d <= r) {
+        ASSERT_TRUE(*answer) << "p = " << p.transpose() << ", r = " << r << ", d = " << d;
+      }
+      if (*answer) {
+        ASSERT_LE(d, r * (1 + 1e-12) + 1e-12) << "p = " << p.transpose() << ", r = " << r;
+      }
+      ++(*answer ? meets : misses);
+    }
+    EXPECT_GT(meets, 100);
+    EXPECT_GT(misses, 100);
+    EXPECT_FALSE(field.ball_meets_occupied(Vec3(0.5, 0.0, 0.0), cap + 5 * res).has_value());  // leaves the grid
+    EXPECT_FALSE(field.ball_meets_occupied(Vec3(2.0, 0.0, 0.0), 0.01).has_value());
+  }
+}
+
 TEST(OctreeDistanceField, BoundsEqualTheExactTransformAndNeverExceedTheDistance) {
   for (const std::uint64_t seed : {1u, 2u, 3u}) {
     const Octree tree = scene(seed);
@@ -211,6 +248,7 @@ TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
     for (int i = 0; i < test::sized(600); ++i) {
       const std::vector<double> q = random_configuration(checker.model(), rng);
       EnvironmentRequest plain;
+      plain.distance_field = EnvironmentRequest::DistanceField::kOff;
       if (round == 2) plain.root_pose.t = Vec3(0.1, -0.2, 0.05);
       plain.all_links = i % 2 == 0;
       EnvironmentRequest with = plain;
@@ -276,7 +314,9 @@ TEST(OctreeDistanceField, BatchesCheckTheFixedLinksOnceAndAnswerAsOneByOne) {
       const std::vector<char> batch = checker.check_batch(flat.data(), count, &env, request);
       int colliding = 0;
       for (int i = 0; i < count; ++i) {
-        const bool one = checker.check_environment(flat.data() + i * checker.model().variable_count(), env).collision;
+        EnvironmentRequest without;
+        without.distance_field = EnvironmentRequest::DistanceField::kOff;
+        const bool one = checker.check_environment(flat.data() + i * checker.model().variable_count(), env, without).collision;
         ASSERT_EQ(batch[i] != 0, one) << "slab at " << slab << ", state " << i << ", field " << field;
         colliding += one;
       }

@@ -222,7 +222,9 @@ TEST(MeshAgainstOctree, ToleranceNeverReportsBeyondPaddingPlusTolerance) {
         ASSERT_FALSE(hit && d > padding + tolerance + 1e-12)
             << "case " << i << ": collision reported at distance " << d << " > padding " << padding << " + tolerance "
             << tolerance;
-        if (d <= padding) ASSERT_TRUE(hit) << "case " << i << ": a miss";
+        if (d <= padding) {
+          ASSERT_TRUE(hit) << "case " << i << ": a miss";
+        }
       }
     }
   }

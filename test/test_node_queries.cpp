@@ -4,6 +4,9 @@
 // joints left out of a request taken from joint_states.
 #include <set>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/topic.h>
+
 #include "bvh_collision/CheckStates.h"
 #include "node_test_client.h"
 
@@ -31,6 +34,26 @@ class NodeQueries : public testing::Test {
   static CollisionChecker* checker_;
 };
 CollisionChecker* NodeQueries::checker_ = nullptr;
+
+// The node comes up without proxies and builds its levels on a thread of its own, coarsest
+// first; the diagnostics say which are in use. The .test file says which to expect (the default
+// levels); the tests below then run with them.
+TEST_F(NodeQueries, ProxyLevelsJoinAfterStartUp) {
+  std::string expected;
+  ASSERT_TRUE(ros::param::get("~expect_proxy_levels", expected)) << "the .test file must set ~expect_proxy_levels";
+  std::string ready = "(no diagnostics)";
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(90.0);
+  while (ros::WallTime::now() < deadline && ready != expected) {
+    const auto msg = ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5.0));
+    if (!msg) continue;
+    for (const auto& status : msg->status) {
+      for (const auto& kv : status.values) {
+        if (kv.key == "proxy levels ready (m)") ready = kv.value;
+      }
+    }
+  }
+  EXPECT_EQ(ready, expected);
+}
 
 TEST_F(NodeQueries, FreeAndSelfCollidingConfigurations) {
   std::mt19937_64 rng(11);

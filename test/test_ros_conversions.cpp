@@ -2,6 +2,8 @@
 // and point clouds, each against an independent construction and with every malformed case.
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -43,6 +45,21 @@ TEST(JointValueMap, NamesMapToStateVariables) {
   EXPECT_EQ(state[model.joints()[model.joint_index("joint3")].variable], 0.5);
   EXPECT_EQ(state[model.joints()[model.joint_index("joint1")].variable], -0.25);
   EXPECT_TRUE(warnings.empty());
+}
+
+// The node replaces its checker as proxy levels are built, and the model the map was made from
+// goes with the old one: the map must not depend on it (it once kept a pointer, and every
+// request after the first swap failed with "unknown joint").
+TEST(JointValueMap, OutlivesTheModelItWasMadeFrom) {
+  auto model = std::make_unique<RobotModel>(demo_arm());
+  const std::vector<std::string> names = model->variable_names();
+  const JointValueMap map(*model);
+  model.reset();
+  std::vector<std::string> warnings;
+  const auto columns = map.columns(names, warnings);
+  ASSERT_EQ(columns.size(), names.size());
+  for (std::size_t i = 0; i < columns.size(); ++i) EXPECT_EQ(columns[i], int(i));
+  EXPECT_TRUE(map.knows("joint1"));
 }
 
 TEST(JointValueMap, BadNamesAndValuesAreErrors) {

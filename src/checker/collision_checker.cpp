@@ -220,6 +220,11 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
     if (check_environment(states, *env, once).collision) return std::vector<char>(count, 1);
     environment.only_links = &moving;
   }
+  // The field looked up once for the batch (a lookup takes a lock).
+  const std::shared_ptr<const OctreeDistanceField> field =
+      request.environment && !env->octree().empty()
+          ? octree_field(*env, request.root_pose, environment.distance_field == EnvironmentRequest::DistanceField::kBuild)
+          : nullptr;
   const ProxyLevel* proxies = request.self ? m_->proxies_for(request.tolerance) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment
   // only for the states found free.
@@ -230,7 +235,7 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
       proxies->batch.check(*m_, states + begin * stride, n, request.tolerance, out.data() + begin, request.simd);
       if (!request.environment) return;
       for (std::size_t i = begin; i < begin + n; ++i) {
-        if (!out[i]) out[i] = check_environment(states + i * stride, *env, environment).collision;
+        if (!out[i]) out[i] = environment_check(states + i * stride, *env, environment, field.get()).collision;
       }
     });
     return out;
@@ -241,7 +246,7 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   ThreadPool::shared().for_each(count, 16, [&](std::size_t i) {
     const double* q = states + i * stride;
     out[i] = (request.self && check_self(q, self).collision) ||
-             (request.environment && check_environment(q, *env, environment).collision);
+             (request.environment && environment_check(q, *env, environment, field.get()).collision);
   });
   return out;
 }

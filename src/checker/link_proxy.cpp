@@ -571,3 +571,44 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
 }
 
 }  // namespace bvh_collision
+
+namespace bvh_collision {
+
+double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
+                        double best, const ProxySlack& slack) {
+  if (a.empty() || b.empty()) return best;
+  const ProxySphere* sa = a.spheres().data();
+  const ProxySphere* sb = b.spheres().data();
+  const Transform b_in_a = relative_transform(pose_a, pose_b);
+  const Mat3& r = b_in_a.R;
+  const Vec3& t = b_in_a.t;
+  const double margin = pose_margin(pose_a.t.norm() + pose_b.t.norm() + sa[0].center.norm() + sa[0].radius +
+                                    sb[0].center.norm() + sb[0].radius);
+  std::vector<std::pair<std::int32_t, std::int32_t>> stack;
+  stack.reserve(64);
+  stack.emplace_back(0, 0);
+  // The smallest gap of a pair of spheres left unopened because it was within the slack of best.
+  double unopened = best;
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    // Spheres contain their subtrees: this gap bounds every leaf pair below from below.
+    const double gap = std::max(0.0, (sa[i].center - apply(r, t, sb[j].center)).norm() - sa[i].radius - sb[j].radius - margin);
+    if (gap >= best) continue;
+    if (slack.leaves(gap, best) && !(sa[i].skip == i + 1 && sb[j].skip == j + 1)) {
+      unopened = std::min(unopened, gap);
+      continue;
+    }
+    const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
+    if (leaf_a && leaf_b) {
+      best = gap;
+    } else if (!leaf_a && (leaf_b || sa[i].radius >= sb[j].radius)) {
+      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.emplace_back(k, j);
+    } else {
+      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.emplace_back(i, k);
+    }
+  }
+  return std::min(best, unopened);
+}
+
+}  // namespace bvh_collision

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
 
@@ -94,7 +95,10 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
       const double* q = lanes ? block.data() + k * n : segment.at(s);
       const bool self = lanes ? self_hit[k] != 0
                               : request.self && checker.check_self(q, SelfCollisionRequest{request.tolerance}).collision;
-      if (self || collides_with_environment(checker, q, env, request)) return result;
+      if (self || collides_with_environment(checker, q, env, request)) {
+        result.colliding_fraction = s;
+        return result;
+      }
       result.last_valid_fraction = s;
     }
   }
@@ -125,6 +129,77 @@ std::optional<double> clearance(const CollisionChecker& checker, const double* s
   return gap;
 }
 
+// A clearance bound may be this fraction loose where it exceeds the stop (the step shrinks by at
+// most 1 / 1.25): far pairs and links then cost a few sphere tests instead of a walk to the
+// leaves, while a bound at the stop is the leaves' own (ProxySlack).
+constexpr double kClearanceSlack = 0.25;
+
+}  // namespace
+
+// Per self pair and link, the cheapest bound first (bounding spheres, the pair's clearance grid,
+// the distance field), the proxies only where those do not already exceed the smallest gap found.
+double CollisionChecker::proxy_clearance(const double* state, const Environment& env, const MotionRequest& request,
+                                         const ProxyLevel& proxies, const OctreeDistanceField* field, double stop) const {
+  thread_local std::vector<Transform> poses;
+  m_->kinematics().compute(state, poses);
+  const auto centre = [&](std::size_t l) { return Vec3(poses[l] * m_->bounds()[l].center); };
+  const auto margin = [&](std::size_t l) { return pose_margin(poses[l].t.norm() + m_->bounds()[l].center.norm() + m_->bounds()[l].radius); };
+  double gap = std::numeric_limits<double>::infinity();
+  if (request.self) {
+    std::vector<std::pair<double, std::size_t>> order;
+    for (std::size_t p = 0; p < m_->checked_pairs().size(); ++p) {
+      const auto [a, b] = m_->checked_pairs()[p];
+      const double pads = m_->paddings()[a] + m_->paddings()[b];
+      order.emplace_back((centre(a) - centre(b)).norm() - m_->bounds()[a].radius - m_->bounds()[b].radius - pads -
+                             margin(a) - margin(b), p);
+    }
+    std::sort(order.begin(), order.end());
+    for (const auto& [bound, p] : order) {
+      if (bound >= gap) break;
+      const auto [a, b] = m_->checked_pairs()[p];
+      const double pads = m_->paddings()[a] + m_->paddings()[b];
+      if (m_->pair_clearance().lower_bound(p, state) - pads >= gap) continue;
+      gap = proxies_distance(proxies.links[a], poses[a], proxies.links[b], poses[b], gap + pads,
+                             ProxySlack{kClearanceSlack, stop + pads}) - pads;
+      if (gap <= stop) return gap;
+    }
+  }
+  if (!request.environment) return gap;
+  const Octree& tree = env.octree();
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (m_->shapes()[l].empty()) continue;
+    const Transform pose = request.root_pose * poses[l];
+    const double padding = m_->paddings()[l];
+    const double radius = m_->bounds()[l].radius + pose_margin(pose.t.norm() + m_->bounds()[l].center.norm() + m_->bounds()[l].radius);
+    if (!tree.empty() && !(field != nullptr && field->lower_bound(pose * m_->bounds()[l].center) - radius - padding >= gap)) {
+      gap = proxy_obstacle_distance(proxies.links[l], pose, gap + padding, [&](const Vec3& c, double r, double best) {
+              if (field != nullptr) {
+                const double bound = field->lower_bound(c) - r;
+                if (bound >= best) return bound;
+              }
+              return std::max(0.0, point_octree_distance(c, tree, best + r).distance - r);
+            }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
+      if (gap <= stop) return gap;
+    }
+    for (const CollisionObject& object : env.objects()) {
+      const double apart = (pose * m_->bounds()[l].center - object.pose * object.bound_center).norm() - radius -
+                           object.bound_radius - padding;
+      if (apart >= gap) continue;
+      const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
+      QueryStats stats;
+      gap = proxy_obstacle_distance(proxies.links[l], pose, gap + padding, [&](const Vec3& c, double r, double best) {
+              Vec3 wa, wb;
+              return detail::shapes_distance({nullptr, nullptr, Primitive::sphere(r)}, Transform{Mat3::Identity(), c},
+                                             obstacle, object.pose, best, true, wa, wb, stats);
+            }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
+      if (gap <= stop) return gap;
+    }
+  }
+  return gap;
+}
+
+namespace {
+
 // Conservative advancement. Over a step ds every point of link L moves at most ds * M_L, with
 // M_L = sum_j rate(L, j) |delta_j|; a self pair closes by at most ds (M_a + M_b), an obstacle gap
 // by ds M_L. With M the largest M_L, a step below gap / (2 M) cannot hide a collision.
@@ -137,13 +212,26 @@ MotionResult motion_certified(const CollisionChecker& checker, Segment& segment,
     max_padding = std::max(max_padding, checker.link_padding(static_cast<int>(l)));
   }
   const double closing = (request.self ? 2.0 : 1.0) * speed;
+  // At a tolerance t, a lower bound on the clearance that is at most e below it (the proxies of
+  // level e) serves as well: a state whose bound is at most t - e is within t of collision. The
+  // coarsest level up to t / 2 leaves at least t / 2 of that room (so the steps near a contact
+  // stay long); failing that, up to t, with min_clearance as the room.
+  const RobotCollisionModel& model = checker.collision_model();
+  const ProxyLevel* proxies = model.proxies_for(request.tolerance / 2);
+  if (proxies == nullptr) proxies = model.proxies_for(request.tolerance);
+  const double stop = proxies ? std::max(request.tolerance - proxies->level, request.min_clearance)
+                              : std::max(request.tolerance, request.min_clearance);
+  const auto field = proxies && request.environment ? checker.kept_distance_field(env, request.root_pose) : nullptr;
   double s = 0.0;
   while (result.states_checked < request.max_states) {
     ++result.states_checked;
-    const auto gap = clearance(checker, segment.at(s), env, request, max_padding);
-    if (!gap || *gap <= std::max(request.tolerance, request.min_clearance)) {
+    const double* q = segment.at(s);
+    const auto gap = proxies ? std::optional<double>(checker.proxy_clearance(q, env, request, *proxies, field.get(), stop))
+                             : clearance(checker, q, env, request, max_padding);
+    if (!gap || *gap <= stop) {
       // In collision, or within the tolerance of it (allowed to count as collision).
       result.certified = true;
+      result.colliding_fraction = s;
       return result;
     }
     result.last_valid_fraction = s;

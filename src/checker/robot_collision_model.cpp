@@ -70,24 +70,40 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
 void RobotCollisionModel::build_proxies(std::vector<double> levels) {
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-  for (const double level : levels) {
-    if (!(level > 0.0) || !std::isfinite(level)) {
-      throw std::invalid_argument("proxy level " + std::to_string(level) + " m: must be a positive number of metres");
-    }
-    const auto start = std::chrono::steady_clock::now();
-    ProxyLevel out;
-    out.level = level;
-    out.links.resize(shapes_.size());
-    for (std::size_t l = 0; l < shapes_.size(); ++l) {
-      if (shapes_[l].empty()) continue;
-      out.links[l] = LinkProxy::build(shapes_[l], meshes_, level);
-      out.leaves += out.links[l].leaf_count();
-      out.memory_bytes += out.links[l].memory_bytes();
-    }
-    out.batch = ProxyBatch(*this, out);
-    out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    proxy_levels_.push_back(std::move(out));
+  for (const double level : levels) proxy_levels_.push_back(build_proxy_level(level, nullptr));
+}
+
+ProxyLevel RobotCollisionModel::build_proxy_level(double level, const std::atomic<bool>* cancel) const {
+  if (!(level > 0.0) || !std::isfinite(level)) {
+    throw std::invalid_argument("proxy level " + std::to_string(level) + " m: must be a positive number of metres");
   }
+  const auto start = std::chrono::steady_clock::now();
+  ProxyLevel out;
+  out.level = level;
+  out.links.resize(shapes_.size());
+  for (std::size_t l = 0; l < shapes_.size(); ++l) {
+    if (shapes_[l].empty()) continue;
+    if (cancel != nullptr && cancel->load()) throw ProxyBuildCancelled();
+    out.links[l] = LinkProxy::build(shapes_[l], meshes_, level);
+    out.leaves += out.links[l].leaf_count();
+    out.memory_bytes += out.links[l].memory_bytes();
+  }
+  out.batch = ProxyBatch(*this, out);
+  out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+RobotCollisionModel RobotCollisionModel::with_proxy_level(double level, const std::atomic<bool>* cancel) const {
+  ProxyLevel built = build_proxy_level(level, cancel);
+  RobotCollisionModel copy = *this;
+  auto& levels = copy.proxy_levels_;
+  const auto at = std::find_if(levels.begin(), levels.end(), [&](const ProxyLevel& p) { return p.level >= level; });
+  if (at != levels.end() && at->level == level) {
+    *at = std::move(built);
+  } else {
+    levels.insert(at, std::move(built));
+  }
+  return copy;
 }
 
 const ProxyLevel* RobotCollisionModel::proxies_for(double tolerance) const {

@@ -6,6 +6,7 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
 
 namespace bvh_collision {
@@ -39,6 +40,36 @@ std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
     fn(begin, end, parts[c]);
   });
   return parts;
+}
+
+// What a link's proxy (checker/link_proxy.h) says of a point and a padding: -1, the point is
+// farther than the padding from the link (no leaf sphere grown by the padding holds it); 1, it is
+// within the padding (a leaf sphere grown by padding - h holds it, h >= the distance from any
+// sphere point to the link, so padding >= h is needed); 0, the exact test must tell. The spheres
+// stay in the link frame and the point goes there once.
+int proxy_point_verdict(const LinkProxy& proxy, const Transform& pose, const Vec3& p, double padding) {
+  if (proxy.empty()) return -1;
+  const std::vector<ProxySphere>& s = proxy.spheres();
+  const Vec3 local = pose.R.transpose() * (p - pose.t);
+  const double margin = proxy_pose_margin(proxy, pose) + pose_margin(p.norm());
+  const bool can_accept = padding >= proxy.hausdorff_bound();
+  const double accept = padding - proxy.hausdorff_bound() - margin;
+  bool near = false;
+  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
+    const double d2 = (s[i].center - local).squaredNorm();
+    const double reach = grown_radius(s[i].radius + padding + margin);
+    if (d2 > reach * reach) {
+      i = s[i].skip;
+      continue;
+    }
+    if (s[i].skip == i + 1) {
+      near = true;
+      const double inside = s[i].radius + accept;
+      if (can_accept && inside > 0.0 && d2 <= inside * inside) return 1;
+    }
+    ++i;
+  }
+  return near ? 0 : -1;
 }
 
 }  // namespace
@@ -94,6 +125,12 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
     links.push_back({link, poses[l], poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius,
                      point_on_link(link, poses[l], origin, padding)});
   }
+  // Where proxies are built, they settle most points near a link without the exact test, with
+  // the same answers: the coarsest level whose spheres lie within the padding of their links
+  // (accepts and rejects), else the finest (rejects only).
+  const std::vector<ProxyLevel>& levels = m_->proxy_levels();
+  const ProxyLevel* proxies = m_->proxies_for(2.0 * padding);
+  if (proxies == nullptr && !levels.empty()) proxies = &levels.front();
   // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`
   // before the ray first meets a link.
   auto classify = [&](const ScanPoint& point, FilteredScan& out) {
@@ -110,7 +147,8 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
     for (const LinkInScan& v : links) {
       const double reach = v.radius + padding;
       if (!on_robot && (p - v.centre).squaredNorm() <= reach * reach) {
-        on_robot = point_on_link(v.link, v.pose, p, padding);
+        const int verdict = proxies ? proxy_point_verdict(proxies->links[v.link], v.pose, p, padding) : 0;
+        on_robot = verdict > 0 || (verdict == 0 && point_on_link(v.link, v.pose, p, padding));
       }
       if (!v.holds_sensor && segment_meets_ball(origin, unit, first, v.centre, v.radius)) {
         first = std::min(first, ray_meets_link(v.link, v.pose, origin, unit, first));

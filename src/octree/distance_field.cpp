@@ -139,4 +139,33 @@ double OctreeDistanceField::lower_bound(const Vec3& p) const {
   return std::max(0.0, bound - kVolumeMargin * (1.0 + p.lpNorm<Eigen::Infinity>() + cap_));
 }
 
+std::optional<bool> OctreeDistanceField::ball_meets_occupied(const Vec3& centre, double radius) const {
+  if (squared_.empty() || !centre.allFinite() || !std::isfinite(radius)) return std::nullopt;
+  std::int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    // One voxel more on each side than the ball needs: p / res may round across a face.
+    lo[a] = voxel_of(centre[a] - radius, resolution_) - 1 - grid_lo_[a];
+    hi[a] = voxel_of(centre[a] + radius, resolution_) + 1 - grid_lo_[a];
+    if (lo[a] < 0 || hi[a] >= size_[a]) return std::nullopt;
+  }
+  // Grown a little: the clamped differences round, and a touching cube must count.
+  const double grown = grown_radius(radius) + kVolumeMargin * (1.0 + centre.lpNorm<Eigen::Infinity>());
+  const double r2 = grown * grown;
+  for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+    const double cx = centre.x() - std::clamp(centre.x(), double(x + grid_lo_[0]) * resolution_, double(x + grid_lo_[0] + 1) * resolution_);
+    if (cx * cx > r2) continue;
+    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+      const double cy = centre.y() - std::clamp(centre.y(), double(y + grid_lo_[1]) * resolution_, double(y + grid_lo_[1] + 1) * resolution_);
+      if (cx * cx + cy * cy > r2) continue;
+      const std::uint32_t* row = squared_.data() + (x * size_[1] + y) * size_[2];
+      for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+        if (row[z] != 0) continue;
+        const double cz = centre.z() - std::clamp(centre.z(), double(z + grid_lo_[2]) * resolution_, double(z + grid_lo_[2] + 1) * resolution_);
+        if (cx * cx + cy * cy + cz * cz <= r2) return true;
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace bvh_collision

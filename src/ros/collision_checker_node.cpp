@@ -1,6 +1,8 @@
 // Start-up, the robot's state from joint_states, and poses from tf2.
 #include "bvh_collision/ros/collision_checker_node.h"
 
+#include <algorithm>
+
 #include <sstream>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -29,13 +31,43 @@ CollisionCheckerNode::CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle p
   advertise();
   ROS_INFO_STREAM("collision_checker: " << summary_.to_string() << "; world frame '" << params_.world_frame
                                         << "', octree resolution " << params_.resolution << " m, "
-                                        << checker_->checked_pairs().size() << " link pairs checked");
+                                        << checker()->checked_pairs().size() << " link pairs checked");
   log_solidity();
-  publish_status();  // last: once these are set, the node is up
+  publish_status();  // once these are set, the node is up
+  if (!params_.proxy_levels.empty() && has_geometry_) proxy_builder_ = std::thread([this] { build_proxy_levels(); });
 }
 
 CollisionCheckerNode::~CollisionCheckerNode() {
+  stop_building_ = true;  // the build stops at its next link
+  if (proxy_builder_.joinable()) proxy_builder_.join();
   if (cloud_spinner_) cloud_spinner_->stop();
+}
+
+// Coarsest first: the cheapest level serves the widest range of tolerances soonest. Each level
+// is built into a copy of the checker, which then replaces the one queries take (a query in
+// flight keeps the one it took).
+void CollisionCheckerNode::build_proxy_levels() {
+  std::vector<double> levels = params_.proxy_levels;
+  std::sort(levels.rbegin(), levels.rend());
+  for (std::size_t i = 0; i < levels.size() && !stop_building_; ++i) {
+    try {
+      auto next = std::make_shared<const CollisionChecker>(checker()->with_proxy_level(levels[i], &stop_building_));
+      const ProxyLevel* built = next->collision_model().proxies_for(levels[i]);
+      std::atomic_store(&checker_, std::shared_ptr<const CollisionChecker>(next));
+      ROS_INFO("collision_checker: proxy level %.4g m ready: %zu spheres, %.1f KiB, built in %.2f s", built->level,
+               built->leaves, built->memory_bytes / 1024.0, built->build_seconds);
+      if (built->leaves > kProxySphereBudget && i + 1 < levels.size()) {
+        ROS_INFO("collision_checker: finer proxy levels skipped: %.4g m needed %zu spheres (budget %zu)", built->level,
+                 built->leaves, kProxySphereBudget);
+        return;
+      }
+    } catch (const ProxyBuildCancelled&) {
+      return;
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM("collision_checker: proxy level " << levels[i] << " m not built: " << e.what());
+      return;
+    }
+  }
 }
 
 void CollisionCheckerNode::load_robot() {
@@ -78,16 +110,12 @@ void CollisionCheckerNode::load_robot() {
   CheckerOptions options;
   options.padding = params_.padding;
   options.link_padding = params_.link_padding;
-  options.proxy_levels = params_.proxy_levels;
-  checker_ = std::make_unique<const CollisionChecker>(std::move(model), std::move(acm), options);
-  for (const ProxyLevel& level : checker_->collision_model().proxy_levels()) {
-    ROS_INFO("collision_checker: proxy level %.4g m: %zu spheres, %.1f KiB, built in %.2f s", level.level, level.leaves,
-             level.memory_bytes / 1024.0, level.build_seconds);
-  }
-  const PairClearance& grids = checker_->collision_model().pair_clearance();
+  // The proxy levels come later, from build_proxy_levels.
+  checker_ = std::make_shared<const CollisionChecker>(std::move(model), std::move(acm), options);
+  const PairClearance& grids = checker()->collision_model().pair_clearance();
   ROS_INFO("collision_checker: clearance grids for %zu of %zu checked pairs, %.1f KiB, built in %.2f s", grids.grids().size(),
-           checker_->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());
-  joint_map_ = std::make_unique<const JointValueMap>(checker_->model());
+           checker()->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());
+  joint_map_ = std::make_unique<const JointValueMap>(checker()->model());
 }
 
 Environment CollisionCheckerNode::initial_environment() const {
@@ -154,7 +182,7 @@ void CollisionCheckerNode::advertise() {
 // One line: which links are solids (a link inside one collides) and which meshes are open, and
 // why; the same lists as parameters (robot/solid_links, robot/open_meshes).
 void CollisionCheckerNode::log_solidity() {
-  const RobotModel& m = checker_->model();
+  const RobotModel& m = checker()->model();
   const LinkSolidity solidity = link_solidity(m);
   solid_links_.clear();
   open_meshes_.clear();
@@ -178,9 +206,9 @@ void CollisionCheckerNode::publish_status() {
   private_nh_.setParam("robot/links", static_cast<int>(summary_.links));
   private_nh_.setParam("robot/joints", static_cast<int>(summary_.joints));
   private_nh_.setParam("robot/collision_elements", static_cast<int>(summary_.collision_elements));
-  private_nh_.setParam("robot/variables", checker_->model().variable_names());
-  private_nh_.setParam("robot/checked_pairs", static_cast<int>(checker_->checked_pairs().size()));
-  private_nh_.setParam("robot/reach", checker_->reach());
+  private_nh_.setParam("robot/variables", checker()->model().variable_names());
+  private_nh_.setParam("robot/checked_pairs", static_cast<int>(checker()->checked_pairs().size()));
+  private_nh_.setParam("robot/reach", checker()->reach());
   private_nh_.setParam("robot/solid_links", solid_links_);
   private_nh_.setParam("robot/open_meshes", open_meshes_);
 }
@@ -193,7 +221,7 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
   }
   // Joint states may come from several publishers and other robots: take what is ours and
   // finite, ignore the rest.
-  const RobotModel& model = checker_->model();
+  const RobotModel& model = checker()->model();
   std::lock_guard<std::mutex> lock(state_mutex_);
   for (std::size_t i = 0; i < msg->name.size(); ++i) {
     const int j = model.joint_index(msg->name[i]);

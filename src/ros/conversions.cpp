@@ -25,7 +25,7 @@ std::string number(double v) {
 }  // namespace
 
 JointValueMap::JointValueMap(const RobotModel& model)
-    : model_(&model),
+    : model_(model),
       lower_(model.variable_count(), -INFINITY),
       upper_(model.variable_count(), INFINITY),
       bounded_(model.variable_count(), false) {
@@ -37,7 +37,7 @@ JointValueMap::JointValueMap(const RobotModel& model)
   }
 }
 
-bool JointValueMap::knows(const std::string& name) const { return model_->joint_index(name) >= 0; }
+bool JointValueMap::knows(const std::string& name) const { return model_.joint_index(name) >= 0; }
 
 std::vector<int> JointValueMap::columns(const std::vector<std::string>& names,
                                         std::vector<std::string>& warnings) const {
@@ -46,11 +46,11 @@ std::vector<int> JointValueMap::columns(const std::vector<std::string>& names,
   std::set<std::string> seen;
   for (const std::string& name : names) {
     if (!seen.insert(name).second) throw RequestError("joint " + quoted(name) + " is named twice");
-    const int j = model_->joint_index(name);
-    if (j < 0) throw RequestError("unknown joint " + quoted(name) + " (robot '" + model_->name() + "')");
-    const RobotJoint& joint = model_->joints()[j];
+    const int j = model_.joint_index(name);
+    if (j < 0) throw RequestError("unknown joint " + quoted(name) + " (robot '" + model_.name() + "')");
+    const RobotJoint& joint = model_.joints()[j];
     if (joint.mimic >= 0) {
-      warnings.push_back("joint " + quoted(name) + " mimics " + quoted(model_->joints()[joint.mimic].name) +
+      warnings.push_back("joint " + quoted(name) + " mimics " + quoted(model_.joints()[joint.mimic].name) +
                          ": its value is ignored");
       columns.push_back(-1);
       continue;

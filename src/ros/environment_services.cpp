@@ -54,16 +54,18 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
 
   ScanOptions options;
   options.max_range = params_.max_range;
-  const double half = checker_->reach() + kWorkspaceMargin;
+  const double half = checker()->reach() + kWorkspaceMargin;
   options.workspace = params_.workspace_min
                           ? ScanWorkspace{params_.workspace_min->cast<float>(), params_.workspace_max->cast<float>()}
                           : ScanWorkspace{(root.t.array() - half).matrix().cast<float>(),
                                           (root.t.array() + half).matrix().cast<float>()};
   const std::vector<double> state = current_state();
-  const FilteredScan filtered = checker_->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
+  const FilteredScan filtered = checker()->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   });
+  // The new map's distance field, here on the cloud thread rather than in the first query.
+  if (params_.distance_field) checker()->prepare_distance_field(*store_->snapshot(), root);
   clouds_.points += stats.points;
   clouds_.skipped_invalid += stats.skipped_invalid;
   clouds_.skipped_outside += stats.skipped_outside;

@@ -1,6 +1,7 @@
 // What the node shows: occupied voxels and contacts as markers, and /diagnostics.
 #include <algorithm>
 #include <cstdio>
+#include <sstream>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -171,6 +172,11 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   queries.hardware_id = summary_.name;
   queries.level = diagnostic_msgs::DiagnosticStatus::OK;
   queries.message = "ok";
+  std::ostringstream levels;
+  for (const ProxyLevel& level : checker()->collision_model().proxy_levels()) {
+    levels << (levels.tellp() > 0 ? " " : "") << level.level;
+  }
+  queries.values.push_back(kv("proxy levels ready (m)", levels.str()));
   for (const auto& [service, stats] : latency_) {
     const LatencyStats::Summary s = stats.summary();
     queries.values.push_back(kv(service + " requests", std::to_string(s.requests)));

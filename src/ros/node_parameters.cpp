@@ -104,6 +104,9 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   read_workspace(nh, p);
   p.max_range = read_number(nh, "max_range", p.max_range, true);
   p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);
+  if (nh.hasParam("distance_field") && !nh.getParam("distance_field", p.distance_field)) {
+    throw NodeStartupError("parameter ~distance_field must be a boolean");
+  }
   p.sensor_hit = read_probability(nh, "sensor_model/hit", p.sensor_hit);
   p.sensor_miss = read_probability(nh, "sensor_model/miss", p.sensor_miss);
   p.sensor_min = read_probability(nh, "sensor_model/min", p.sensor_min);

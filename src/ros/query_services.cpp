@@ -77,8 +77,8 @@ void CollisionCheckerNode::self_part(const double* state, const CheckState::Requ
   request.all_pairs = req.max_contacts > 0;
   request.max_contacts = req.max_contacts;
   request.distance = req.distance;
-  const SelfCollisionResult result = checker_->check_self(state, request);
-  const auto& links = checker_->model().links();
+  const SelfCollisionResult result = checker()->check_self(state, request);
+  const auto& links = checker()->model().links();
   res.self_collision = result.collision;
   for (const LinkContact& lc : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;
@@ -105,8 +105,8 @@ void CollisionCheckerNode::environment_part(const double* state, const Environme
   request.all_links = req.max_contacts > 0;
   request.distance = req.distance;
   request.root_pose = root;
-  const EnvironmentResult result = checker_->check_environment(state, env, request);
-  const auto& links = checker_->model().links();
+  const EnvironmentResult result = checker()->check_environment(state, env, request);
+  const auto& links = checker()->model().links();
   res.environment_collision = result.collision;
   for (const EnvironmentContact& ec : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;
@@ -185,7 +185,7 @@ bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::
       request.root_pose = root_pose(ros::Time(0));
       env = store_->snapshot();
     }
-    const std::vector<char> colliding = checker_->check_batch(states.data(), rows, env.get(), request);
+    const std::vector<char> colliding = checker()->check_batch(states.data(), rows, env.get(), request);
     res.valid.resize(rows);
     for (std::size_t r = 0; r < rows; ++r) res.valid[r] = !colliding[r];
     res.warning = join_warnings(warnings, 4);
@@ -216,7 +216,7 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     request.resolution = req.resolution;
     request.tolerance = params_.tolerance;
     if (checks.environment) request.root_pose = root_pose(ros::Time(0));
-    const MotionResult result = checker_->check_motion(start.data(), goal.data(), *store_->snapshot(), request);
+    const MotionResult result = checker()->check_motion(start.data(), goal.data(), *store_->snapshot(), request);
     res.valid = result.valid;
     res.last_valid_fraction = result.last_valid_fraction;
     res.states_checked = static_cast<std::uint32_t>(result.states_checked);
@@ -232,10 +232,10 @@ bool CollisionCheckerNode::cast_ray(CastRay::Request& req, CastRay::Response& re
     const Vec3 direction(req.direction.x, req.direction.y, req.direction.z);
     const std::vector<double> state = current_state();
     const RayCastResult hit =
-        checker_->cast_ray(state.data(), *store_->snapshot(), origin, direction, req.max_range, root_pose(ros::Time(0)));
+        checker()->cast_ray(state.data(), *store_->snapshot(), origin, direction, req.max_range, root_pose(ros::Time(0)));
     res.hit = hit.hit;
     if (!hit.hit) return;
-    res.body = hit.link >= 0 ? checker_->model().links()[hit.link].name : hit.octree ? "octree" : hit.object;
+    res.body = hit.link >= 0 ? checker()->model().links()[hit.link].name : hit.octree ? "octree" : hit.object;
     res.point = point_msg(hit.point);
     res.distance = hit.distance;
   });

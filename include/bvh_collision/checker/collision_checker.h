@@ -34,6 +34,10 @@ namespace bvh_collision {
 class CollisionChecker {
  public:
   CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
+  // This checker with one more proxy level (RobotCollisionModel::with_proxy_level).
+  CollisionChecker with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const {
+    return CollisionChecker(std::make_shared<const RobotCollisionModel>(m_->with_proxy_level(level, cancel)));
+  }
 
   const RobotModel& model() const { return m_->robot(); }
   const AllowedCollisionMatrix& acm() const { return m_->acm(); }
@@ -102,6 +106,30 @@ class CollisionChecker {
   // configuration within the joint limits: the default workspace is this plus a margin.
   double reach() const { return m_->reach(); }
 
+  // Builds and keeps the octree's distance field over the robot's reach around `root_pose`
+  // (Environment::octree_distance_field), which boolean checks and motions then use when asked
+  // for a kept one; returns it (null when the octree is empty or the box too large). A node calls
+  // this after each map change, off the query path.
+  std::shared_ptr<const OctreeDistanceField> prepare_distance_field(const Environment& env,
+                                                                    const Transform& root_pose = Transform::Identity()) const {
+    return env.octree().empty() ? nullptr : octree_field(env, root_pose, true);
+  }
+
+  // The field prepare_distance_field kept for this octree, or null.
+  std::shared_ptr<const OctreeDistanceField> kept_distance_field(const Environment& env,
+                                                                 const Transform& root_pose = Transform::Identity()) const {
+    return env.octree().empty() ? nullptr : octree_field(env, root_pose, false);
+  }
+
+  // A lower bound on the clearance of `state` (its distance less padding, per self pair and per
+  // link against each obstacle; the smallest) from the proxies of one level and, if given, the
+  // octree's distance field: at most the level below the exact clearance (each proxy lies within
+  // level / 2 of its link). Returns as soon as it is at most `stop`. What certified motions at a
+  // tolerance step by; request.self / environment / root_pose say what counts.
+  double proxy_clearance(const double* state, const Environment& env, const MotionRequest& request,
+                         const ProxyLevel& proxies, const OctreeDistanceField* field = nullptr,
+                         double stop = -std::numeric_limits<double>::infinity()) const;
+
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return m_->meshes().size(); }
 
@@ -114,6 +142,13 @@ class CollisionChecker {
   bool split_fixed_links(std::vector<char>& moving, std::vector<char>& fixed) const;
   std::shared_ptr<const OctreeDistanceField> octree_field(const Environment& env, const Transform& root_pose,
                                                           bool build) const;
+  // check_environment with the distance field already looked up (null: none).
+  EnvironmentResult environment_check(const double* state, const Environment& env, const EnvironmentRequest& request,
+                                      const OctreeDistanceField* field) const;
+  // Boolean environment check of one link from its proxy (tolerance at least half its level).
+  bool proxy_meets_environment(int link, const Transform& pose, const LinkProxy& proxy, const Environment& env,
+                               const OctreeDistanceField* field, const EnvironmentRequest& request,
+                               EnvironmentResult& result) const;
   bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,
                          EnvironmentResult& result) const;
   bool link_meets_object(int link, const Transform& pose, const CollisionObject& object,
@@ -126,6 +161,8 @@ class CollisionChecker {
   // Self filter primitives: is p on or within padding of the link; where does the ray first meet it.
   bool point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const;
   double ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit, double length) const;
+
+  explicit CollisionChecker(std::shared_ptr<const RobotCollisionModel> model) : m_(std::move(model)) {}
 
   // Shared, never changed: a copy of the checker is cheap and answers the same.
   std::shared_ptr<const RobotCollisionModel> m_;

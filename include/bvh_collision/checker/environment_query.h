@@ -19,17 +19,19 @@ struct EnvironmentRequest {
   bool octree = true;      // check against the octree...
   bool objects = true;     // ...and against the collision objects
   Transform root_pose;     // the root link in the environment's (world) frame: a moving base
-  // Boolean checks: a link whose bounding sphere the octree's distance field clears (the field
-  // proves every occupied cube farther than its radius + padding) skips the octree. The field
-  // covers the robot's reach around the root; it is built on first use (tens of ms for a 2 cm
-  // map around an arm) and kept until the octree changes (Environment::octree_distance_field),
-  // so it pays for large batches and for many queries on one environment (a 2 cm map around
-  // panda: 48 ms to build, then 6.4 -> 3.7 us a state). Answers are unchanged.
   // Per link, nonzero: check it; null: every link (check_batch checks the links no joint moves
   // once per batch). Not owned: it must outlive the query.
   const std::vector<char>* only_links = nullptr;
+  // Boolean checks: a link whose bounding sphere the octree's distance field clears (the field
+  // proves every occupied cube farther than its radius + padding) skips the octree, and at a
+  // tolerance a proxy level fits, the link's proxy spheres answer against the field and its grid
+  // (within padding + level / 2). The field covers the robot's reach around the root; it is
+  // kept until the octree changes (Environment::octree_distance_field; a 2 cm map around panda:
+  // ~48 ms to build, 23 MB). kIfKept (the default) uses one already built
+  // (CollisionChecker::prepare_distance_field, which the node calls after each map change);
+  // kBuild builds it if needed; kOff never uses it. Exact answers are unchanged by it.
   enum class DistanceField { kOff, kIfKept, kBuild };
-  DistanceField distance_field = DistanceField::kOff;  // kIfKept: only a field already built
+  DistanceField distance_field = DistanceField::kIfKept;
 };
 
 struct EnvironmentContact {

@@ -30,6 +30,7 @@
 
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/types.h"
 
 namespace bvh_collision {
@@ -70,5 +71,84 @@ class LinkProxy {
 // true whenever two leaf spheres are within padding (rounding can only make it answer true).
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
                      double padding);
+
+// A lower bound on the distance between the two links: the smallest gap between a leaf sphere of
+// each, less a rounding margin, clamped at 0; `best` (or more) when no pair of leaves is closer
+// than `best`. The leaves contain the links, so it is at most their distance, and every leaf point
+// lies within level / 2 of its link, so it is at least their distance less a's and b's
+// hausdorff_bound(): certified motion steps by it (a clearance lower bound within e).
+// A slack lets far pairs cost a few tests: a pair of spheres whose gap exceeds `exact_below` and
+// is within a factor 1 + relative_slack of the smallest found is not opened, its gap counts
+// instead. The answer stays a lower bound, is at least the exact one divided by 1 + slack, and
+// equals it when at most exact_below (an unopened gap exceeds that).
+struct ProxySlack {
+  double relative = 0.0;
+  double exact_below = 0.0;
+  bool leaves(double gap, double best) const { return gap > exact_below && gap * (1.0 + relative) >= best; }
+};
+double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
+                        double best, const ProxySlack& slack = {});
+
+// How far a sphere centre of the posed proxy can land from its exact place through rounding.
+inline double proxy_pose_margin(const LinkProxy& proxy, const Transform& pose) {
+  const ProxySphere& root = proxy.spheres().front();
+  return pose_margin(pose.t.norm() + root.center.norm() + root.radius);
+}
+
+// The link (its proxy posed at `pose`) against one obstacle, through a test of a ball against it.
+// Every sphere contains its subtree, so a ball that misses the obstacle prunes its subtree; the
+// spheres are stored depth first with `skip` past each subtree, so the walk needs no stack.
+//
+// proxy_meets_obstacle: does some leaf sphere, grown by `padding`, meet the obstacle?
+// `meets(centre, radius, leaf)` must answer true whenever the ball meets it; for a ball that is
+// not a leaf it may answer true more often (a cheap test that only prunes). True means the link lies within padding + level / 2
+// of the obstacle; false that it is farther than padding.
+template <class BallMeets>
+bool proxy_meets_obstacle(const LinkProxy& proxy, const Transform& pose, double padding, BallMeets&& meets) {
+  if (proxy.empty()) return false;
+  const std::vector<ProxySphere>& s = proxy.spheres();
+  const double grow = padding + proxy_pose_margin(proxy, pose);
+  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
+    const bool leaf = s[i].skip == i + 1;
+    if (!meets(Vec3(pose * s[i].center), s[i].radius + grow, leaf)) {
+      i = s[i].skip;
+    } else if (leaf) {
+      return true;
+    } else {
+      ++i;
+    }
+  }
+  return false;
+}
+
+// proxy_obstacle_distance: min(best, the smallest `distance(centre, radius, best)` over the leaf
+// spheres), where `distance` is a lower bound on the distance from the ball to the obstacle (0 if
+// they meet) and returns best or more when the ball is not closer than best. With an exact ball
+// distance the result lies within hausdorff_bound() below the link's distance. A slack leaves
+// spheres unopened as in proxies_distance.
+template <class BallDistance>
+double proxy_obstacle_distance(const LinkProxy& proxy, const Transform& pose, double best, BallDistance&& distance,
+                               const ProxySlack& slack = {}) {
+  if (proxy.empty()) return best;
+  const std::vector<ProxySphere>& s = proxy.spheres();
+  const double grow = proxy_pose_margin(proxy, pose);
+  double unopened = best;
+  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
+    const double d = distance(Vec3(pose * s[i].center), s[i].radius + grow, best);
+    const bool leaf = s[i].skip == i + 1;
+    if (d >= best) {
+      i = s[i].skip;
+    } else if (leaf) {
+      best = d;
+      ++i;
+    } else if (slack.leaves(d, best)) {
+      unopened = std::min(unopened, d);
+      i = s[i].skip;
+    } else {
+      ++i;
+    }
+  }
+  return std::min(best, unopened);
+}
 
 }  // namespace bvh_collision

@@ -27,6 +27,8 @@ struct MotionRequest {
 struct MotionResult {
   bool valid = false;
   double last_valid_fraction = 0.0;  // the last state checked free before the first collision (1 when valid)
+  // The state found colliding (or, at a tolerance, within it of collision); -1 when none.
+  double colliding_fraction = -1.0;
   std::size_t states_checked = 0;
   bool certified = false;    // the whole motion (or up to the collision) was certified
   std::string message;       // why a certified check gave up, when it did

@@ -6,6 +6,7 @@
 // share one (copies of a CollisionChecker) share it safely between threads.
 #pragma once
 
+#include <atomic>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -48,6 +49,11 @@ struct ProxyLevel {
   std::size_t leaves = 0, memory_bytes = 0;
   double build_seconds = 0.0;
   ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
+};
+
+// RobotCollisionModel::with_proxy_level stopped by its cancel flag.
+struct ProxyBuildCancelled : std::runtime_error {
+  ProxyBuildCancelled() : std::runtime_error("proxy level build cancelled") {}
 };
 
 // One collision element of a link.
@@ -93,6 +99,11 @@ class RobotCollisionModel {
   // whose e is at most `tolerance`, or null.
   const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
   const ProxyLevel* proxies_for(double tolerance) const;
+  // A copy of this model with proxy level `level` built as well: it answers every query as this
+  // one does and uses the level wherever it fits (a node builds its levels this way after
+  // start-up, coarsest first, and swaps each copy in). `cancel`, once true, stops the build
+  // between links with ProxyBuildCancelled. Throws std::invalid_argument for a bad level.
+  RobotCollisionModel with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const;
   const PairClearance& pair_clearance() const { return pair_clearance_; }
 
   // A shape as the shape-pair dispatch takes it.
@@ -105,6 +116,7 @@ class RobotCollisionModel {
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);
   void compute_motion_rates();
   void build_proxies(std::vector<double> levels);
+  ProxyLevel build_proxy_level(double level, const std::atomic<bool>* cancel) const;
 
   RobotModel robot_;
   AllowedCollisionMatrix acm_;

@@ -1,6 +1,7 @@
 // Lower bounds on the distance to the octree's occupied cubes over a box, from one exact squared
 // Euclidean distance transform of its voxels (issue 18: the step toward answering "is this
-// sphere clear of every obstacle?" with one lookup; not used by the queries yet).
+// sphere clear of every obstacle?" with one lookup: check_environment, check_batch and certified
+// motions use it through Environment::octree_distance_field).
 //
 // Why the bound holds. Voxel i is the cube [i res, (i + 1) res] per axis (octree_key.h). For every
 // voxel X of the grid the transform gives D(X), the smallest squared distance, in voxels, between
@@ -16,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "bvh_collision/geometry/types.h"
@@ -35,6 +37,11 @@ class OctreeDistanceField {
   // A lower bound on the distance from p to every occupied cube of the tree, at most cap(); 0 for
   // a point outside the box (or not finite): nothing is known there.
   double lower_bound(const Vec3& p) const;
+
+  // Does the closed ball meet an occupied voxel? Answered from the grid's own record of which
+  // voxels are occupied (squared distance 0), exactly up to rounding on the side of yes: true
+  // whenever it meets one. Empty when the ball's voxels are not all in the grid.
+  std::optional<bool> ball_meets_occupied(const Vec3& centre, double radius) const;
 
   double cap() const { return cap_; }
   std::size_t cells() const { return squared_.size(); }

@@ -45,7 +45,7 @@ class JointValueMap {
   bool knows(const std::string& name) const;
 
  private:
-  const RobotModel* model_;
+  RobotModel model_;  // a copy: the checker it came from may be replaced (proxy levels)
   std::vector<double> lower_, upper_;
   std::vector<bool> bounded_;
 };
