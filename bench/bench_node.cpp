@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <random>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
+#include <ros/topic.h>
 
 #include "bench_util.h"
 #include "bvh_collision/CheckState.h"
@@ -128,6 +130,18 @@ int main(int argc, char** argv) {
   const std::string node = pnh.param<std::string>("node", "/collision_checker");
   if (!ros::service::waitForService(node + "/check_state", ros::Duration(60))) {
     std::fprintf(stderr, "bench_node: %s/check_state never came up\n", node.c_str());
+    return 1;
+  }
+  // The node builds its proxy level after start-up: measure once it is in use.
+  bool ready = false;
+  for (int tries = 0; tries < 30 && !ready; ++tries) {
+    const auto msg = ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5.0));
+    for (const auto& status : msg ? msg->status : std::vector<diagnostic_msgs::DiagnosticStatus>{}) {
+      for (const auto& kv : status.values) ready = ready || (kv.key == "proxy levels ready (m)" && kv.value == "0.01");
+    }
+  }
+  if (!ready) {
+    std::fprintf(stderr, "bench_node: the node's proxy level never came into use\n");
     return 1;
   }
   const CollisionChecker checker = load_checker(urdf);

@@ -225,6 +225,9 @@ TEST(EnvironmentProxies, NoFalseNegativeAndHitsWithinTheTolerance) {
         request.tolerance = tolerance;
         request.all_links = i % 2 == 0;
         const EnvironmentResult r = checker.check_environment(q.data(), env, request);
+        EnvironmentRequest boolean = request;  // as check_batch asks: the field's grid may answer alone
+        boolean.contacts = false;
+        ASSERT_EQ(checker.check_environment(q.data(), env, boolean).collision, r.collision) << "state " << i;
         if (d <= padding) {
           ASSERT_TRUE(r.collision) << "state " << i << " distance " << d;
         }

@@ -63,6 +63,7 @@ bool collides_with_environment(const CollisionChecker& checker, const double* st
   r.tolerance = request.tolerance;
   r.root_pose = request.root_pose;
   r.distance_field = EnvironmentRequest::DistanceField::kIfKept;  // one already built for this octree
+  r.contacts = false;
   return checker.check_environment(state, env, r).collision;
 }
 

@@ -62,6 +62,9 @@ void transform_line(std::uint32_t* line, std::int64_t count, std::int64_t stride
 }
 
 std::int64_t voxel_of(double x, double resolution) { return static_cast<std::int64_t>(std::floor(x / resolution)); }
+// The same through a multiplication (queries): at most an ulp or two from x / res, so a point
+// lands in the other voxel only within rounding of their shared face, which the margins cover.
+std::int64_t voxel_at(double x, double inverse) { return static_cast<std::int64_t>(std::floor(x * inverse)); }
 
 }  // namespace
 
@@ -74,6 +77,7 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
   OctreeDistanceField field;
   const double res = tree.resolution();
   field.resolution_ = res;
+  field.inverse_ = 1.0 / res;
   field.cap_ = cap;
   const std::int64_t pad = static_cast<std::int64_t>(std::ceil(cap / res)) + 1;
   std::size_t cells = 1;
@@ -108,6 +112,13 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
       }
     }
   }
+  // The bound of every squared centre distance below the cap's, computed once (a query then
+  // takes one load instead of a square root).
+  for (std::uint32_t d = 0;; ++d) {
+    const double bound = std::min((std::sqrt(double(d)) - std::sqrt(3.0)) * res, cap);
+    field.bound_of_squared_.push_back(bound);
+    if (bound >= cap) break;
+  }
   // Separable: along z, then y, then x (a squared distance sums its axes' squares).
   std::vector<std::int64_t> f, v;
   std::vector<Breakpoint> zs;
@@ -128,13 +139,12 @@ double OctreeDistanceField::lower_bound(const Vec3& p) const {
   if (squared_.empty() || !p.allFinite()) return 0.0;
   std::int64_t i[3];
   for (int a = 0; a < 3; ++a) {
-    i[a] = voxel_of(p[a], resolution_);
+    i[a] = voxel_at(p[a], inverse_);
     if (i[a] < inner_lo_[a] || i[a] > inner_hi_[a]) return 0.0;
     i[a] -= grid_lo_[a];
   }
   const std::uint32_t squared = squared_[(i[0] * size_[1] + i[1]) * size_[2] + i[2]];
-  const double bound =
-      squared == kFar ? cap_ : std::min((std::sqrt(double(squared)) - std::sqrt(3.0)) * resolution_, cap_);
+  const double bound = squared < bound_of_squared_.size() ? bound_of_squared_[squared] : cap_;
   // The margin covers p / res rounded across a voxel face and the square root's rounding.
   return std::max(0.0, bound - kVolumeMargin * (1.0 + p.lpNorm<Eigen::Infinity>() + cap_));
 }
@@ -144,8 +154,8 @@ std::optional<bool> OctreeDistanceField::ball_meets_occupied(const Vec3& centre,
   std::int64_t lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     // One voxel more on each side than the ball needs: p / res may round across a face.
-    lo[a] = voxel_of(centre[a] - radius, resolution_) - 1 - grid_lo_[a];
-    hi[a] = voxel_of(centre[a] + radius, resolution_) + 1 - grid_lo_[a];
+    lo[a] = voxel_at(centre[a] - radius, inverse_) - 1 - grid_lo_[a];
+    hi[a] = voxel_at(centre[a] + radius, inverse_) + 1 - grid_lo_[a];
     if (lo[a] < 0 || hi[a] >= size_[a]) return std::nullopt;
   }
   // Grown a little: the clamped differences round, and a touching cube must count.

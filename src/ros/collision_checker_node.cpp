@@ -182,7 +182,8 @@ void CollisionCheckerNode::advertise() {
 // One line: which links are solids (a link inside one collides) and which meshes are open, and
 // why; the same lists as parameters (robot/solid_links, robot/open_meshes).
 void CollisionCheckerNode::log_solidity() {
-  const RobotModel& m = checker()->model();
+  const std::shared_ptr<const CollisionChecker> checker = this->checker();  // keeps `m` alive
+  const RobotModel& m = checker->model();
   const LinkSolidity solidity = link_solidity(m);
   solid_links_.clear();
   open_meshes_.clear();
@@ -221,7 +222,8 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
   }
   // Joint states may come from several publishers and other robots: take what is ours and
   // finite, ignore the rest.
-  const RobotModel& model = checker()->model();
+  const std::shared_ptr<const CollisionChecker> checker = this->checker();  // keeps `model` alive
+  const RobotModel& model = checker->model();
   std::lock_guard<std::mutex> lock(state_mutex_);
   for (std::size_t i = 0; i < msg->name.size(); ++i) {
     const int j = model.joint_index(msg->name[i]);

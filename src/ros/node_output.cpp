@@ -173,7 +173,8 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   queries.level = diagnostic_msgs::DiagnosticStatus::OK;
   queries.message = "ok";
   std::ostringstream levels;
-  for (const ProxyLevel& level : checker()->collision_model().proxy_levels()) {
+  const std::shared_ptr<const CollisionChecker> checker = this->checker();  // alive through the loop
+  for (const ProxyLevel& level : checker->collision_model().proxy_levels()) {
     levels << (levels.tellp() > 0 ? " " : "") << level.level;
   }
   queries.values.push_back(kv("proxy levels ready (m)", levels.str()));

@@ -77,8 +77,11 @@ void CollisionCheckerNode::self_part(const double* state, const CheckState::Requ
   request.all_pairs = req.max_contacts > 0;
   request.max_contacts = req.max_contacts;
   request.distance = req.distance;
-  const SelfCollisionResult result = checker()->check_self(state, request);
-  const auto& links = checker()->model().links();
+  // One checker for the whole answer: the node may swap in another (a proxy level built), and
+  // `links` must outlive this function's use of it.
+  const std::shared_ptr<const CollisionChecker> checker = this->checker();
+  const SelfCollisionResult result = checker->check_self(state, request);
+  const auto& links = checker->model().links();
   res.self_collision = result.collision;
   for (const LinkContact& lc : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;
@@ -105,8 +108,11 @@ void CollisionCheckerNode::environment_part(const double* state, const Environme
   request.all_links = req.max_contacts > 0;
   request.distance = req.distance;
   request.root_pose = root;
-  const EnvironmentResult result = checker()->check_environment(state, env, request);
-  const auto& links = checker()->model().links();
+  // One checker for the whole answer: the node may swap in another (a proxy level built), and
+  // `links` must outlive this function's use of it.
+  const std::shared_ptr<const CollisionChecker> checker = this->checker();
+  const EnvironmentResult result = checker->check_environment(state, env, request);
+  const auto& links = checker->model().links();
   res.environment_collision = result.collision;
   for (const EnvironmentContact& ec : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;

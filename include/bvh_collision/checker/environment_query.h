@@ -18,6 +18,9 @@ struct EnvironmentRequest {
   bool solids = true;      // closed meshes bound solids; occupied space is solid
   bool octree = true;      // check against the octree...
   bool objects = true;     // ...and against the collision objects
+  // False: the boolean answer is all the caller reads (check_batch), so a proxy check may answer
+  // from the distance field's occupancy grid without finding the octree cube for a contact.
+  bool contacts = true;
   Transform root_pose;     // the root link in the environment's (world) frame: a moving base
   // Per link, nonzero: check it; null: every link (check_batch checks the links no joint moves
   // once per batch). Not owned: it must outlive the query.

@@ -34,7 +34,8 @@ struct CheckerOptions {
   // Proxy levels e (m) for bounded-error sphere proxies (checker/link_proxy.h), built at
   // construction. A boolean self check at tolerance t >= e answers from the coarsest such level.
   // Empty by default: their build delays the start (panda 1.8 s at 10 mm, 34 s at 2 mm; pr2
-  // 41 s at 10 mm). Levels of 5 mm and up pay; 2 mm was slower than the exact check on panda.
+  // 41 s at 10 mm); with_proxy_level adds one later (the node builds 5, 10 and 20 mm so, after
+  // start-up). Levels of 5 mm and up pay; 2 mm was slower than the exact check on panda.
   std::vector<double> proxy_levels;
   // Grids of proven clearance for the self pairs one or two variables move
   // (checker/pair_clearance.h): a boolean self check skips such a pair with one lookup when its

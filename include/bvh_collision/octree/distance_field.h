@@ -48,7 +48,8 @@ class OctreeDistanceField {
   std::size_t memory_bytes() const { return squared_.capacity() * sizeof(std::uint32_t); }
 
  private:
-  double resolution_ = 0.0, cap_ = 0.0;
+  double resolution_ = 0.0, inverse_ = 0.0, cap_ = 0.0;
+  std::vector<double> bound_of_squared_;  // the bound for each D whose bound is below the cap
   std::int64_t inner_lo_[3] = {0, 0, 0}, inner_hi_[3] = {-1, -1, -1};  // the box's voxels
   std::int64_t grid_lo_[3] = {0, 0, 0}, size_[3] = {0, 0, 0};          // the box and the cap
   std::vector<std::uint32_t> squared_;  // per grid voxel, D (kFar: no occupied voxel in the grid)

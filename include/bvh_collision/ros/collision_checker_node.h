@@ -107,7 +107,8 @@ class CollisionCheckerNode {
   void log_solidity();
   // The proxy levels, coarsest first, on proxy_builder_ (collision_checker_node.cpp).
   void build_proxy_levels();
-  // The checker queries use now: proxy levels join it as they are built.
+  // The checker queries use now: proxy levels join it as they are built. Hold the pointer while
+  // using references into it (a swap may free the old one).
   std::shared_ptr<const CollisionChecker> checker() const { return std::atomic_load(&checker_); }
 
   // The robot's state and pose (collision_checker_node.cpp).
