@@ -107,6 +107,11 @@ void CollisionCheckerNode::load_robot() {
   for (const RobotLink& link : model.links()) has_geometry_ = has_geometry_ || !link.collision.empty();
   root_link_ = model.links()[model.root_link()].name;
   state_ = neutral_state(model);
+  try {
+    history_ = std::make_unique<JointStateHistory>(model, params_.joint_state_history, params_.joint_state_lead);
+  } catch (const std::invalid_argument& e) {
+    throw NodeStartupError(std::string("parameters ~joint_state_history and ~joint_state_lead: ") + e.what());
+  }
   CheckerOptions options;
   options.padding = params_.padding;
   options.link_padding = params_.link_padding;
@@ -225,17 +230,33 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
   const std::shared_ptr<const CollisionChecker> checker = this->checker();  // keeps `model` alive
   const RobotModel& model = checker->model();
   std::lock_guard<std::mutex> lock(state_mutex_);
+  bool ours = false;
   for (std::size_t i = 0; i < msg->name.size(); ++i) {
     const int j = model.joint_index(msg->name[i]);
     if (j < 0 || !std::isfinite(msg->position[i])) continue;
     const int variable = model.joints()[j].variable;
     if (variable >= 0) state_[variable] = msg->position[i];
+    ours = ours || variable >= 0;
   }
+  // The merged state at the message's stamp (its arrival when unstamped): what a cloud taken
+  // then must be filtered against.
+  if (!ours) return;
+  history_->record((msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp).toSec(), state_);
+  history_grew_.notify_all();
 }
 
 std::vector<double> CollisionCheckerNode::current_state() const {
   std::lock_guard<std::mutex> lock(state_mutex_);
   return state_;
+}
+
+std::optional<std::vector<double>> CollisionCheckerNode::state_at(const ros::Time& stamp,
+                                                                 const ros::WallDuration& timeout) const {
+  std::unique_lock<std::mutex> lock(state_mutex_);
+  if (stamp.isZero() || history_->empty()) return state_;
+  const double t = stamp.toSec();
+  history_grew_.wait_for(lock, std::chrono::duration<double>(timeout.toSec()), [&] { return history_->newest() >= t; });
+  return history_->at(t);
 }
 
 Transform CollisionCheckerNode::root_pose(const ros::Time& stamp, const ros::Duration& timeout) const {

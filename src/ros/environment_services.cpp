@@ -59,7 +59,18 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
                           ? ScanWorkspace{params_.workspace_min->cast<float>(), params_.workspace_max->cast<float>()}
                           : ScanWorkspace{(root.t.array() - half).matrix().cast<float>(),
                                           (root.t.array() + half).matrix().cast<float>()};
-  const std::vector<double> state = current_state();
+  // The robot where it was at the stamp: with the latest joint values instead, a moving arm's
+  // own points stay as obstacles and real points near its present pose are dropped.
+  const std::optional<std::vector<double>> at_stamp =
+      state_at(msg.header.stamp, ros::WallDuration(params_.cloud_transform_timeout));
+  if (!at_stamp) {
+    ++clouds_.dropped_state;
+    ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud dropped: no joint state at its stamp "
+                                      << msg.header.stamp << " (joint_state_history " << params_.joint_state_history
+                                      << " s, joint_state_lead " << params_.joint_state_lead << " s)");
+    return;
+  }
+  const std::vector<double>& state = *at_stamp;
   const FilteredScan filtered = checker()->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);

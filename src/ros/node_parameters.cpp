@@ -117,6 +117,8 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   }
   read(nh, "octree_file", p.octree_file, "a string (a .bt or .ot path)");
   p.cloud_transform_timeout = read_number(nh, "cloud_transform_timeout", p.cloud_transform_timeout, false);
+  p.joint_state_history = read_number(nh, "joint_state_history", p.joint_state_history, false);
+  p.joint_state_lead = read_number(nh, "joint_state_lead", p.joint_state_lead, false);
   p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
   p.service_threads = static_cast<int>(read_number(nh, "service_threads", p.service_threads, true));
   return p;

@@ -11,6 +11,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -40,6 +41,7 @@
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/checker/environment_store.h"
+#include "bvh_collision/robot/joint_state_history.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/ros/conversions.h"
 #include "bvh_collision/ros/latency_stats.h"
@@ -77,6 +79,10 @@ struct NodeParameters {
   std::string octree_file;
   // ---
   double cloud_transform_timeout = 0.2;  // s to wait for a cloud's transform at its stamp
+  // The self filter places the robot at a cloud's stamp from the joint states of the last
+  // `joint_state_history` s (interpolated); a cloud older than that, or stamped more than
+  // `joint_state_lead` s after the newest joint state, is dropped and counted.
+  double joint_state_history = 10.0, joint_state_lead = 0.1;
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
 
@@ -114,6 +120,10 @@ class CollisionCheckerNode {
   // The robot's state and pose (collision_checker_node.cpp).
   void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg);
   std::vector<double> current_state() const;
+  // The joint values at a cloud's stamp (joint_state_history), waiting up to `timeout` for the
+  // joint states to reach it (they often come after the cloud); the current state for a zero
+  // stamp or before any joint_states; nothing when the stamp lies outside the history.
+  std::optional<std::vector<double>> state_at(const ros::Time& stamp, const ros::WallDuration& timeout) const;
   // The root link in world_frame at `stamp` (0: the latest); throws RequestError when tf2 cannot
   // tell within `timeout`.
   Transform root_pose(const ros::Time& stamp, const ros::Duration& timeout = ros::Duration(0)) const;
@@ -167,6 +177,8 @@ class CollisionCheckerNode {
 
   mutable std::mutex state_mutex_;
   std::vector<double> state_;  // from joint_states; neutral_state() until the first message
+  std::unique_ptr<JointStateHistory> history_;  // every merged state_, at its message's stamp
+  mutable std::condition_variable history_grew_;  // notified on each joint state recorded
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -183,7 +195,7 @@ class CollisionCheckerNode {
   std::uint64_t clouds_lost_reported_ = 0;  // dropped + rejected at the last diagnostics
 
   struct CloudCounters {
-    std::atomic<std::uint64_t> received{0}, inserted{0}, dropped_transform{0}, rejected{0};
+    std::atomic<std::uint64_t> received{0}, inserted{0}, dropped_transform{0}, dropped_state{0}, rejected{0};
     std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
     std::atomic<std::uint64_t> on_robot{0}, shadowed{0};
     std::atomic<double> last_insert_seconds{0.0};
