@@ -154,7 +154,9 @@ int main(int argc, char** argv) {
   const std::vector<double> neutral = neutral_state(checker.model());
   const FilteredScan filtered = checker.filter_scan(neutral.data(), points, origin, 0.02);
   const float half = float(checker.reach() + 0.5);
-  const ScanOptions options{5.0, ScanWorkspace{ScanPoint::Constant(-half), ScanPoint::Constant(half)}, 0};
+  ScanOptions options;
+  options.max_range = 5.0;
+  options.workspace = ScanWorkspace{ScanPoint::Constant(-half), ScanPoint::Constant(half)};
   insert_scan(b.env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("obstacle_cloud", 1, true);
   sensor_msgs::PointCloud2 cloud = to_cloud_msg(points, checker.model().links()[checker.model().root_link()].name);

@@ -316,6 +316,29 @@ TEST(Environment, ObjectsAddMoveRemoveAndBadInput) {
 }
 
 // A whole robot against an octree and objects, link by link against the exploded oracle.
+// An object built outside the environment (the node builds it before taking the store's write
+// lock) is the object add_object builds: same bounds, same hierarchy, replaces by id, and a bad
+// one throws before the environment is touched.
+TEST(Environment, ObjectsBuiltAheadEqualObjectsBuiltInPlace) {
+  const ObjectShape blob = ObjectShape::triangles(test::bumpy_sphere(rng(), 0.05, 6, 8, 0.1));
+  const Transform pose = Transform::Translation(Vec3(0.3, 0.1, 0.5));
+  Environment in_place(0.05), ahead(0.05);
+  in_place.add_object("blob", blob, pose);
+  ahead.add_object(make_collision_object("blob", blob, pose));
+  const CollisionObject& a = *in_place.find_object("blob");
+  const CollisionObject& b = *ahead.find_object("blob");
+  EXPECT_EQ(a.bound_center, b.bound_center);
+  EXPECT_EQ(a.bound_radius, b.bound_radius);
+  ASSERT_TRUE(a.mesh && b.mesh);
+  EXPECT_EQ(a.mesh->nodes().size(), b.mesh->nodes().size());
+  EXPECT_EQ(a.hull->vertices.size(), b.hull->vertices.size());
+  ahead.add_object(make_collision_object("blob", ObjectShape::sphere(0.2), pose));  // replaces
+  EXPECT_EQ(ahead.objects().size(), 1u);
+  EXPECT_EQ(ahead.find_object("blob")->mesh, nullptr);
+  EXPECT_THROW(make_collision_object("", blob, pose), std::invalid_argument);
+  EXPECT_THROW(make_collision_object("bad", ObjectShape::sphere(-1.0), pose), std::invalid_argument);
+}
+
 TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
   BVH_REQUIRE_ROBOTS();
   const std::string dir = test::robots_dir() + "/panda";

@@ -5,6 +5,7 @@
 // without collision geometry.
 #include <gmock/gmock.h>
 
+#include <chrono>
 #include <filesystem>
 #include <limits>
 #include <mutex>
@@ -115,6 +116,15 @@ TEST_F(NodeBadRequests, CheckStatesAndCheckMotion) {
   EXPECT_THAT(batch_error({"joint1"}, {0, 0, kNaN}), Says("configuration 2"));
   EXPECT_THAT(batch_error({"joint9"}, {0}), Says("unknown joint 'joint9'"));
   EXPECT_THAT(batch_error({}, {0.0}), Says("joint_names is empty"));
+  // Limits (the .test file sets ~max_batch_states 500): named, with the parameter that raises them.
+  EXPECT_THAT(batch_error({"joint1"}, std::vector<double>(501, 0.0)), Says("~max_batch_states"));
+  EXPECT_TRUE(call<CheckStates>("check_states", [] {
+                CheckStates::Request r;
+                r.joint_names = {"joint1"};
+                r.positions.assign(500, 0.0);
+                return r;
+              }()).response.error.empty())
+      << "500 configurations are within the limit";
 
   const auto motion_error = [](std::vector<double> start, std::vector<double> goal, double resolution) {
     CheckMotion::Request r;
@@ -128,6 +138,11 @@ TEST_F(NodeBadRequests, CheckStatesAndCheckMotion) {
   EXPECT_THAT(motion_error({0.0}, {1.0}, -0.1), Says("resolution"));
   EXPECT_THAT(motion_error({0.0}, {1.0}, kNaN), Says("resolution"));
   EXPECT_THAT(motion_error({0.0}, {kInf}, 0.1), Says("'joint1' has value inf"));
+  // 3 rad at 1e-9 rad once kept the node busy for ten minutes; 1e-300 made the count undefined.
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_THAT(motion_error({-1.5}, {1.5}, 1e-9), Says("~max_motion_states"));
+  EXPECT_THAT(motion_error({-1.5}, {1.5}, 1e-300), Says("~max_motion_states"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
 }
 
 TEST_F(NodeBadRequests, RaysAndBoxes) {
@@ -183,6 +198,13 @@ TEST_F(NodeBadRequests, CollisionObjects) {
                 r.id = "";
               }),
               Says("id is empty"));
+  EXPECT_THAT(error([](auto& r) {  // 101 triangles; the .test file sets ~max_object_triangles 100
+                r.shape.type = CollisionShape::TRIANGLES;
+                r.shape.vertices.resize(3);
+                r.shape.vertices[1].x = r.shape.vertices[2].y = 0.1;
+                for (int i = 0; i < 101; ++i) r.shape.triangles.insert(r.shape.triangles.end(), {0, 1, 2});
+              }),
+              Says("~max_object_triangles"));
   RemoveCollisionObject::Request remove;
   remove.id = "ghost";
   EXPECT_THAT(call<RemoveCollisionObject>("remove_collision_object", remove).response.error,
@@ -226,6 +248,8 @@ TEST_F(NodeBadRequests, BadCloudsAreCountedNotInserted) {
   bad[1].fields[0].datatype = sensor_msgs::PointField::INT32;       // x is not a float
   bad[2].data.resize(bad[2].data.size() / 2);                       // data shorter than promised
   bad[3].fields[2].offset = 10;                                     // z beyond point_step
+  std::vector<ScanPoint> big(1001, ScanPoint(0.5f, 0.0f, 0.5f));
+  bad.push_back(to_cloud_msg(big, "world"));                        // beyond ~max_cloud_points (1000)
   sensor_msgs::PointCloud2 lost = to_cloud_msg(wall, "nowhere");    // no transform will come
   for (auto& c : bad) {
     c.header.stamp = ros::Time::now();
@@ -238,13 +262,16 @@ TEST_F(NodeBadRequests, BadCloudsAreCountedNotInserted) {
     std::lock_guard<std::mutex> lock(mutex);
     return values.count(key) ? values[key] : -1LL;
   };
-  for (int i = 0; i < 60 && (get("clouds rejected (malformed)") < 4 || get("clouds dropped (no transform)") < 1); ++i) {
+  for (int i = 0; i < 60 && (get("clouds rejected (malformed)") < 4 || get("clouds rejected (over ~max_cloud_points)") < 1 ||
+                              get("clouds dropped (no transform)") < 1);
+       ++i) {
     ros::WallDuration(0.1).sleep();
   }
   EXPECT_EQ(get("clouds rejected (malformed)"), 4);
+  EXPECT_EQ(get("clouds rejected (over ~max_cloud_points)"), 1);
   EXPECT_EQ(get("clouds dropped (no transform)"), 1);
   EXPECT_EQ(get("clouds inserted"), 0);
-  EXPECT_EQ(get("clouds received"), 5);
+  EXPECT_EQ(get("clouds received"), 6);
 }
 
 TEST_F(NodeBadRequests, ARobotWithoutGeometryIsAnError) {

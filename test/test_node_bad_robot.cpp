@@ -84,6 +84,19 @@ TEST(NodeBadRobot, ProxyLevelBelowAMillimetre) {
   expect_startup_failure("bad_proxy_levels", "~proxy_levels: every level must lie in [0.001, 1] m, got 0.000100");
 }
 
+// Limits (issue 19): each refused at start-up, naming the parameter that raises it.
+TEST(NodeBadRobot, ServiceThreadsOutOfRange) {
+  expect_startup_failure("huge_threads", "~service_threads must be a whole number from 1 to 64");
+}
+
+TEST(NodeBadRobot, RaysCrossingTooManyVoxels) {
+  expect_startup_failure("long_rays", "~max_ray_voxels");  // 5 m at 0.1 mm: 50,000 voxels a ray
+}
+
+TEST(NodeBadRobot, MoreLinksThanTheLimit) { expect_startup_failure("many_links", "~max_robot_links"); }
+
+TEST(NodeBadRobot, MoreCheckedPairsThanTheLimit) { expect_startup_failure("many_pairs", "~max_checked_pairs"); }
+
 TEST(NodeBadRobot, ProxyLevelsNotAList) {
   expect_startup_failure("proxy_levels_not_list", "~proxy_levels must be a list of numbers (m)");
 }

@@ -47,7 +47,9 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
   return {};
 }
 
-CollisionObject make_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
+}  // namespace
+
+CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
   if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
   require_rigid(pose, id);
   CollisionObject o{id, shape, pose, nullptr, nullptr, Primitive{}, Vec3::Zero(), 0.0};
@@ -81,8 +83,6 @@ CollisionObject make_object(const std::string& id, const ObjectShape& shape, con
   o.bound_radius = grown_radius(o.bound_radius);
   return o;
 }
-
-}  // namespace
 
 Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
 
@@ -119,7 +119,11 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
 }
 
 void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
-  CollisionObject o = make_object(id, shape, pose);  // throws before anything changes
+  add_object(make_collision_object(id, shape, pose));  // throws before anything changes
+}
+
+void Environment::add_object(CollisionObject o) {
+  const std::string& id = o.id;
   const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
   if (it != objects_.end()) {
     *it = std::move(o);

@@ -3,10 +3,12 @@
 // clearance divided by a bound on how fast any point of any link moves).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
@@ -73,7 +75,14 @@ bool collides_with_environment(const CollisionChecker& checker, const double* st
 MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, const Environment& env,
                              const MotionRequest& request) {
   MotionResult result;
-  const auto steps = static_cast<std::size_t>(std::max(1.0, std::ceil(segment.longest() / request.resolution)));
+  // Counted in floating point first: 3 rad at 1e-300 rad is not a number of states to cast.
+  const double needed = std::max(1.0, std::ceil(segment.longest() / request.resolution));
+  char what[160];
+  std::snprintf(what, sizeof what, "a fixed-step motion of %g rad (or m) at resolution %g with its states",
+                segment.longest(), request.resolution);
+  check_limit(what,
+              needed + 1.0, checker.collision_model().limits().motion_states, "max_motion_states");
+  const auto steps = static_cast<std::size_t>(needed);
   const RobotCollisionModel& model = checker.collision_model();
   const ProxyLevel* proxies = request.self ? model.proxies_for(request.tolerance) : nullptr;
   const bool lanes = proxies != nullptr && !proxies->batch.empty();

@@ -41,8 +41,9 @@ LinkBound bounding_sphere(const std::vector<LinkShape>& shapes, const std::vecto
 }  // namespace
 
 RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options)
-    : robot_(std::move(robot)), acm_(std::move(acm)) {
+    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits) {
   const std::size_t n = robot_.links().size();
+  check_limit("robot '" + robot_.name() + "' with its links", double(n), limits_.robot_links, "max_robot_links");
   if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
   padding_.resize(n, options.padding);
   for (std::size_t l = 0; l < n; ++l) {
@@ -58,6 +59,12 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
     for (std::size_t b = a + 1; b < n; ++b) {
       if (robot_.links()[a].collision.empty() || robot_.links()[b].collision.empty() || acm_.allowed(a, b)) continue;
       checked_pairs_.emplace_back(static_cast<int>(a), static_cast<int>(b));
+      // Before any hierarchy is built: refusing such a robot must cost nothing.
+      if (checked_pairs_.size() > limits_.checked_pairs) {
+        throw LimitExceeded("robot '" + robot_.name() + "' with its checked link pairs (more than the limit: counting "
+                            "stopped at " + std::to_string(checked_pairs_.size()) + ")", double(checked_pairs_.size()),
+                            limits_.checked_pairs, "max_checked_pairs");
+      }
     }
   }
   build_shapes(options, needed);

@@ -2,9 +2,9 @@
 #include "bvh_collision/geometry/detail/filtered_predicates.h"
 
 #include <algorithm>
+#include <random>
 #include <cmath>
 #include <cstdint>
-#include <unordered_set>
 
 #include "bvh_collision/geometry/predicates.h"
 
@@ -42,41 +42,151 @@ bool initial_tetrahedron(const std::vector<Vec3>& p, std::array<int, 4>& t) {
   return t[3] >= 0;
 }
 
-std::uint64_t edge_key(int u, int v) { return (static_cast<std::uint64_t>(u) << 32) | static_cast<std::uint32_t>(v); }
+// Randomized incremental hull with exact signs (Clarkson and Shor 1989; the outside sets of
+// Quickhull, Barber, Dobkin and Huhdanpaa 1996): every point outside the hull so far waits in
+// the outside set of one face it sees. Points are added in a fixed pseudo-random order: the faces
+// a point sees (a connected set, found from its face across edges) are replaced by a cone to
+// their horizon, and their waiting points go to the first new face each one sees (one that sees
+// no new face is inside the new hull: above a replaced face and below every cone face means
+// within the cone). Expected O(n log n) for any input; inserting every point against every face
+// (what this replaced) was O(n^2): 200,000 points on a sphere took minutes.
+class Quickhull {
+ public:
+  explicit Quickhull(const std::vector<Vec3>& p) : p_(p), face_of_(p.size(), -1), cone_from_(p.size(), -1), cone_to_(p.size(), -1) {}
 
-// Adds point `pi` to the hull `faces` (outward), replacing the faces it sees strictly: exact signs
-// make "sees no face" mean "inside or on the hull". Returns false when nothing changed.
-bool add_point(const std::vector<Vec3>& p, int pi, std::vector<Face>& faces) {
-  thread_local std::vector<char> visible;
-  visible.assign(faces.size(), 0);
-  bool any = false;
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const Face& q = faces[f];
-    visible[f] = detail::orient3d_filtered(p[q[0]], p[q[1]], p[q[2]], p[pi]) < 0;
-    any = any || visible[f];
-  }
-  if (!any) return false;
-  // The horizon: edges of seen faces whose reverse edge belongs to a face not seen.
-  std::unordered_set<std::uint64_t> seen_edges;
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    if (!visible[f]) continue;
-    for (int k = 0; k < 3; ++k) seen_edges.insert(edge_key(faces[f][k], faces[f][(k + 1) % 3]));
-  }
-  std::vector<Face> next;
-  next.reserve(faces.size() + 8);
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    if (!visible[f]) {
-      next.push_back(faces[f]);
-      continue;
+  std::vector<Face> run(const std::array<int, 4>& t) {
+    for (int k = 0; k < 4; ++k) {  // each face oriented away from the fourth vertex
+      Face f{t[k], t[(k + 1) % 4], t[(k + 2) % 4]};
+      if (detail::orient3d_filtered(p_[f[0]], p_[f[1]], p_[f[2]], p_[t[(k + 3) % 4]]) < 0) std::swap(f[1], f[2]);
+      faces_.push_back({f, {-1, -1, -1}, true, {}});
     }
-    for (int k = 0; k < 3; ++k) {
-      const int u = faces[f][k], v = faces[f][(k + 1) % 3];
-      if (!seen_edges.count(edge_key(v, u))) next.push_back({u, v, pi});
+    // The tetrahedron's neighbours: the face holding each edge reversed.
+    for (int a = 0; a < 4; ++a) {
+      for (int k = 0; k < 3; ++k) {
+        for (int b = 0; b < 4; ++b) {
+          for (int j = 0; j < 3; ++j) {
+            if (faces_[b].v[j] == faces_[a].v[(k + 1) % 3] && faces_[b].v[(j + 1) % 3] == faces_[a].v[k]) faces_[a].n[k] = b;
+          }
+        }
+      }
+    }
+    std::vector<int> rest;
+    for (int i = 0; i < static_cast<int>(p_.size()); ++i) {
+      if (std::find(t.begin(), t.end(), i) == t.end()) rest.push_back(i);
+    }
+    assign(rest, 0);
+    // A fixed permutation (the same hull for the same input, run after run).
+    std::mt19937_64 shuffle(0x9e3779b97f4a7c15ULL ^ p_.size());
+    std::shuffle(rest.begin(), rest.end(), shuffle);
+    for (const int q : rest) {
+      if (face_of_[q] >= 0) add_point(q);  // else inside the hull by now
+    }
+    std::vector<Face> out;
+    for (const FaceRec& f : faces_) {
+      if (f.alive) out.push_back(f.v);
+    }
+    return out;
+  }
+
+ private:
+  struct FaceRec {
+    Face v;
+    std::array<int, 3> n;  // the face across edge v[k] -> v[k + 1]
+    bool alive = true;
+    std::vector<int> outside;  // points that see this face (strictly), waiting
+  };
+
+  bool sees(int face, int point) const {
+    const Face& v = faces_[face].v;
+    return detail::orient3d_filtered(p_[v[0]], p_[v[1]], p_[v[2]], p_[point]) < 0;
+  }
+
+  // Each point to the first face from `first` on that it sees; the others are inside.
+  void assign(const std::vector<int>& points, int first) {
+    for (const int q : points) {
+      face_of_[q] = -1;
+      for (int f = first; f < static_cast<int>(faces_.size()); ++f) {
+        if (faces_[f].alive && sees(f, q)) {
+          faces_[f].outside.push_back(q);
+          face_of_[q] = f;
+          break;
+        }
+      }
     }
   }
-  faces.swap(next);
-  return true;
-}
+
+  // The faces the eye sees, from its own face across edges (a face is tested once per step);
+  // the horizon: edges (u, w) of seen faces whose neighbour h is not seen, at h's edge j.
+  void find_visible(int eye) {
+    ++step_;
+    if (mark_.size() < faces_.size()) mark_.resize(2 * faces_.size(), {0, 0});
+    const int face = face_of_[eye];
+    visible_.assign(1, face);
+    stack_.assign(1, face);
+    mark_[face] = {step_, 1};
+    horizon_.clear();
+    while (!stack_.empty()) {
+      const int g = stack_.back();
+      stack_.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const int h = faces_[g].n[k];
+        if (mark_[h].first != step_) {
+          mark_[h] = {step_, sees(h, eye) ? 1 : 2};
+          if (mark_[h].second == 1) visible_.push_back(h), stack_.push_back(h);
+        }
+        if (mark_[h].second == 2) {
+          const FaceRec& hidden = faces_[h];
+          const int j = hidden.n[0] == g ? 0 : hidden.n[1] == g ? 1 : 2;
+          horizon_.push_back({faces_[g].v[k], faces_[g].v[(k + 1) % 3], h, j});
+        }
+      }
+    }
+  }
+
+  // The point `eye`, outside the hull: the faces it sees replaced by a cone to their horizon.
+  void add_point(int eye) {
+    find_visible(eye);
+    orphans_.clear();
+    for (const int g : visible_) {
+      FaceRec& rec = faces_[g];
+      rec.alive = false;
+      for (const int q : rec.outside) {
+        if (q != eye) orphans_.push_back(q);
+      }
+      std::vector<int>().swap(rec.outside);
+    }
+    face_of_[eye] = -1;
+    // One face (u, w, eye) per horizon edge: across (u, w) the hidden face, across (w, eye) the
+    // cone face that starts at w, across (eye, u) the one that ends at u (the horizon is a cycle).
+    const int first = static_cast<int>(faces_.size());
+    for (const HorizonEdge& e : horizon_) {
+      const int f = static_cast<int>(faces_.size());
+      faces_.push_back({{e.u, e.w, eye}, {e.hidden, -1, -1}, true, {}});
+      faces_[e.hidden].n[e.hidden_edge] = f;
+      cone_from_[e.u] = f;
+      cone_to_[e.w] = f;
+    }
+    for (int f = first; f < static_cast<int>(faces_.size()); ++f) {
+      faces_[f].n[1] = cone_from_[faces_[f].v[1]];
+      faces_[f].n[2] = cone_to_[faces_[f].v[0]];
+    }
+    assign(orphans_, first);
+  }
+
+  struct HorizonEdge {
+    int u, w, hidden, hidden_edge;
+  };
+
+  const std::vector<Vec3>& p_;
+  std::vector<FaceRec> faces_;
+  std::vector<int> face_of_;             // per point: the face whose outside set holds it, or -1
+  std::vector<int> cone_from_, cone_to_;  // per horizon vertex: the cone face starting / ending there
+  // Scratch of add_point, kept between steps.
+  std::uint64_t step_ = 0;
+  std::vector<std::pair<std::uint64_t, int>> mark_;  // per face: the step it was last met in, and how
+  std::vector<int> visible_, stack_, orphans_;
+  std::vector<HorizonEdge> horizon_;
+};
 
 }  // namespace
 
@@ -95,22 +205,7 @@ ConvexHull convex_hull(const std::vector<Vec3>& points) {
     hull.vertices = p;
     return hull;
   }
-  std::vector<Face> faces;
-  for (int k = 0; k < 4; ++k) {  // each face oriented away from the fourth vertex
-    Face f{t[k], t[(k + 1) % 4], t[(k + 2) % 4]};
-    if (detail::orient3d_filtered(p[f[0]], p[f[1]], p[f[2]], p[t[(k + 3) % 4]]) < 0) std::swap(f[1], f[2]);
-    faces.push_back(f);
-  }
-  // Far points first: they are the likely vertices, and the hull they make rejects the rest.
-  const Vec3 inside = 0.25 * (p[t[0]] + p[t[1]] + p[t[2]] + p[t[3]]);
-  std::vector<std::pair<double, int>> order;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (std::find(t.begin(), t.end(), static_cast<int>(i)) == t.end()) {
-      order.emplace_back(-(p[i] - inside).squaredNorm(), static_cast<int>(i));
-    }
-  }
-  std::sort(order.begin(), order.end());
-  for (const auto& [key, i] : order) add_point(p, i, faces);
+  std::vector<Face> faces = Quickhull(p).run(t);
   std::vector<int> index(p.size(), -1);
   for (Face& f : faces) {
     for (int& v : f) {

@@ -199,6 +199,13 @@ ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const 
 
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const std::vector<ScanPoint>& clear_only,
                       const ScanPoint& origin, const ScanOptions& options) {
+  check_limit("a scan with its points", double(points.size()) + double(clear_only.size()), options.limits.cloud_points,
+              "max_cloud_points");
+  if (options.max_range > 0.0) {
+    check_limit("a ray of max_range " + std::to_string(options.max_range) + " m at resolution " +
+                    std::to_string(tree.resolution()) + " m with its voxels",
+                std::ceil(options.max_range / tree.resolution()), options.limits.ray_voxels, "max_ray_voxels");
+  }
   const ScanRays rays{points, clear_only};
   ScanPart scan = cast_scan(tree.grid(), rays, origin, options);
   scan.stats.points = rays.size();

@@ -82,6 +82,13 @@ void CollisionCheckerNode::load_robot() {
     throw NodeStartupError("parameter '" + nh_.resolveName("robot_description") + "': " + e.what());
   }
   summary_ = summarize(*urdf_);
+  // Before any mesh is read: a robot of thousands of links is refused at once.
+  try {
+    check_limit("robot '" + summary_.name + "' with its links", double(summary_.links), params_.limits.robot_links,
+                "max_robot_links");
+  } catch (const LimitExceeded& e) {
+    throw NodeStartupError(e.what());
+  }
   if (params_.world_frame.empty()) params_.world_frame = summary_.root_link;
   RobotModel model = [&] {
     try {
@@ -115,8 +122,13 @@ void CollisionCheckerNode::load_robot() {
   CheckerOptions options;
   options.padding = params_.padding;
   options.link_padding = params_.link_padding;
+  options.limits = params_.limits;
   // The proxy levels come later, from build_proxy_levels.
-  checker_ = std::make_shared<const CollisionChecker>(std::move(model), std::move(acm), options);
+  try {
+    checker_ = std::make_shared<const CollisionChecker>(std::move(model), std::move(acm), options);
+  } catch (const LimitExceeded& e) {
+    throw NodeStartupError(std::string("robot '") + summary_.name + "': " + e.what());
+  }
   const PairClearance& grids = checker()->collision_model().pair_clearance();
   ROS_INFO("collision_checker: clearance grids for %zu of %zu checked pairs, %.1f KiB, built in %.2f s", grids.grids().size(),
            checker()->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());

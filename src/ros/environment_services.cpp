@@ -19,6 +19,9 @@ void CollisionCheckerNode::on_cloud(const sensor_msgs::PointCloud2::ConstPtr& ms
   ++clouds_.received;
   try {
     insert_cloud(*msg);
+  } catch (const LimitExceeded& e) {
+    ++clouds_.over_limit;
+    ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud rejected: " << e.what());
   } catch (const RequestError& e) {
     ++clouds_.rejected;
     ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud rejected: " << e.what());
@@ -31,6 +34,8 @@ void CollisionCheckerNode::on_cloud(const sensor_msgs::PointCloud2::ConstPtr& ms
 void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   const auto start = std::chrono::steady_clock::now();
   if (msg.header.frame_id.empty()) throw RequestError("cloud has an empty frame_id");
+  check_limit("a cloud with its points", double(msg.width) * double(msg.height), params_.limits.cloud_points,
+              "max_cloud_points");
   std::vector<ScanPoint> points = cloud_points(msg);
   // Where the sensor and the robot were when the cloud was taken; a transform that does not come
   // within the timeout drops the cloud (counted), rather than queueing it forever.
@@ -54,6 +59,7 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
 
   ScanOptions options;
   options.max_range = params_.max_range;
+  options.limits = params_.limits;
   const double half = checker()->reach() + kWorkspaceMargin;
   options.workspace = params_.workspace_min
                           ? ScanWorkspace{params_.workspace_min->cast<float>(), params_.workspace_max->cast<float>()}
@@ -116,7 +122,13 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
     const Transform pose = frame_to_world(req.frame_id) * to_transform(req.pose);
     // Meshes are read before the environment is locked: a slow file delays no other change.
     const ObjectShape shape = to_object_shape(req.shape, resolver_);
-    store_->modify([&](Environment& env) { env.add_object(req.id, shape, pose); });
+    if (shape.mesh) {
+      check_limit("collision object '" + req.id + "' with its triangles", double(shape.mesh->triangles.size()),
+                  params_.limits.object_triangles, "max_object_triangles");
+    }
+    // The hierarchy and hull too: the store's write lock is held only to insert the result.
+    CollisionObject object = make_collision_object(req.id, shape, pose);
+    store_->modify([&](Environment& env) { env.add_object(std::move(object)); });
   });
 }
 

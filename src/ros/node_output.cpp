@@ -140,7 +140,8 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   diagnostic_msgs::DiagnosticStatus environment;
   environment.name = name + ": environment";
   environment.hardware_id = summary_.name;
-  const std::uint64_t dropped = clouds_.dropped_transform + clouds_.dropped_state, rejected = clouds_.rejected;
+  const std::uint64_t dropped = clouds_.dropped_transform + clouds_.dropped_state;
+  const std::uint64_t rejected = clouds_.rejected + clouds_.over_limit;
   const bool new_losses = dropped + rejected > clouds_lost_reported_;
   clouds_lost_reported_ = dropped + rejected;
   environment.level = new_losses ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK;
@@ -155,7 +156,8 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("clouds inserted", std::to_string(inserted)),
       kv("clouds dropped (no transform)", std::to_string(clouds_.dropped_transform.load())),
       kv("clouds dropped (no joint state at the stamp)", std::to_string(clouds_.dropped_state.load())),
-      kv("clouds rejected (malformed)", std::to_string(rejected)),
+      kv("clouds rejected (malformed)", std::to_string(clouds_.rejected.load())),
+      kv("clouds rejected (over ~max_cloud_points)", std::to_string(clouds_.over_limit.load())),
       kv("points received", std::to_string(clouds_.points.load())),
       kv("points skipped (NaN or Inf)", std::to_string(clouds_.skipped_invalid.load())),
       kv("points skipped (outside the octree)", std::to_string(clouds_.skipped_outside.load())),

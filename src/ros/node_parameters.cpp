@@ -24,6 +24,38 @@ double read_number(const ros::NodeHandle& nh, const std::string& name, double va
   return value;
 }
 
+// A whole number in [1, most] (read as a double: a value too large for an int must be refused,
+// not wrapped).
+std::size_t read_count(const ros::NodeHandle& nh, const std::string& name, std::size_t value, double most) {
+  double v = static_cast<double>(value);
+  if (nh.hasParam(name) && !nh.getParam(name, v)) throw NodeStartupError("parameter ~" + name + " must be a number");
+  if (!(v >= 1.0 && v <= most) || v != std::floor(v)) {
+    throw NodeStartupError("parameter ~" + name + " must be a whole number from 1 to " + std::to_string(std::size_t(most)) +
+                           ", got " + std::to_string(v));
+  }
+  return static_cast<std::size_t>(v);
+}
+
+void read_limits(const ros::NodeHandle& nh, NodeParameters& p) {
+  constexpr double kMost = 1e12;  // any count a machine could hold; the defaults are the real limits
+  Limits& l = p.limits;
+  l.motion_states = read_count(nh, "max_motion_states", l.motion_states, kMost);
+  l.batch_states = read_count(nh, "max_batch_states", l.batch_states, kMost);
+  l.cloud_points = read_count(nh, "max_cloud_points", l.cloud_points, kMost);
+  l.ray_voxels = read_count(nh, "max_ray_voxels", l.ray_voxels, kMost);
+  l.object_triangles = read_count(nh, "max_object_triangles", l.object_triangles, kMost);
+  l.robot_links = read_count(nh, "max_robot_links", l.robot_links, kMost);
+  l.checked_pairs = read_count(nh, "max_checked_pairs", l.checked_pairs, kMost);
+  // A ray may cross max_range / resolution voxels: refused here rather than on every cloud.
+  try {
+    check_limit("~max_range " + std::to_string(p.max_range) + " m at ~resolution " + std::to_string(p.resolution) +
+                    " m: a ray with its voxels",
+                std::ceil(p.max_range / p.resolution), l.ray_voxels, "max_ray_voxels");
+  } catch (const LimitExceeded& e) {
+    throw NodeStartupError(e.what());
+  }
+}
+
 double read_probability(const ros::NodeHandle& nh, const std::string& name, double value) {
   value = read_number(nh, name, value, true);
   if (value >= 1.0) throw NodeStartupError("parameter ~" + name + " must be a probability in (0, 1)");
@@ -120,7 +152,8 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.joint_state_history = read_number(nh, "joint_state_history", p.joint_state_history, false);
   p.joint_state_lead = read_number(nh, "joint_state_lead", p.joint_state_lead, false);
   p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
-  p.service_threads = static_cast<int>(read_number(nh, "service_threads", p.service_threads, true));
+  p.service_threads = static_cast<int>(read_count(nh, "service_threads", p.service_threads, kMostServiceThreads));
+  read_limits(nh, p);
   return p;
 }
 

@@ -45,6 +45,10 @@ struct CollisionObject {
   double bound_radius = 0.0;
 };
 
+// An object as queries use it: its hierarchy and hull built (the costly part of adding one).
+// Throws std::invalid_argument as Environment::add_object does.
+CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
+
 class Environment {
  public:
   // Throws std::invalid_argument for a resolution that is not a positive finite number.
@@ -62,6 +66,9 @@ class Environment {
   // changes nothing) for an empty id, a non-finite or non-rigid pose, dimensions that are not
   // positive and finite, or a mesh without triangles or with non-finite vertices.
   void add_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
+  // The same with the object already built (make_collision_object): a writer that holds a lock
+  // builds the hierarchy and hull before taking it.
+  void add_object(CollisionObject object);
   // False (and nothing changes) when no object has this id; move throws for a bad pose.
   bool move_object(const std::string& id, const Transform& pose);
   bool remove_object(const std::string& id);

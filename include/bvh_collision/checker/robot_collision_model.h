@@ -19,6 +19,7 @@
 #include "bvh_collision/checker/pair_clearance.h"
 #include "bvh_collision/checker/proxy_batch.h"
 #include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
@@ -41,6 +42,10 @@ struct CheckerOptions {
   // (checker/pair_clearance.h): a boolean self check skips such a pair with one lookup when its
   // bound clears the padding. 0 cells: none built.
   std::size_t pair_clearance_cells = 4096;
+  // How much one robot and one query may ask for (geometry/limits.h): construction refuses a
+  // robot with more links or checked pairs, check_motion a fixed-step motion with more states,
+  // check_batch a larger batch, each with LimitExceeded.
+  Limits limits;
 };
 
 // One proxy level as built: its link proxies and what they cost.
@@ -96,6 +101,7 @@ class RobotCollisionModel {
   const std::vector<std::vector<double>>& motion_turns() const { return motion_turns_; }
   const std::vector<std::vector<SlideBound>>& motion_slides() const { return motion_slides_; }
   double reach() const { return reach_; }
+  const Limits& limits() const { return limits_; }
   // The proxy levels built (CheckerOptions::proxy_levels), finest first; the coarsest level
   // whose e is at most `tolerance`, or null.
   const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
@@ -132,6 +138,7 @@ class RobotCollisionModel {
   std::vector<std::vector<double>> motion_turns_;
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
+  Limits limits_;
   std::vector<ProxyLevel> proxy_levels_;
   PairClearance pair_clearance_;
 };

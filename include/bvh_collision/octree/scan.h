@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -31,6 +32,10 @@ struct ScanOptions {
   double max_range = -1.0;                 // < 0: unlimited; points beyond it clear along the ray only
   std::optional<ScanWorkspace> workspace;  // "model only what a scene needs"
   int threads = 0;                         // rays are cast on this many threads; 0: one per core
+  // Points per scan (end points and clear-only ones together) and voxels per ray (max_range /
+  // resolution, when max_range is given; without it a ray stays inside the 16-bit key range):
+  // insert_scan throws LimitExceeded beyond them, before it changes anything.
+  Limits limits;
 };
 
 struct ScanStats {

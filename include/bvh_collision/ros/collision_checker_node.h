@@ -41,6 +41,7 @@
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/checker/environment_store.h"
+#include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/robot/joint_state_history.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/ros/conversions.h"
@@ -85,11 +86,15 @@ struct NodeParameters {
   double joint_state_history = 10.0, joint_state_lead = 0.1;
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
+  // ~max_motion_states, ~max_batch_states, ~max_cloud_points, ~max_ray_voxels,
+  // ~max_object_triangles, ~max_robot_links, ~max_checked_pairs (geometry/limits.h).
+  Limits limits;
 
   OccupancyModel occupancy_model() const;
 };
 
 constexpr std::size_t kProxySphereBudget = 50000;
+constexpr double kMostServiceThreads = 64;  // ~service_threads: 1 to this
 
 // Reads and validates the private parameters; throws NodeStartupError on a bad value.
 NodeParameters read_node_parameters(const ros::NodeHandle& private_nh);
@@ -196,6 +201,7 @@ class CollisionCheckerNode {
 
   struct CloudCounters {
     std::atomic<std::uint64_t> received{0}, inserted{0}, dropped_transform{0}, dropped_state{0}, rejected{0};
+    std::atomic<std::uint64_t> over_limit{0};  // more points than ~max_cloud_points
     std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
     std::atomic<std::uint64_t> on_robot{0}, shadowed{0};
     std::atomic<double> last_insert_seconds{0.0};

@@ -1,0 +1,122 @@
+// Limits (geometry/limits.h, issue 19): every limit of the library refuses at once, names itself
+// and the node parameter that raises it, and changes nothing; at the limit the work is done.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/octree/scan.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+CollisionChecker demo(const Limits& limits = {}) {
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
+                                           PackageResolver({}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  CheckerOptions options;
+  options.limits = limits;
+  return CollisionChecker(std::move(model), std::move(acm), options);
+}
+
+// The message names what, how much, the limit and the parameter.
+template <class Call>
+std::string refusal(Call&& call) {
+  try {
+    call();
+  } catch (const LimitExceeded& e) {
+    return e.what();
+  }
+  return "(no LimitExceeded)";
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// 3 rad at 1e-9 rad once ran for ten minutes; 1e-300 made the number of states undefined. Both
+// are refused at once; exactly the limit's states are checked.
+TEST(Limits, FixedStepMotions) {
+  Limits limits;
+  limits.motion_states = 101;
+  const CollisionChecker checker = demo(limits);
+  const Environment env(0.02);
+  std::vector<double> a(checker.model().variable_count(), 0.0), b = a;
+  a[0] = -1.5, b[0] = 1.5;
+  MotionRequest request;
+  const auto start = std::chrono::steady_clock::now();
+  for (const double resolution : {1e-9, 1e-300, 0.0299}) {
+    request.resolution = resolution;
+    const std::string message = refusal([&] { checker.check_motion(a.data(), b.data(), env, request); });
+    EXPECT_NE(message.find("~max_motion_states"), std::string::npos) << message;
+    EXPECT_NE(message.find("limit of 101"), std::string::npos) << message;
+  }
+  EXPECT_LT(seconds_since(start), 0.5);
+  request.resolution = 0.03;  // 100 steps: 101 states
+  EXPECT_EQ(checker.check_motion(a.data(), b.data(), env, request).states_checked, 101u);
+  // The default allows 100,000.
+  const CollisionChecker defaults = demo();
+  request.resolution = 1e-9;
+  EXPECT_NE(refusal([&] { defaults.check_motion(a.data(), b.data(), env, request); }).find("100000"), std::string::npos);
+}
+
+TEST(Limits, Batches) {
+  Limits limits;
+  limits.batch_states = 10;
+  const CollisionChecker checker = demo(limits);
+  const std::vector<double> states(11 * checker.model().variable_count(), 0.0);
+  BatchRequest request;
+  request.environment = false;
+  const std::string message = refusal([&] { checker.check_batch(states.data(), 11, nullptr, request); });
+  EXPECT_NE(message.find("~max_batch_states"), std::string::npos) << message;
+  EXPECT_NE(message.find("needs 11"), std::string::npos) << message;
+  EXPECT_EQ(checker.check_batch(states.data(), 10, nullptr, request).size(), 10u);
+}
+
+// A robot beyond the limits is refused before any hierarchy is built.
+TEST(Limits, RobotLinksAndCheckedPairs) {
+  Limits links;
+  links.robot_links = 5;
+  EXPECT_NE(refusal([&] { demo(links); }).find("~max_robot_links"), std::string::npos);
+  Limits pairs;
+  pairs.checked_pairs = 3;
+  EXPECT_NE(refusal([&] { demo(pairs); }).find("~max_checked_pairs"), std::string::npos);
+  Limits exact;
+  exact.robot_links = demo().model().links().size();
+  exact.checked_pairs = demo().checked_pairs().size();
+  EXPECT_NO_THROW(demo(exact));
+}
+
+// A scan beyond the point limit, or with rays longer than the voxel limit, changes nothing.
+TEST(Limits, Scans) {
+  Octree tree(0.02);
+  const std::vector<ScanPoint> points(1001, ScanPoint(1.0f, 0.0f, 0.0f));
+  const std::uint64_t revision = tree.revision();
+  ScanOptions options;
+  options.limits.cloud_points = 1000;
+  std::string message = refusal([&] { insert_scan(tree, points, ScanPoint::Zero(), options); });
+  EXPECT_NE(message.find("~max_cloud_points"), std::string::npos) << message;
+  options.limits.cloud_points = 2000;
+  options.max_range = 100.0;  // 5,000 voxels a ray at 2 cm
+  options.limits.ray_voxels = 4999;
+  message = refusal([&] { insert_scan(tree, points, ScanPoint::Zero(), options); });
+  EXPECT_NE(message.find("~max_ray_voxels"), std::string::npos) << message;
+  EXPECT_EQ(tree.revision(), revision) << "a refused scan changed the octree";
+  EXPECT_EQ(tree.node_count(), Octree(0.02).node_count());
+  options.limits.ray_voxels = 5000;
+  EXPECT_EQ(insert_scan(tree, points, ScanPoint::Zero(), options).points, 1001u);
+}
+
+TEST(Limits, MessagesSayHowMuch) {
+  EXPECT_EQ(LimitExceeded("a batch", 12, 10, "max_batch_states").what(),
+            std::string("a batch needs 12, more than the limit of 10 (parameter ~max_batch_states raises it)"));
+  EXPECT_NE(std::string(LimitExceeded("x", INFINITY, 1, "p").what()).find("an unbounded number"), std::string::npos);
+  EXPECT_THROW(check_limit("x", std::nan(""), 1, "p"), LimitExceeded);
+  EXPECT_NO_THROW(check_limit("x", 1.0, 1, "p"));
+}
+
+}  // namespace
+}  // namespace bvh_collision
