@@ -4,6 +4,7 @@
 // of those poses (with the latest joint state instead, the arm's own points 0.15 rad behind stay
 // as obstacles it then collides with: this test failed so, at nearly every pose), and a real
 // obstacle 3 cm below the arm's path is kept.
+#include <atomic>
 #include <deque>
 #include <mutex>
 #include <thread>
@@ -155,12 +156,22 @@ TEST(NodeMovingArm, CloudsMeetTheArmWhereItWasAtTheirStamp) {
   for (std::size_t i = 0; i < parked.size(); ++i) {
     if (checker.model().variable_names()[i] == "joint1") parked[i] = -2.5;
   }
-  for (int i = 0; i < 50; ++i) {
-    sensor_msgs::JointState js = joint_state(checker.model().variable_names(), parked);
-    js.header.stamp = ros::Time::now();
-    joints.publish(js);
-    ros::Duration(0.01).sleep();
-  }
+  // The robot keeps publishing its (parked) state, as a real one does: cast_ray below takes it.
+  std::atomic<bool> parked_done{false};
+  std::thread parked_publisher([&] {
+    while (!parked_done) {
+      sensor_msgs::JointState js = joint_state(checker.model().variable_names(), parked);
+      js.header.stamp = ros::Time::now();
+      joints.publish(js);
+      ros::Duration(0.02).sleep();
+    }
+  });
+  struct Join {
+    std::atomic<bool>& done;
+    std::thread& thread;
+    ~Join() { done = true, thread.join(); }
+  } join{parked_done, parked_publisher};
+  ros::Duration(0.5).sleep();
   EXPECT_GE(std::stoi(diagnostic("clouds inserted")), 45);
   EXPECT_EQ(diagnostic("clouds dropped (no joint state at the stamp)"), "0");
 

@@ -181,6 +181,10 @@ TEST_F(NodeQueries, JointsLeftOutComeFromJointStates) {
   // as the library on the merged configuration.
   CheckState::Request partial;
   partial.state = joint_state({checker().model().variable_names()[0]}, {free[0]});
+  // A robot publishes its state all the time; this test once, so once more now: a state older than
+  // ~joint_state_timeout (1 s) would be refused, not used (node_faults.test).
+  pub.publish(msg);
+  ros::WallDuration(0.2).sleep();
   std::vector<double> merged = hit;
   merged[0] = free[0];
   EXPECT_EQ(call<CheckState>("check_state", partial).response.valid, !library_collides(merged));

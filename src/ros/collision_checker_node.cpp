@@ -253,12 +253,31 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
   // The merged state at the message's stamp (its arrival when unstamped): what a cloud taken
   // then must be filtered against.
   if (!ours) return;
+  last_joint_state_ = ros::Time::now();
   history_->record((msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp).toSec(), state_);
   history_grew_.notify_all();
 }
 
 std::vector<double> CollisionCheckerNode::current_state() const {
   std::lock_guard<std::mutex> lock(state_mutex_);
+  return state_;
+}
+
+std::vector<double> CollisionCheckerNode::current_state_for(const std::vector<int>& columns) const {
+  std::vector<char> given(state_.size(), 0);
+  for (const int c : columns) {
+    if (c >= 0) given[c] = 1;
+  }
+  const bool needs_joint_states = std::find(given.begin(), given.end(), 0) != given.end();
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (needs_joint_states && params_.joint_state_timeout > 0.0 && last_joint_state_) {
+    const double age = (ros::Time::now() - *last_joint_state_).toSec();
+    if (age > params_.joint_state_timeout) {
+      throw RequestError("the last joint_states arrived " + std::to_string(age) + " s ago (~joint_state_timeout " +
+                         std::to_string(params_.joint_state_timeout) + " s): the joints this request leaves out " +
+                         "are not known; give every joint, or restore joint_states");
+    }
+  }
   return state_;
 }
 

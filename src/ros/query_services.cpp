@@ -56,9 +56,9 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
                        std::to_string(req.state.position.size()) + " positions");
   }
   std::vector<std::string> warnings;
-  std::vector<double> state = current_state();
-  joint_map_->write(joint_map_->columns(req.state.name, warnings), req.state.position.data(), req.state.name,
-                    state, warnings);
+  const std::vector<int> columns = joint_map_->columns(req.state.name, warnings);
+  std::vector<double> state = current_state_for(columns);
+  joint_map_->write(columns, req.state.position.data(), req.state.name, state, warnings);
   // Contacts are reported in world_frame; a boolean or distance self check needs no pose.
   const bool need_pose = checks.environment || req.max_contacts > 0;
   const Transform root = need_pose ? root_pose(ros::Time(0)) : Transform::Identity();
@@ -164,7 +164,7 @@ bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::
     }
     std::vector<std::string> warnings;
     const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
-    const std::vector<double> base = current_state();
+    const std::vector<double> base = current_state_for(columns);
     const std::size_t rows = req.positions.size() / n, vars = base.size();
     std::vector<double> states(rows * vars);
     std::size_t rows_warned = 0;
@@ -213,7 +213,7 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     }
     std::vector<std::string> warnings;
     const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
-    std::vector<double> start = current_state(), goal = start;
+    std::vector<double> start = current_state_for(columns), goal = start;
     joint_map_->write(columns, req.start.data(), req.joint_names, start, warnings);
     joint_map_->write(columns, req.goal.data(), req.joint_names, goal, warnings);
     MotionRequest request;
@@ -236,7 +236,7 @@ bool CollisionCheckerNode::cast_ray(CastRay::Request& req, CastRay::Response& re
     if (std::isnan(req.max_range)) throw RequestError("max_range is NaN");
     const Vec3 origin(req.origin.x, req.origin.y, req.origin.z);
     const Vec3 direction(req.direction.x, req.direction.y, req.direction.z);
-    const std::vector<double> state = current_state();
+    const std::vector<double> state = current_state_for({});  // every link where joint_states put it
     const RayCastResult hit =
         checker()->cast_ray(state.data(), *store_->snapshot(), origin, direction, req.max_range, root_pose(ros::Time(0)));
     res.hit = hit.hit;

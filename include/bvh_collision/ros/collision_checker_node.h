@@ -84,6 +84,10 @@ struct NodeParameters {
   // `joint_state_history` s (interpolated); a cloud older than that, or stamped more than
   // `joint_state_lead` s after the newest joint state, is dropped and counted.
   double joint_state_history = 10.0, joint_state_lead = 0.1;
+  // A query that takes joint values from joint_states (joints it leaves out; cast_ray) answers an
+  // error once the last joint state is older than this (s): the robot's pose is no longer known.
+  // 0: never. Before the first joint state the neutral state is used, as always.
+  double joint_state_timeout = 1.0;
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
   // ~max_motion_states, ~max_batch_states, ~max_cloud_points, ~max_ray_voxels,
@@ -125,6 +129,9 @@ class CollisionCheckerNode {
   // The robot's state and pose (collision_checker_node.cpp).
   void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg);
   std::vector<double> current_state() const;
+  // The current state as the base of a request that sets the variables in `columns` (-1: none):
+  // a RequestError when it needs a joint value from joint_states that have stopped.
+  std::vector<double> current_state_for(const std::vector<int>& columns) const;
   // The joint values at a cloud's stamp (joint_state_history), waiting up to `timeout` for the
   // joint states to reach it (they often come after the cloud); the current state for a zero
   // stamp or before any joint_states; nothing when the stamp lies outside the history.
@@ -182,6 +189,7 @@ class CollisionCheckerNode {
 
   mutable std::mutex state_mutex_;
   std::vector<double> state_;  // from joint_states; neutral_state() until the first message
+  std::optional<ros::Time> last_joint_state_;  // when the last one of ours arrived
   std::unique_ptr<JointStateHistory> history_;  // every merged state_, at its message's stamp
   mutable std::condition_variable history_grew_;  // notified on each joint state recorded
 
