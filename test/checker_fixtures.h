@@ -1,5 +1,5 @@
-// A CollisionChecker for one of the real robots of ../shared/robots, with the allowed-collision
-// matrix from adjacency: what most checker tests and benchmarks start from.
+// A CollisionChecker for the demo arm or one of the real robots of ../shared/robots, with the
+// allowed-collision matrix from adjacency: what most checker tests and benchmarks start from.
 #pragma once
 
 #include <string>
@@ -10,6 +10,17 @@
 #include "robot_data.h"
 
 namespace bvh_collision::test {
+
+// The package's own demo arm (urdf/demo_arm.urdf: primitives only, no mesh files).
+inline RobotModel demo_arm_model() {
+  return RobotModel::from_urdf(*load_robot_description_file(source_dir() + "/urdf/demo_arm.urdf"), PackageResolver({}));
+}
+
+inline CollisionChecker demo_arm_checker(const CheckerOptions& options = {}) {
+  RobotModel model = demo_arm_model();
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  return CollisionChecker(std::move(model), std::move(acm), options);
+}
 
 inline CollisionChecker load_checker(const std::string& robot, const CheckerOptions& options = {}) {
   const std::string dir = robots_dir() + "/" + robot;

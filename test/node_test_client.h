@@ -85,4 +85,15 @@ std::vector<double> find_configuration(const CollisionChecker& checker, std::mt1
   return std::vector<double>(checker.model().variable_count(), 0.0);
 }
 
+// main() of a launch test: gtest and a ROS node named `name`, with an asynchronous spinner so that
+// subscriptions and tf broadcasts run while the tests wait.
+inline int run_node_tests(int argc, char** argv, const char* name) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, name);
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
+
 }  // namespace bvh_collision::test

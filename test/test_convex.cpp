@@ -47,6 +47,29 @@ Transform random_pose(double reach) {
   return {q.toRotationMatrix(), Vec3(u(rng()), u(rng()), u(rng())) * reach};
 }
 
+// Closed and consistently oriented: every directed edge's reverse appears exactly once.
+void expect_closed_surface(const ConvexHull& hull) {
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& f : hull.faces) {
+    for (int k = 0; k < 3; ++k) ++edges[{f[k], f[(k + 1) % 3]}];
+  }
+  for (const auto& [e, count] : edges) {
+    ASSERT_EQ(count, 1);
+    ASSERT_EQ(edges.count({e.second, e.first}), 1u);
+  }
+}
+
+// The support function along random directions equals the input's, to the last bit.
+void expect_input_support(const std::vector<Vec3>& points, const ConvexHull& hull, int directions) {
+  for (int i = 0; i < directions; ++i) {
+    const Vec3 d = random_cloud(1, 1.0)[0];
+    double best_in = -1e300, best_hull = -1e300;
+    for (const Vec3& p : points) best_in = std::max(best_in, d.dot(p));
+    for (const Vec3& p : hull.vertices) best_hull = std::max(best_hull, d.dot(p));
+    EXPECT_EQ(best_in, best_hull);
+  }
+}
+
 // The properties the distance bound relies on, each checked exactly or by brute force.
 void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, const std::string& what) {
   SCOPED_TRACE(what);
@@ -57,15 +80,7 @@ void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, 
     return s;
   }();
   for (const Vec3& v : hull.vertices) EXPECT_TRUE(input.count({v.x(), v.y(), v.z()})) << "vertex not an input point";
-  // Closed and consistently oriented: every directed edge's reverse appears exactly once.
-  std::map<std::pair<int, int>, int> edges;
-  for (const auto& f : hull.faces) {
-    for (int k = 0; k < 3; ++k) ++edges[{f[k], f[(k + 1) % 3]}];
-  }
-  for (const auto& [e, count] : edges) {
-    EXPECT_EQ(count, 1);
-    EXPECT_EQ(edges.count({e.second, e.first}), 1u);
-  }
+  expect_closed_surface(hull);
   // Every input point on the inner side of (or on) every face, exactly.
   int outside = 0;
   for (const auto& f : hull.faces) {
@@ -79,14 +94,7 @@ void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, 
   std::set<std::array<double, 3>> ours;
   for (const Vec3& v : hull.vertices) ours.insert({v.x(), v.y(), v.z()});
   for (const auto& e : extreme) EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
-  // The support function along random directions equals the input's, to the last bit.
-  for (int i = 0; i < 200; ++i) {
-    const Vec3 d = random_cloud(1, 1.0)[0];
-    double best_in = -1e300, best_hull = -1e300;
-    for (const Vec3& p : points) best_in = std::max(best_in, d.dot(p));
-    for (const Vec3& p : hull.vertices) best_hull = std::max(best_hull, d.dot(p));
-    EXPECT_EQ(best_in, best_hull);
-  }
+  expect_input_support(points, hull, 200);
 }
 
 TEST(ConvexHull, RandomClouds) {
@@ -125,21 +133,8 @@ TEST(ConvexHull, TwoHundredThousandPointsOnASphere) {
   for (const Vec3& x : p) distinct.insert({x.x(), x.y(), x.z()});
   EXPECT_EQ(hull.vertices.size(), distinct.size());
   EXPECT_EQ(hull.faces.size(), 2 * hull.vertices.size() - 4);  // a closed triangulated sphere
-  std::map<std::pair<int, int>, int> edges;
-  for (const auto& f : hull.faces) {
-    for (int k = 0; k < 3; ++k) ++edges[{f[k], f[(k + 1) % 3]}];
-  }
-  for (const auto& [e, count] : edges) {
-    ASSERT_EQ(count, 1);
-    ASSERT_EQ(edges.count({e.second, e.first}), 1u);
-  }
-  for (int i = 0; i < 50; ++i) {
-    const Vec3 d = random_cloud(1, 1.0)[0];
-    double best_in = -1e300, best_hull = -1e300;
-    for (const Vec3& x : p) best_in = std::max(best_in, d.dot(x));
-    for (const Vec3& x : hull.vertices) best_hull = std::max(best_hull, d.dot(x));
-    EXPECT_EQ(best_in, best_hull);
-  }
+  expect_closed_surface(hull);
+  expect_input_support(p, hull, 50);
 }
 
 TEST(ConvexHull, RobotMeshes) {

@@ -15,6 +15,7 @@
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/octree/distance_field.h"
+#include "checker_fixtures.h"
 #include "robot_data.h"
 
 namespace bvh_collision {
@@ -222,12 +223,9 @@ TEST(OctreeDistanceField, TheEnvironmentKeepsItUntilTheOctreeChanges) {
 // answers are exact, so equal), on the demo arm amid random boxes, with a moved base, and after
 // the octree changes under a kept field.
 TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
-  RobotModel m = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
-                                       PackageResolver({}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
   CheckerOptions options;
   options.padding = 0.01;
-  const CollisionChecker checker(std::move(m), std::move(acm), options);
+  const CollisionChecker checker = test::demo_arm_checker(options);
   Environment env(0.02);
   std::mt19937_64 rng(31);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -282,10 +280,7 @@ TEST(OctreeDistanceField, EnvironmentChecksAnswerAsWithoutIt) {
 // the base every state collides, with the slab 1 mm below it the batch answers as one state at a
 // time; with the distance field kept and without.
 TEST(OctreeDistanceField, BatchesCheckTheFixedLinksOnceAndAnswerAsOneByOne) {
-  RobotModel m = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
-                                       PackageResolver({}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
-  const CollisionChecker checker(std::move(m), std::move(acm));
+  const CollisionChecker checker = test::demo_arm_checker();
   std::mt19937_64 rng(37);
   std::vector<double> flat;
   const int count = test::sized(400);

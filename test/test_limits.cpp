@@ -7,19 +7,15 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/octree/scan.h"
-#include "bvh_collision/robot/robot_description.h"
-#include "robot_data.h"
+#include "checker_fixtures.h"
 
 namespace bvh_collision {
 namespace {
 
 CollisionChecker demo(const Limits& limits = {}) {
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
-                                           PackageResolver({}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   CheckerOptions options;
   options.limits = limits;
-  return CollisionChecker(std::move(model), std::move(acm), options);
+  return test::demo_arm_checker(options);
 }
 
 // The message names what, how much, the limit and the parameter.

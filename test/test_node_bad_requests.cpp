@@ -284,11 +284,4 @@ TEST_F(NodeBadRequests, ARobotWithoutGeometryIsAnError) {
 }  // namespace
 }  // namespace bvh_collision::test
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_bad_requests");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return bvh_collision::test::run_node_tests(argc, argv, "test_node_bad_requests"); }

@@ -33,13 +33,10 @@ std::mt19937_64& rng() {
 }
 
 CollisionChecker demo_checker(double padding, std::vector<double> levels) {
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
-                                           PackageResolver({}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   CheckerOptions options;
   options.padding = padding;
   options.proxy_levels = std::move(levels);
-  return CollisionChecker(std::move(model), std::move(acm), options);
+  return test::demo_arm_checker(options);
 }
 
 // The demo's pillar (a 12 x 12 x 80 cm box's surface in a 2 cm octree), a box lying across the

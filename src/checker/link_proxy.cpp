@@ -528,6 +528,28 @@ inline Vec3 apply(const Mat3& r, const Vec3& t, const Vec3& p) {
               r(2, 0) * p[0] + r(2, 1) * p[1] + r(2, 2) * p[2] + t[2]);
 }
 
+// b's sphere centres in a's frame (one transform per sphere of b visited), and the margin that
+// covers the rounding of a pair walk.
+struct PairFrame {
+  Mat3 r;
+  Vec3 t;
+  double margin;
+};
+
+PairFrame pair_frame(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b) {
+  const Transform b_in_a = relative_transform(pose_a, pose_b);
+  const ProxySphere& ra = a.spheres().front();
+  const ProxySphere& rb = b.spheres().front();
+  return {b_in_a.R, b_in_a.t,
+          pose_margin(pose_a.t.norm() + pose_b.t.norm() + ra.center.norm() + ra.radius + rb.center.norm() + rb.radius)};
+}
+
+// A pair walk opens a's sphere unless it is a leaf or b's (not a leaf) is larger.
+bool open_a(const ProxySphere* sa, std::int32_t i, const ProxySphere* sb, std::int32_t j) {
+  const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
+  return !leaf_a && (leaf_b || sa[i].radius >= sb[j].radius);
+}
+
 }  // namespace
 
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
@@ -535,13 +557,10 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   if (a.empty() || b.empty()) return false;
   const ProxySphere* sa = a.spheres().data();
   const ProxySphere* sb = b.spheres().data();
-  // b's spheres in a's frame: one transform per sphere of b visited.
-  const Transform b_in_a = relative_transform(pose_a, pose_b);
-  const Mat3& r = b_in_a.R;
-  const Vec3& t = b_in_a.t;
-  const double margin = pose_margin(pose_a.t.norm() + pose_b.t.norm() + sa[0].center.norm() + sa[0].radius +
-                                    sb[0].center.norm() + sb[0].radius);
-  const double slack = padding + margin;
+  const PairFrame frame = pair_frame(a, pose_a, b, pose_b);
+  const Mat3& r = frame.r;
+  const Vec3& t = frame.t;
+  const double slack = padding + frame.margin;
   // A local stack: each step pops one pair and pushes at most the children of one sphere, so
   // it never holds more than (tree depth) x (children) pairs; past 256 it spills to a vector.
   std::pair<std::int32_t, std::int32_t> local[256];
@@ -559,9 +578,8 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
     const auto [i, j] = next;
     const double reach = sa[i].radius + sb[j].radius + slack;
     if ((sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach) continue;
-    const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
-    if (leaf_a && leaf_b) return true;
-    if (!leaf_a && (leaf_b || sa[i].radius >= sb[j].radius)) {
+    if (sa[i].skip == i + 1 && sb[j].skip == j + 1) return true;
+    if (open_a(sa, i, sb, j)) {
       for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) push(k, j);
     } else {
       for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) push(i, k);
@@ -570,20 +588,15 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   return false;
 }
 
-}  // namespace bvh_collision
-
-namespace bvh_collision {
-
 double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
                         double best, const ProxySlack& slack) {
   if (a.empty() || b.empty()) return best;
   const ProxySphere* sa = a.spheres().data();
   const ProxySphere* sb = b.spheres().data();
-  const Transform b_in_a = relative_transform(pose_a, pose_b);
-  const Mat3& r = b_in_a.R;
-  const Vec3& t = b_in_a.t;
-  const double margin = pose_margin(pose_a.t.norm() + pose_b.t.norm() + sa[0].center.norm() + sa[0].radius +
-                                    sb[0].center.norm() + sb[0].radius);
+  const PairFrame frame = pair_frame(a, pose_a, b, pose_b);
+  const Mat3& r = frame.r;
+  const Vec3& t = frame.t;
+  const double margin = frame.margin;
   std::vector<std::pair<std::int32_t, std::int32_t>> stack;
   stack.reserve(64);
   stack.emplace_back(0, 0);
@@ -595,14 +608,12 @@ double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkP
     // Spheres contain their subtrees: this gap bounds every leaf pair below from below.
     const double gap = std::max(0.0, (sa[i].center - apply(r, t, sb[j].center)).norm() - sa[i].radius - sb[j].radius - margin);
     if (gap >= best) continue;
-    if (slack.leaves(gap, best) && !(sa[i].skip == i + 1 && sb[j].skip == j + 1)) {
-      unopened = std::min(unopened, gap);
-      continue;
-    }
-    const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
-    if (leaf_a && leaf_b) {
+    const bool leaves = sa[i].skip == i + 1 && sb[j].skip == j + 1;
+    if (leaves) {
       best = gap;
-    } else if (!leaf_a && (leaf_b || sa[i].radius >= sb[j].radius)) {
+    } else if (slack.leaves(gap, best)) {
+      unopened = std::min(unopened, gap);
+    } else if (open_a(sa, i, sb, j)) {
       for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.emplace_back(k, j);
     } else {
       for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.emplace_back(i, k);
