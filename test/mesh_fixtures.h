@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <fstream>
 #include <random>
 #include <string>
 
@@ -48,6 +50,24 @@ inline TriangleMesh bumpy_sphere(std::mt19937_64& rng, double radius, int rings,
 }
 
 // Random triangles in a box: a soup with slivers, overlaps and no topology.
+// A binary STL of the mesh (single precision, zero normals), for tests that load files.
+inline void write_binary_stl(const TriangleMesh& mesh, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  const char header[80] = "bvh_collision test mesh";
+  out.write(header, 80);
+  const auto n = static_cast<std::uint32_t>(mesh.triangles.size());
+  out.write(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : mesh.triangles) {
+    float facet[12] = {};
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c) facet[3 + 3 * k + c] = static_cast<float>(mesh.vertices[t[k]][c]);
+    }
+    out.write(reinterpret_cast<const char*>(facet), sizeof(facet));
+    const std::uint16_t attributes = 0;
+    out.write(reinterpret_cast<const char*>(&attributes), 2);
+  }
+}
+
 inline TriangleMesh triangle_soup(std::mt19937_64& rng, int n, double size, double triangle_size) {
   TriangleMesh m;
   std::uniform_real_distribution<double> pos(-size / 2, size / 2), off(-triangle_size, triangle_size);

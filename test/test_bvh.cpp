@@ -178,6 +178,40 @@ TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
   EXPECT_GT(shortcuts, 0) << "the tolerance never took effect";
 }
 
+// Every node's slack bounds the distance from any point of its volume to its own triangles:
+// random points of each volume's enclosing box (which holds the volume), against the brute-force
+// distance to the node's triangles. A mesh under 50k triangles takes the sampled bounds; one
+// over it (built on two threads) the corner and composed bounds only: both must hold everywhere.
+TYPED_TEST(BvhOracle, SlackBoundsEveryNode) {
+  std::mt19937_64 rng(23);
+  for (const auto& [rings, segments] : {std::pair{24, 32}, std::pair{test::sized(160) + 8, 200}}) {
+    const TriangleMesh mesh = test::bumpy_sphere(rng, 0.1, rings, segments, 0.002);
+    const auto bvh = Bvh<TypeParam>::build(mesh);
+    std::uniform_int_distribution<std::size_t> pick(0, bvh.nodes().size() - 1);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int checked = 0;
+    for (int k = 0; k < 3000; ++k) {
+      const std::size_t i = k < 8 ? static_cast<std::size_t>(k) : pick(rng);  // the top levels too
+      const BvhNode<TypeParam>& node = bvh.nodes()[i];
+      if (node.count > 4000) continue;
+      const EnclosingBox box = enclosing_box(node.volume);
+      ASSERT_LE(node.slack, 2.0 * node.size * (1 + 1e-9)) << "node " << i;
+      for (int s = 0; s < 4; ++s) {
+        const Vec3 p = box.center + box.axes * box.half.cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+        if (!contains(node.volume, p)) continue;
+        double d = std::numeric_limits<double>::infinity();
+        for (int t = node.first; t < node.first + node.count; ++t) {
+          const Triangle& tri = bvh.triangles()[t];
+          d = std::min(d, (closest_point_on_triangle(p, tri[0], tri[1], tri[2]) - p).norm());
+        }
+        ASSERT_LE(d, node.slack) << mesh.triangles.size() << " triangles, node " << i << " of " << node.count;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 1000);
+  }
+}
+
 TYPED_TEST(BvhOracle, PaddingMatchesDistance) {
   const MeshPair& mp = mesh_pairs()[0];
   const auto a = Bvh<TypeParam>::build(mp.a), b = Bvh<TypeParam>::build(mp.b);

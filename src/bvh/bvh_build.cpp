@@ -1,7 +1,10 @@
 #include "bvh_collision/bvh/bvh.h"
 
 #include <algorithm>
+#include <exception>
 #include <numeric>
+#include <thread>
+#include <type_traits>
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/distance.h"
@@ -36,6 +39,14 @@ int longest_axis(const Vec3& extent) {
 }
 
 using Order = std::vector<std::int32_t>;
+
+// Meshes up to this many triangles (robot links, most objects) get the build's most expensive
+// refinements: the rotation search for boxes and sampled slack. Larger ones (a 400k-triangle
+// scan) get boxes from principal axes and slack from corners and children, both still exact
+// bounds, so that they load in about a second.
+constexpr std::size_t kSearchedMesh = 50000;
+// Meshes over this many triangles build (and bound) the root's two subtrees on two threads.
+constexpr std::size_t kParallelBuild = 20000;
 
 // Split at the median centroid along the widest centroid axis (always splits when n >= 2).
 int split_at_median(Order& order, int begin, int end, const std::vector<Prim>& prims) {
@@ -122,14 +133,26 @@ std::uint32_t spread_bits(std::uint32_t v) {  // 10 bits -> every third bit
 
 template <class BV>
 struct BvhBuilder {
+  struct SharedInput {};
   const TriangleMesh& mesh;
   BuildOptions options;
-  std::vector<Prim> prims;
-  Order order;
+  std::vector<Prim> own_prims;
+  Order own_order;
+  std::vector<Prim>& prims;  // the builder's own, or (SharedInput) another builder's
+  Order& order;
   std::vector<Vec3> scratch;
+  std::vector<std::uint32_t> last_fit;  // per vertex: the fit() call that last took it
+  std::uint32_t fit_round = 0;
   Bvh<BV> out;
 
-  BvhBuilder(const TriangleMesh& m, const BuildOptions& o) : mesh(m), options(o) {
+  BvhBuilder(const BvhBuilder&) = delete;
+  BvhBuilder& operator=(const BvhBuilder&) = delete;
+  // A second builder over the same triangles and order, for a subtree of its own.
+  BvhBuilder(BvhBuilder& other, SharedInput)
+      : mesh(other.mesh), options(other.options), prims(other.prims), order(other.order), last_fit(mesh.vertices.size(), 0) {}
+
+  BvhBuilder(const TriangleMesh& m, const BuildOptions& o)
+      : mesh(m), options(o), prims(own_prims), order(own_order), last_fit(m.vertices.size(), 0) {
     prims.resize(mesh.triangles.size());
     for (std::size_t i = 0; i < prims.size(); ++i) {
       const Triangle t = mesh.triangle(i);
@@ -138,14 +161,23 @@ struct BvhBuilder {
     }
   }
 
-  // The volume fitted to the points of triangles order[begin, end).
+  // The volume fitted to the vertices of triangles order[begin, end), each vertex once: in a
+  // closed mesh a vertex is shared by about six triangles, so this fits a sixth of the points.
   BV fit(int begin, int end) {
     scratch.clear();
+    ++fit_round;
     for (int i = begin; i < end; ++i) {
-      const Triangle t = mesh.triangle(order[i]);
-      scratch.insert(scratch.end(), {t[0], t[1], t[2]});
+      for (const std::int32_t v : mesh.triangles[order[i]]) {
+        if (last_fit[v] == fit_round) continue;
+        last_fit[v] = fit_round;
+        scratch.push_back(mesh.vertices[v]);
+      }
     }
-    return fit_volume<BV>(scratch.data(), scratch.size());
+    if constexpr (std::is_same_v<BV, Obb>) {
+      return fit_obb(scratch.data(), scratch.size(), mesh.triangles.size() <= kSearchedMesh);
+    } else {
+      return fit_volume<BV>(scratch.data(), scratch.size());
+    }
   }
 
   std::int32_t new_node(int begin, int end) {
@@ -258,36 +290,181 @@ struct BvhBuilder {
     return idx;
   }
 
-  // Slack: the largest distance from a point of the volume to the node's triangles, bounded by
-  // sampling the centres of 4x4x4 cells of an enclosing box (distance is 1-Lipschitz, so adding
-  // the cell's half diagonal makes it an upper bound). Large nodes use the diameter.
-  void compute_slack() {
-    constexpr int kCells = 4;
-    constexpr int kMaxSampled = 256;
-    for (auto& node : out.nodes_) {
-      node.size = radius(node.volume);
-      node.slack = 2.0 * node.size;
-      if (node.count > kMaxSampled) continue;
-      const EnclosingBox box = enclosing_box(node.volume);
-      double worst = 0.0;
-      for (int i = 0; i < kCells * kCells * kCells; ++i) {
-        const Vec3 u((i % kCells + 0.5) / kCells, (i / kCells % kCells + 0.5) / kCells, (i / (kCells * kCells) + 0.5) / kCells);
-        const Vec3 s = box.center + box.axes * (box.half.cwiseProduct(2.0 * u - Vec3::Ones()));
-        double best = std::numeric_limits<double>::infinity();
-        for (int t = node.first; t < node.first + node.count && best > worst; ++t) {
-          const Triangle& tri = out.triangles_[t];
-          best = std::min(best, (closest_point_on_triangle(s, tri[0], tri[1], tri[2]) - s).norm());
-        }
-        worst = std::max(worst, best);
+  // Slack: the largest distance from a point of the volume to the node's triangles. Both bounds
+  // below take the largest of a 1-Lipschitz function over the centres of 4x4x4 cells of an
+  // enclosing box and add the cell's half diagonal, so each is an upper bound, not an estimate:
+  //  - sampled: the distance to the node's own triangles (64 x count work, so only for nodes of
+  //    up to kMaxSampled triangles, and not at all on meshes over kSearchedMesh);
+  //  - composed: min over the children of (distance to the child's box + the child's slack),
+  //    which every point of the parent satisfies since the child's triangles are the parent's.
+  // Nodes come parent first (pre-order), so a reverse pass sees children before parents.
+  static constexpr int kCells = 4;
+
+  template <class Distance>
+  static double lipschitz_max(const EnclosingBox& box, Distance&& distance) {
+    double worst = 0.0;
+    for (int i = 0; i < kCells * kCells * kCells; ++i) {
+      const Vec3 u((i % kCells + 0.5) / kCells, (i / kCells % kCells + 0.5) / kCells, (i / (kCells * kCells) + 0.5) / kCells);
+      worst = std::max(worst, distance(box.center + box.axes * (box.half.cwiseProduct(2.0 * u - Vec3::Ones())), worst));
+    }
+    return (worst + box.half.norm() / kCells) * (1 + kPoseMargin);
+  }
+
+  double sampled_slack(const EnclosingBox& box, const BvhNode<BV>& node) const {
+    return lipschitz_max(box, [&](const Vec3& s, double worst) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int t = node.first; t < node.first + node.count && best > worst; ++t) {
+        const Triangle& tri = out.triangles_[t];
+        best = std::min(best, (closest_point_on_triangle(s, tri[0], tri[1], tri[2]) - s).norm());
       }
-      node.slack = std::min(node.slack, (worst + box.half.norm() / kCells) * (1 + kPoseMargin));
+      return best;  // stopping at or below `worst` cannot raise the maximum
+    });
+  }
+
+  // A node of few triangles: the distance to one triangle is convex, so over a box it is largest
+  // at a corner; the smallest such corner maximum over the node's triangles bounds the node
+  // (exactly, for a single triangle).
+  // `to_vertices`: the distance to the triangle's nearest vertex instead (no less than the
+  // distance to the triangle, so still a bound; a tenth of the work, for very large meshes).
+  double corner_slack(const EnclosingBox& box, const BvhNode<BV>& node, bool to_vertices) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (int t = node.first; t < node.first + node.count; ++t) {
+      const Triangle& tri = out.triangles_[t];
+      double worst = 0.0;
+      for (int c = 0; c < 8 && worst < best; ++c) {
+        const Vec3 corner = box.center + box.axes * Vec3(c & 1 ? box.half.x() : -box.half.x(),
+                                                         c & 2 ? box.half.y() : -box.half.y(),
+                                                         c & 4 ? box.half.z() : -box.half.z());
+        const double d = to_vertices ? std::sqrt(std::min({(tri[0] - corner).squaredNorm(), (tri[1] - corner).squaredNorm(),
+                                                            (tri[2] - corner).squaredNorm()}))
+                                     : (closest_point_on_triangle(corner, tri[0], tri[1], tri[2]) - corner).norm();
+        worst = std::max(worst, d);
+      }
+      best = std::min(best, worst);
+    }
+    return best * (1 + kPoseMargin);
+  }
+
+  // `box_slack`: each node's slack over its whole enclosing box (which may be larger than the
+  // volume, e.g. a sphere's), the quantity composition needs from the children.
+  // The sample points are s = centre + axes * (half .* (2u - 1)) on the 4x4x4 grid, so each
+  // child's box coordinates of s are linear in the grid indices: a base and three steps per
+  // child, not a matrix product per sample (this pass visits every node of the tree).
+  double composed_slack(const EnclosingBox& box, const BvhNode<BV>& node, const std::vector<double>& box_slack) const {
+    struct ChildFrame {
+      Vec3 base, step[3], half;
+      double slack;
+    };
+    ChildFrame frames[2];
+    const std::int32_t children[2] = {node.left, node.right};
+    for (int c = 0; c < 2; ++c) {
+      const EnclosingBox child = enclosing_box(out.nodes_[children[c]].volume);
+      const Mat3 to_child = child.axes.transpose() * box.axes;
+      const Vec3 first = box.half * ((0.5 / kCells) * 2.0 - 1.0);  // the grid's first centre, in box axes
+      frames[c].base = child.axes.transpose() * (box.center - child.center) + to_child * first;
+      for (int k = 0; k < 3; ++k) frames[c].step[k] = to_child.col(k) * (2.0 * box.half[k] / kCells);
+      frames[c].half = child.half;
+      frames[c].slack = box_slack[children[c]];
+    }
+    double worst = 0.0;
+    for (int i = 0; i < kCells * kCells * kCells; ++i) {
+      const int ix = i % kCells, iy = i / kCells % kCells, iz = i / (kCells * kCells);
+      double best = std::numeric_limits<double>::infinity();
+      for (const ChildFrame& f : frames) {
+        const Vec3 local = f.base + ix * f.step[0] + iy * f.step[1] + iz * f.step[2];
+        best = std::min(best, (local.cwiseAbs() - f.half).cwiseMax(0.0).norm() + f.slack);
+        if (best <= worst) break;  // the minimum can only fall: it cannot raise the maximum
+      }
+      worst = std::max(worst, best);
+    }
+    return (worst + box.half.norm() / kCells) * (1 + kPoseMargin);
+  }
+
+  // Nodes [begin, end) in reverse: a whole subtree (or several) and nothing that hangs below
+  // another part of the tree, so two such ranges can run at once.
+  void compute_slack(std::size_t begin, std::size_t end, std::vector<double>& box_slack) {
+    constexpr int kMaxSampled = 256;
+    const bool large = out.triangles_.size() > kSearchedMesh;
+    const int corners_up_to = large ? 1 : 4;
+    const int sampled_up_to = large ? 0 : kMaxSampled;
+    for (std::size_t i = end; i-- > begin;) {
+      BvhNode<BV>& node = out.nodes_[i];
+      const EnclosingBox box = enclosing_box(node.volume);
+      double bound = 2.0 * box.half.norm() * (1 + kPoseMargin);  // the node's triangles lie in the box
+      if (!node.is_leaf()) bound = std::min(bound, composed_slack(box, node, box_slack));
+      if (node.count <= corners_up_to) bound = std::min(bound, corner_slack(box, node, large));
+      if (node.count <= sampled_up_to) bound = std::min(bound, sampled_slack(box, node));
+      box_slack[i] = bound;
+      node.size = radius(node.volume);
+      node.slack = std::min(2.0 * node.size, bound);
     }
   }
 
-  Bvh<BV> run() {
+  void compute_slack() {
+    std::vector<double> box_slack(out.nodes_.size());
+    const std::size_t right = out.nodes_.empty() || out.nodes_[0].is_leaf() ? 0 : out.nodes_[0].right;
+    if (out.nodes_.size() > 2 * kParallelBuild && right > 0) {  // the root's two subtrees at once
+      run_beside([&] { compute_slack(right, out.nodes_.size(), box_slack); }, [&] { compute_slack(1, right, box_slack); });
+      compute_slack(0, 1, box_slack);
+    } else {
+      compute_slack(0, out.nodes_.size(), box_slack);
+    }
+  }
+
+  // Runs `aside` on a thread of its own while this thread runs `here`. Only for the root's two
+  // subtrees of a mesh over kParallelBuild triangles: Bvh::build is called from the shared
+  // pool's jobs (RobotCollisionModel builds every mesh and hull as one job set), where a nested
+  // pool job would run serially, and one such mesh otherwise sets how long a robot takes to load.
+  template <class Aside, class Here>
+  static void run_beside(Aside&& aside, Here&& here) {
+    std::exception_ptr failed;
+    std::thread helper([&] {
+      try {
+        aside();
+      } catch (...) {
+        failed = std::current_exception();
+      }
+    });
+    try {
+      here();
+    } catch (...) {
+      helper.join();
+      throw;
+    }
+    helper.join();
+    if (failed) std::rethrow_exception(failed);
+  }
+
+  // The root split, then its right subtree by a second builder (same triangles and order, its
+  // own node list and scratch) beside the left one; the right list is appended with its child
+  // indices shifted, which keeps the nodes in pre-order.
+  void top_down_in_two() {
+    const int n = static_cast<int>(order.size());
+    const std::int32_t root = new_node(0, n);
+    out.nodes_[root].volume = fit(0, n);
+    if (n <= options.max_leaf_triangles || options.max_depth <= 0) return;
+    const int mid = options.method == BuildMethod::kSah ? split_by_sah(order, 0, n, prims) : split_at_centre(order, 0, n, prims);
+    BvhBuilder right_half(*this, SharedInput{});
+    std::int32_t left = -1;
+    run_beside([&] { right_half.top_down(mid, n, 1); }, [&] { left = top_down(0, mid, 1); });
+    const auto offset = static_cast<std::int32_t>(out.nodes_.size());
+    for (BvhNode<BV> node : right_half.out.nodes_) {
+      if (!node.is_leaf()) {
+        node.left += offset;
+        node.right += offset;
+      }
+      out.nodes_.push_back(node);
+    }
+    out.nodes_[root].left = left;
+    out.nodes_[root].right = offset;
+  }
+
+  void find_surface_facts() {
     out.closed_ = is_closed(mesh);
     for (std::int32_t v : component_representatives(mesh)) out.component_points_.push_back(mesh.vertices[v]);
-    if (mesh.triangles.empty()) return std::move(out);
+  }
+
+  void build_tree() {
     if (options.method == BuildMethod::kBottomUp) {
       const std::vector<Cluster> tree = agglomerate();
       order.clear();
@@ -295,9 +472,16 @@ struct BvhBuilder {
     } else {
       order.resize(prims.size());
       std::iota(order.begin(), order.end(), 0);
-      top_down(0, static_cast<int>(order.size()), 0);
+      out.nodes_.reserve(2 * prims.size());
+      if (prims.size() > kParallelBuild) {
+        top_down_in_two();
+      } else {
+        top_down(0, static_cast<int>(order.size()), 0);
+      }
     }
     out.triangles_.reserve(order.size());
+    out.planes_.reserve(order.size());
+    out.spheres_.reserve(order.size());
     for (std::int32_t t : order) {
       const Triangle tri = mesh.triangle(t);
       out.triangles_.push_back(tri);
@@ -306,6 +490,19 @@ struct BvhBuilder {
     }
     out.triangle_ids_ = order;
     compute_slack();
+  }
+
+  Bvh<BV> run() {
+    if (mesh.triangles.empty()) {
+      find_surface_facts();
+      return std::move(out);
+    }
+    if (prims.size() > kParallelBuild) {  // closedness and components do not need the tree
+      run_beside([&] { find_surface_facts(); }, [&] { build_tree(); });
+    } else {
+      find_surface_facts();
+      build_tree();
+    }
     return std::move(out);
   }
 };

@@ -1,11 +1,15 @@
 #include "bvh_collision/checker/robot_collision_model.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <optional>
 
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/thread_pool.h"
 
 namespace bvh_collision {
 namespace {
@@ -127,7 +131,8 @@ void RobotCollisionModel::build_shapes(const CheckerOptions& options, const std:
   const std::size_t n = robot_.links().size();
   shapes_.resize(n);
   bounds_.resize(n);
-  std::map<const TriangleMesh*, int> built;
+  std::map<const TriangleMesh*, int> index;
+  std::vector<const TriangleMesh*> distinct;
   for (std::size_t l = 0; l < n; ++l) {
     if (!needed[l]) continue;
     for (const CollisionElement& e : robot_.links()[l].collision) {
@@ -138,17 +143,43 @@ void RobotCollisionModel::build_shapes(const CheckerOptions& options, const std:
       } else if (e.shape == CollisionElement::Shape::kCylinder) {
         s.primitive = Primitive::cylinder(e.radius, e.length);
       } else {
-        auto [it, fresh] = built.emplace(e.mesh.get(), static_cast<int>(meshes_.size()));
-        if (fresh) {
-          meshes_.push_back(Bvh<Obb>::build(*e.mesh, options.bvh));
-          // Surface vertices only: a hull vertex is taken to lie on the mesh (meshes_distance).
-          hulls_.push_back(convex_hull(used_vertices(*e.mesh)));
-        }
+        const auto [it, fresh] = index.emplace(e.mesh.get(), static_cast<int>(distinct.size()));
+        if (fresh) distinct.push_back(e.mesh.get());
         s.mesh = it->second;
       }
       shapes_[l].push_back(s);
     }
-    bounds_[l] = bounding_sphere(shapes_[l], meshes_);
+  }
+  build_meshes(distinct, options.bvh);
+  for (std::size_t l = 0; l < n; ++l) {
+    if (needed[l]) bounds_[l] = bounding_sphere(shapes_[l], meshes_);
+  }
+}
+
+// The hierarchies and hulls are independent jobs: they share the pool's threads, largest mesh
+// first (a robot comes up in about the time of its largest mesh, not the sum of all of them).
+void RobotCollisionModel::build_meshes(const std::vector<const TriangleMesh*>& distinct, const BuildOptions& bvh) {
+  std::vector<std::optional<Bvh<Obb>>> trees(distinct.size());
+  std::vector<std::optional<ConvexHull>> hulls(distinct.size());
+  std::vector<std::size_t> jobs(2 * distinct.size());  // 2m: mesh m's hierarchy, 2m + 1: its hull
+  std::iota(jobs.begin(), jobs.end(), 0);
+  std::stable_sort(jobs.begin(), jobs.end(), [&](std::size_t a, std::size_t b) {
+    return distinct[a / 2]->triangles.size() > distinct[b / 2]->triangles.size();
+  });
+  std::atomic<std::size_t> next{0};
+  ThreadPool::shared().run(static_cast<unsigned>(jobs.size()), [&](unsigned) {
+    for (std::size_t k = next++; k < jobs.size(); k = next++) {
+      const std::size_t m = jobs[k] / 2;
+      if (jobs[k] % 2 == 0) {
+        trees[m].emplace(Bvh<Obb>::build(*distinct[m], bvh));
+      } else {  // surface vertices only: a hull vertex is taken to lie on the mesh (meshes_distance)
+        hulls[m].emplace(convex_hull(used_vertices(*distinct[m])));
+      }
+    }
+  });
+  for (std::size_t m = 0; m < distinct.size(); ++m) {
+    meshes_.push_back(std::move(*trees[m]));
+    hulls_.push_back(std::move(*hulls[m]));
   }
 }
 

@@ -121,6 +121,7 @@ class RobotCollisionModel {
 
  private:
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);
+  void build_meshes(const std::vector<const TriangleMesh*>& distinct, const BuildOptions& bvh);
   void compute_motion_rates();
   void build_proxies(std::vector<double> levels);
   ProxyLevel build_proxy_level(double level, const std::atomic<bool>* cancel) const;

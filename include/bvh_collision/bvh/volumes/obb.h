@@ -67,6 +67,10 @@ inline bool ray_hits(const Obb& b, const Ray& ray) {
 
 template <>
 Obb fit_volume<Obb>(const Vec3* points, std::size_t n);
+// fit_volume<Obb> is fit_obb(points, n, true). Without the rotation search the axes are the
+// better of the principal and the mesh axes (an edge-aligned frame for a single triangle):
+// the hierarchies of very large meshes, where the search would dominate loading.
+Obb fit_obb(const Vec3* points, std::size_t n, bool search_rotations);
 bool contains(const Obb& v, const Vec3& p);
 inline EnclosingBox enclosing_box(const Obb& v) { return {v.axes, v.center, v.half}; }
 
