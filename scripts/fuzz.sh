@@ -11,11 +11,24 @@ export PATH="/usr/bin:$PATH"
 FUZZ_BUILD=${FUZZ_BUILD:-build-fuzz}
 SECONDS_PER_TARGET=${FUZZ_SECONDS:-60}
 JOBS=${JOBS:-2}
-TARGETS=${FUZZ_TARGETS:-"robot_description mesh srdf"}
+TARGETS=${FUZZ_TARGETS:-"robot_description mesh srdf octree_file point_cloud service_request"}
 
 CC=clang CXX=clang++ cmake -S . -B "$FUZZ_BUILD" -DBVH_COLLISION_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCATKIN_ENABLE_TESTING=OFF > "$FUZZ_BUILD.configure.log" 2>&1 || { tail -20 "$FUZZ_BUILD.configure.log"; exit 1; }
 make -C "$FUZZ_BUILD" -j"$JOBS" fuzz_targets || exit 1
+
+# service_request runs a whole node, which advertises its services: a master of its own on a
+# free port, for the length of the run.
+MASTER_PID=""
+stop_master() { [[ -n "$MASTER_PID" ]] && kill "$MASTER_PID" 2>/dev/null; wait 2>/dev/null; }
+trap stop_master EXIT
+if [[ " $TARGETS " == *" service_request "* ]]; then
+  port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')
+  rosmaster --core -p "$port" > "$FUZZ_BUILD.master.log" 2>&1 &
+  MASTER_PID=$!
+  export ROS_MASTER_URI="http://localhost:$port"
+  for _ in $(seq 50); do rosnode list > /dev/null 2>&1 && break; sleep 0.2; done
+fi
 
 status=0
 summary=()

@@ -296,6 +296,215 @@ def srdf_cases():
     return cases
 
 
+# ------------------------------------------------------------------ OctoMap files (.bt, .ot)
+
+def octree_path(depth=16, child=0):
+    """One voxel: a chain of nodes from the root, child `child` at each level."""
+    return depth, child
+
+
+def bt_data(depth=16, child=0, leaf_bits=0b01):
+    # Per inner node two bytes, two bits per child (children 0-3, then 4-7): 11 inner, 01
+    # occupied leaf, 10 free leaf (OcTreeBase::writeBinaryNode).
+    out = bytearray()
+    for level in range(depth):
+        bits = 0b11 if level < depth - 1 else leaf_bits
+        pair = [0, 0]
+        pair[child // 4] = bits << (2 * (child % 4))
+        out += bytes(pair)
+    return bytes(out)
+
+
+def ot_data(depth=16, child=0, value=2.0, leaf_mask=0):
+    # Per node its float log-odds and a byte with a bit per existing child (writeData).
+    out = bytearray()
+    for level in range(depth + 1):
+        mask = (1 << child) if level < depth else leaf_mask
+        out += struct.pack("<f", value) + bytes([mask])
+    return bytes(out)
+
+
+def octree_header(binary, res="0.05", size="17", ident="OcTree"):
+    kind = "binary file" if binary else "file"
+    return ("# Octomap OcTree %s\nid %s\nsize %s\nres %s\ndata\n" % (kind, ident, size, res)).encode()
+
+
+def octree_cases():
+    cases = [("bt", b"\0" + octree_header(True) + bt_data()), ("ot", b"\1" + octree_header(False) + ot_data())]
+    for res in ("0", "-1", "nan", "inf", "1e-300", "1e300", "abc", ""):
+        cases.append(("bt_res_" + (res or "empty"), b"\0" + octree_header(True, res=res) + bt_data()))
+        cases.append(("ot_res_" + (res or "empty"), b"\1" + octree_header(False, res=res) + ot_data()))
+    for size in ("0", "4294967296", "-5", "x"):
+        cases.append(("ot_size_" + size, b"\1" + octree_header(False, size=size) + ot_data()))
+    for ident in ("ColorOcTree", "OcTreeStamped", "CountingOcTree", "nothing"):
+        cases.append(("ot_id_" + ident, b"\1" + octree_header(False, ident=ident) + ot_data()))
+    good_ot, good_bt = ot_data(), bt_data()
+    for cut in (1, 5, 40, len(good_ot) - 1):
+        cases.append(("ot_truncated_%d" % cut, b"\1" + octree_header(False) + good_ot[:cut]))
+    for cut in (1, 7, len(good_bt) - 1):
+        cases.append(("bt_truncated_%d" % cut, b"\0" + octree_header(True) + good_bt[:cut]))
+    for value, name in ((float("nan"), "nan"), (float("inf"), "inf"), (-1e30, "huge")):
+        cases.append(("ot_value_" + name, b"\1" + octree_header(False) + ot_data(value=value)))
+    # Deeper than 16 levels: a leaf with children below it.
+    cases.append(("ot_too_deep", b"\1" + octree_header(False) + ot_data(depth=16, leaf_mask=1) + ot_data(depth=3)))
+    cases.append(("ot_deep_chain", b"\1" + octree_header(False) + ot_data(depth=40)))
+    cases.append(("bt_too_deep", b"\0" + octree_header(True) + bt_data(depth=20)))
+    cases.append(("ot_all_children", b"\1" + octree_header(False, size="9") + struct.pack("<f", 1.0) + b"\xff" + ot_data(depth=0) * 8))
+    cases.append(("bt_no_header", b"\0" + bt_data()))
+    cases.append(("ot_no_data_line", b"\1" + octree_header(False).replace(b"data\n", b"") + ot_data()))
+    cases.append(("empty_bt", b"\0"))
+    cases.append(("empty_ot", b"\1"))
+    return cases
+
+
+# ------------------------------------------------------------------ point clouds (cloud_target.cpp)
+
+def cloud(points=((0.1, 0.2, 0.3), (1, 1, 1), (-0.5, 0.25, 2), (0, 0, 0)), fields=(("x", 0, 7), ("y", 4, 7), ("z", 8, 7)),
+          height=1, width=None, point_step=12, row_step=None, bigendian=False, data=None, fmt="<3f"):
+    """The byte layout ByteReader reads: height, width, fields (name, offset, datatype, count),
+    endianness, point_step, row_step, then the data."""
+    width = len(points) // height if width is None else width
+    names = {"x": 0, "y": 1, "z": 2, "rgb": 3, "intensity": 4}
+    out = bytearray()
+    out += bytes([0, height]) if height <= 4 else bytes([255]) + struct.pack("<I", height)
+    out += bytes([0, width]) if width <= 64 else bytes([255]) + struct.pack("<I", width)
+    out += bytes([len(fields)])
+    for name, offset, datatype in fields:
+        out += bytes([names[name]]) + (bytes([0, offset]) if offset <= 40 else bytes([255]) + struct.pack("<I", offset))
+        out += bytes([datatype, 1])
+    out += bytes([255 if bigendian else 0])
+    out += bytes([0, point_step]) if point_step <= 48 else bytes([255]) + struct.pack("<I", point_step)
+    out += bytes([0]) if row_step is None else bytes([255]) + struct.pack("<I", row_step)
+    if data is None:
+        data = b"".join(struct.pack(fmt, *p) for p in points)
+    return bytes(out + data)
+
+
+def cloud_cases():
+    nan, inf = float("nan"), float("inf")
+    doubles = (("x", 0, 8), ("y", 8, 8), ("z", 16, 8))
+    return [
+        ("plain", cloud()), ("doubles", cloud(fields=doubles, point_step=24, fmt="<3d")),
+        ("organized", cloud(height=2)), ("nan_inf", cloud(points=((nan, 0, 0), (inf, 1, 1), (0, -inf, 0), (1, 2, 3)))),
+        ("far", cloud(points=((1e30, 0, 0), (5000, 0, 0), (0, 0, 4.99), (0, 0, 5.01)))),
+        ("no_z", cloud(fields=(("x", 0, 7), ("y", 4, 7)))), ("int_field", cloud(fields=(("x", 0, 3), ("y", 4, 7), ("z", 8, 7)))),
+        ("offset_beyond", cloud(fields=(("x", 0, 7), ("y", 4, 7), ("z", 10, 7)))),
+        ("point_step_0", cloud(point_step=0)), ("point_step_4", cloud(point_step=4)),
+        ("row_step_short", cloud(row_step=4)), ("row_step_huge", cloud(row_step=0xFFFFFFFF)),
+        ("width_huge", cloud(width=0xFFFFFFFF)), ("height_huge", cloud(height=0xFFFFFFFF, width=1)),
+        ("width_huge_step_0", cloud(width=0xFFFFFFFF, point_step=0, row_step=0)),
+        ("data_short", cloud(data=b"\0" * 20)), ("data_empty", cloud(data=b"")), ("bigendian", cloud(bigendian=True)),
+        ("duplicate_x", cloud(fields=(("x", 0, 7), ("x", 4, 7), ("y", 4, 7), ("z", 8, 7)))),
+        ("width_0", cloud(points=(), width=0)), ("rgb_beside", cloud(fields=(("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("rgb", 12, 7)),
+                                                                    point_step=16, fmt="<4f",
+                                                                    points=((0.1, 0.2, 0.3, 0), (1, 1, 1, 0)))),
+        ("empty", b""),
+    ]
+
+
+# ------------------------------------------------------------------ service requests (service_target.cpp)
+
+NAMES = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6", "finger_joint_left", "base_link", "link3", "hand",
+         "world", "box", "octree"]
+PALETTE = {0.0: 0, 1.0: 1, -1.0: 2, 0.5: 3, 1e-300: 4, 1e300: 5, "nan": 6, "inf": 7, "-inf": 8, 1e-9: 9, 3.0: 10,
+           -0.5: 11, 0.02: 12, 100.0: 13}
+
+
+def num(v):
+    if isinstance(v, str):
+        return bytes([PALETTE[v]])
+    if v in PALETTE:
+        return bytes([PALETTE[v]])
+    return bytes([20]) + struct.pack("<d", v)
+
+
+def nums(values):
+    return bytes([len(values)]) + b"".join(num(v) for v in values)
+
+
+def name(n):
+    if n == "":
+        return bytes([255])
+    if n in NAMES:
+        return bytes([NAMES.index(n)])
+    raw = n.encode()[:12]
+    return bytes([200, len(raw)]) + raw
+
+
+def names(ns):
+    return bytes([len(ns)]) + b"".join(name(n) for n in ns)
+
+
+def point(p):
+    return b"".join(num(v) for v in p)
+
+
+ARM = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"]
+
+
+def check_state(joints=ARM, positions=(0, 0.5, -0.5, 0, 1, 0), checks=3, contacts=2, distance=1, tolerance=0.0):
+    return bytes([0]) + names(joints) + nums(positions) + bytes([checks, contacts, distance]) + num(tolerance)
+
+
+def check_states(joints=ARM, positions=(0, 0.5, -0.5, 0, 1, 0) * 3, checks=3, tolerance=0.0):
+    return bytes([1]) + names(joints) + nums(positions) + bytes([checks]) + num(tolerance)
+
+
+def check_motion(joints=ARM, start=(0, 0, 0, 0, 0, 0), goal=(1, 0.5, 0, 0, 0, 0), checks=3, resolution=0.0):
+    return bytes([2]) + names(joints[:5]) + nums(start[:5]) + nums(goal[:5]) + bytes([checks]) + num(resolution)
+
+
+def cast_ray(origin=(0.5, 0, 2), direction=(0, 0, -1), max_range=5.0):
+    return bytes([3]) + point(origin) + point(direction) + num(max_range)
+
+
+def clear_box(lo=(-0.1, -0.1, -0.1), hi=(0.1, 0.1, 0.1)):
+    return bytes([5]) + point(lo) + point(hi)
+
+
+def set_object(ident="box", kind=1, dims=(0.1, 0.2, 0.3), uri="", scale=(1, 1, 1), vertices=(), triangles=(),
+               position=(0.5, 0, 0.2), orientation=(0, 0, 0, 1), frame="base_link"):
+    out = bytes([6]) + name(ident) + bytes([kind]) + nums(dims)
+    uris = ["", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl", "file:///nonexistent.stl",
+            "/etc/hostname"]
+    out += bytes([uris.index(uri)]) + point(scale)
+    out += bytes([len(vertices)]) + b"".join(point(v) for v in vertices)
+    out += bytes([len(triangles)]) + b"".join(bytes([0, t]) for t in triangles)
+    return out + point(position) + point(orientation) + name(frame)
+
+
+def service_cases():
+    tri = ((0, 0, 0), (0.1, 0, 0), (0, 0.1, 0), (0, 0, 0.1))
+    return [
+        ("state", check_state()), ("state_self", check_state(checks=1)), ("state_env", check_state(checks=2)),
+        ("state_nan", check_state(positions=(0, "nan", 0, 0, 0, 0))), ("state_inf_tolerance", check_state(tolerance="inf")),
+        ("state_tolerance", check_state(tolerance=0.02)), ("state_unknown_joint", check_state(joints=["joint1", "nothing"], positions=(0, 0))),
+        ("state_mismatch", check_state(positions=(0, 0))), ("state_huge", check_state(positions=(1e300, 0, 0, 0, 0, 0))),
+        ("state_fixed_joint", check_state(joints=["hand", "joint1"], positions=(0, 0))), ("state_checks_255", check_state(checks=255)),
+        ("state_duplicate", check_state(joints=["joint1", "joint1"], positions=(0, 1))), ("state_none", check_state(joints=[], positions=())),
+        ("states", check_states()), ("states_ragged", check_states(positions=(0, 1, 2, 3, 4))), ("states_none", check_states(joints=[], positions=(0,))),
+        ("states_nan", check_states(positions=("nan",) * 6)), ("states_tolerance", check_states(tolerance=0.02)),
+        ("motion", check_motion()), ("motion_step", check_motion(resolution=0.02)), ("motion_tiny_step", check_motion(resolution=1e-300)),
+        ("motion_nan", check_motion(goal=("nan", 0, 0, 0, 0))), ("motion_negative_step", check_motion(resolution=-1.0)),
+        ("motion_inf_goal", check_motion(goal=("inf", 0, 0, 0, 0))), ("motion_mismatch", bytes([2]) + names(ARM[:2]) + nums((0,)) + nums((1, 1)) + bytes([3]) + num(0.0)),
+        ("ray", cast_ray()), ("ray_zero_direction", cast_ray(direction=(0, 0, 0))), ("ray_nan", cast_ray(origin=("nan", 0, 0))),
+        ("ray_huge_range", cast_ray(max_range=1e300)), ("ray_inf_range", cast_ray(max_range="inf")), ("ray_negative_range", cast_ray(max_range=-1.0)),
+        ("clear_environment", bytes([4])), ("clear_box", clear_box()), ("clear_box_inverted", clear_box((1, 1, 1), (-1, -1, -1))),
+        ("clear_box_nan", clear_box(("nan", 0, 0))), ("clear_box_huge", clear_box((-1e300,) * 3, (1e300,) * 3)),
+        ("object_box", set_object()), ("object_sphere", set_object(kind=2, dims=(0.1,))), ("object_cylinder", set_object(kind=3, dims=(0.3, 0.05))),
+        ("object_capsule", set_object(kind=6, dims=(0.3, 0.05))), ("object_mesh", set_object(kind=4, uri="package://bvh_collision/test/fuzz/meshes/box.stl")),
+        ("object_mesh_missing", set_object(kind=4, uri="package://nothing/x.stl")), ("object_mesh_garbage", set_object(kind=4, uri="/etc/hostname")),
+        ("object_triangles", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1, 2, 0, 1, 3, 0, 2, 3, 1, 2, 3))),
+        ("object_triangles_out_of_range", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1, 9))),
+        ("object_triangles_ragged", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1))),
+        ("object_nan_size", set_object(dims=("nan", 1, 1))), ("object_negative", set_object(dims=(-1, 1, 1))), ("object_huge", set_object(dims=(1e300, 1, 1))),
+        ("object_zero_quaternion", set_object(orientation=(0, 0, 0, 0))), ("object_unknown_frame", set_object(frame="nothing")),
+        ("object_empty_id", set_object(ident="")), ("object_kind_0", set_object(kind=0)), ("object_kind_7", set_object(kind=7)),
+        ("object_zero_scale", set_object(kind=4, uri="package://bvh_collision/test/fuzz/meshes/box.stl", scale=(0, 1, 1))),
+        ("remove", bytes([7]) + name("box")), ("remove_unknown", bytes([7]) + name("nothing")), ("empty", b""),
+    ]
+
+
 def write(folder, name, data):
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, name), "wb") as f:
@@ -304,7 +513,7 @@ def write(folder, name, data):
 
 def main():
     # Only the generated seeds are replaced; files found by the fuzzer (crash-*, found-*) stay.
-    for target in ("robot_description", "mesh", "srdf"):
+    for target in ("robot_description", "mesh", "srdf", "octree_file", "point_cloud", "service_request"):
         folder = os.path.join(CORPUS, target)
         if os.path.isdir(folder):
             for f in os.listdir(folder):
@@ -327,6 +536,10 @@ def main():
     for name, text in srdf_cases():
         write(os.path.join(CORPUS, "srdf"), "seed-" + name + ".srdf", text)
         count += 1
+    for target, cases in (("octree_file", octree_cases()), ("point_cloud", cloud_cases()), ("service_request", service_cases())):
+        for name_, data in cases:
+            write(os.path.join(CORPUS, target), "seed-" + name_, data)
+            count += 1
     print("wrote %d seed inputs to %s" % (count, os.path.relpath(CORPUS)))
 
 

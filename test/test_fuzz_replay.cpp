@@ -1,5 +1,6 @@
-// The loader's fuzz corpora replayed (test/fuzz/corpus: the mutation sweep of malformed robot
-// descriptions, meshes and SRDFs written by scripts/make_loader_corpus.py, plus every input
+// The fuzz corpora replayed (test/fuzz/corpus: the mutation sweep of malformed robot
+// descriptions, meshes, SRDFs, OctoMap files and point clouds written by
+// scripts/make_loader_corpus.py, plus every input
 // `make fuzz` found). Each input must be refused by name or load into something valid (see
 // test/fuzz/loader_targets.h), none may take long, and the whole replay stays far below 1 GiB.
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <iterator>
 
 #include "fuzz/loader_targets.h"
+#include "fuzz/message_targets.h"
 #include "robot_data.h"
 
 namespace bvh_collision {
@@ -49,6 +51,8 @@ std::size_t replay(const std::string& name, Target target) {
 TEST(FuzzReplay, RobotDescriptions) { EXPECT_GE(replay("robot_description", fuzz::check_robot_description), 250u); }
 TEST(FuzzReplay, Meshes) { EXPECT_GE(replay("mesh", fuzz::check_mesh), 120u); }
 TEST(FuzzReplay, Srdf) { EXPECT_GE(replay("srdf", fuzz::check_srdf), 20u); }
+TEST(FuzzReplay, OctreeFiles) { EXPECT_GE(replay("octree_file", fuzz::check_octree_file), 30u); }
+TEST(FuzzReplay, PointClouds) { EXPECT_GE(replay("point_cloud", fuzz::check_point_cloud), 20u); }
 
 // Run last (gtest keeps declaration order): the whole replay's peak memory.
 TEST(FuzzReplay, PeakMemoryStaysFarBelowOneGigabyte) {

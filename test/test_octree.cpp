@@ -5,7 +5,10 @@
 #include <octomap/OcTree.h>
 
 #include <cstdio>
+#include <chrono>
 #include <fstream>
+#include <future>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -538,6 +541,53 @@ TEST(OctomapBridge, ConversionsAndFiles) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("missing.ot"), std::string::npos);
   }
+}
+
+// OctoMap's readers took a file cut short (the nodes they could not read filled with whatever
+// the stream gave) and a header of size 0 followed by a data section (read as an empty map):
+// both loaded without a word. Every cut of a saved file, and those headers, are refused now.
+TEST(OctomapBridge, CutOrMisdeclaredFilesAreRefused) {
+  Octree tree(0.05);
+  insert_scan(tree, random_scan(ScanPoint(0.0f, 0.0f, 1.0f), 500, 1.0), ScanPoint(0.0f, 0.0f, 1.0f));
+  const std::string dir = ::testing::TempDir();
+  for (const std::string ext : {".ot", ".bt"}) {
+    save_octree(tree, dir + "whole" + ext);
+    std::ifstream in(dir + "whole" + ext, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t data = bytes.find("data\n") + 5;
+    ASSERT_GT(ours(load_octree(dir + "whole" + ext)).size(), 10u) << ext;  // the whole file loads
+    for (const std::size_t cut : {data + 1, (data + bytes.size()) / 2, bytes.size() - 1}) {
+      std::ofstream(dir + "cut" + ext, std::ios::binary) << bytes.substr(0, cut);
+      EXPECT_THROW(load_octree(dir + "cut" + ext), std::runtime_error) << ext << " cut at " << cut << " of " << bytes.size();
+    }
+    std::ofstream(dir + "longer" + ext, std::ios::binary) << bytes << "more";
+    EXPECT_THROW(load_octree(dir + "longer" + ext), std::runtime_error) << ext;
+    std::string zero = bytes;
+    const std::size_t size_at = zero.find("size ");
+    zero.replace(size_at, zero.find('\n', size_at) - size_at, "size 0");
+    std::ofstream(dir + "zero" + ext, std::ios::binary) << zero;
+    EXPECT_THROW(load_octree(dir + "zero" + ext), std::runtime_error) << ext;
+  }
+}
+
+// Points a denormal distance from the sensor but in another voxel (found by the point_cloud fuzz
+// target): the ray's float length underflowed to 0, its direction became infinities and NaN,
+// and the voxel walk never ended. They are inserted now (their end voxels occupied) at once.
+TEST(OctreeBadInput, DenormalRaysEnd) {
+  const std::vector<ScanPoint> points = {ScanPoint(-8.82818e-44f, 8.82818e-44f, -0.0f), ScanPoint(0.0f, -0.0f, -1.77965e-43f),
+                                         ScanPoint(1e-45f, 1e-45f, 1e-45f), ScanPoint(-1e-45f, 0.0f, 1e-45f)};
+  auto done = std::async(std::launch::async, [&] {
+    Octree tree(0.05);
+    ScanOptions options;
+    options.threads = 1;
+    insert_scan(tree, points, ScanPoint::Zero(), options);
+    return tree.leaves().size();
+  });
+  if (done.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
+    ADD_FAILURE() << "the scan of four denormal points did not end";
+    std::_Exit(1);  // the walk cannot be stopped from here
+  }
+  EXPECT_GE(done.get(), 1u);
 }
 
 TEST(OctreeBadInput, ResolutionAndPoints) {

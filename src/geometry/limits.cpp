@@ -9,7 +9,7 @@ namespace {
 std::string amount(double asked) {
   if (!std::isfinite(asked)) return "an unbounded number";
   char text[64];
-  std::snprintf(text, sizeof text, "%.0f", asked);
+  std::snprintf(text, sizeof text, asked < 1e15 ? "%.0f" : "%.3g", asked);  // 1e+300, not 300 digits
   return text;
 }
 

@@ -31,7 +31,12 @@ bool walk_ray(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& 
   visit(*key_origin);
   ScanPoint direction = end - origin;
   const float length = static_cast<float>(float_norm(direction));
+  // Ends a denormal distance apart in different voxels: the length underflows to 0 and the
+  // direction to infinities and NaN, with which the walk below never ended (found by the
+  // point_cloud fuzz target). Such a ray crosses no voxel between its ends.
+  if (!(length > 0.0f) || !std::isfinite(length)) return true;
   direction /= length;
+  if (!direction.allFinite()) return true;
   int step[3];
   double t_max[3], t_delta[3];
   OctreeKey current = *key_origin;
@@ -46,7 +51,12 @@ bool walk_ray(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& 
     t_max[i] = (border - origin[i]) / direction[i];
     t_delta[i] = grid.resolution() / std::fabs(direction[i]);
   }
-  while (true) {
+  // Each step moves one voxel along one axis: the walk needs the keys' Manhattan distance, and
+  // rounding that carries it beside the end adds a step or two. The cap makes any other rounding
+  // a short ray, never an endless one.
+  int steps_left = 8;
+  for (int i = 0; i < 3; ++i) steps_left += std::abs(int(key_end->k[i]) - int(key_origin->k[i]));
+  while (steps_left-- > 0) {
     const int dim = t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
     current.k[dim] = static_cast<std::uint16_t>(current.k[dim] + step[dim]);
     t_max[dim] += t_delta[dim];

@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "loader_targets.h"
+#include "message_targets.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string problem = bvh_collision::fuzz::BVH_COLLISION_FUZZ_TARGET(data, size);

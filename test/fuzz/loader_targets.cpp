@@ -7,11 +7,13 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 
 #include "bvh_collision/bvh/bounding_volumes.h"
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -147,8 +149,10 @@ std::string check_mesh(const std::uint8_t* data, std::size_t size) {
     }
     if (!some_area) return "loaded with every triangle of zero area";
     const Bvh<Obb> tree = Bvh<Obb>::build(mesh);
-    for (const Vec3& v : mesh.vertices) {
-      if (!contains(tree.nodes()[0].volume, v)) return "the hierarchy's root does not bound a vertex";
+    for (const auto& t : mesh.triangles) {  // a vertex no triangle uses is not part of the surface
+      for (const int i : t) {
+        if (!contains(tree.nodes()[0].volume, mesh.vertices[i])) return "the hierarchy's root does not bound a vertex";
+      }
     }
     return "";
   } catch (const MeshLoadError& e) {
@@ -185,6 +189,44 @@ std::string check_srdf(const std::uint8_t* data, std::size_t size) {
       }
     }
     return "";
+  } catch (const std::invalid_argument& e) {
+    return refusal_problem(e.what());
+  }
+}
+
+namespace {
+
+// A loaded tree: every leaf finite, inside the key range, and the tree reads back what it writes.
+std::string check_octree(const Octree& tree) {
+  if (!(std::isfinite(tree.resolution()) && tree.resolution() > 0.0)) return "loaded with a resolution that is not positive";
+  const std::vector<Octree::Leaf> leaves = tree.leaves();
+  for (const Octree::Leaf& leaf : leaves) {
+    if (!std::isfinite(leaf.log_odds)) return "loaded with a leaf value that is not finite";
+    if (leaf.depth < 0 || leaf.depth > kOctreeDepth) return "loaded with a leaf at depth " + std::to_string(leaf.depth);
+  }
+  std::stringstream stream;
+  tree.write_nodes(stream);
+  const Octree again = Octree::read_nodes(stream, tree.resolution(), tree.model());
+  const std::vector<Octree::Leaf> reread = again.leaves();
+  if (reread.size() != leaves.size()) return "written and read back, the tree has another number of leaves";
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    if (!(reread[i].key == leaves[i].key) || reread[i].depth != leaves[i].depth || reread[i].log_odds != leaves[i].log_odds) {
+      return "written and read back, leaf " + std::to_string(i) + " differs";
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string check_octree_file(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return "";
+  const OctreeFormat format = data[0] % 2 == 0 ? OctreeFormat::kBinary : OctreeFormat::kFull;
+  std::istringstream in(std::string(reinterpret_cast<const char*>(data + 1), size - 1));
+  try {
+    return check_octree(read_octree(in, format, "fuzz input"));
+  } catch (const std::runtime_error& e) {
+    return refusal_problem(e.what());
   } catch (const std::invalid_argument& e) {
     return refusal_problem(e.what());
   }

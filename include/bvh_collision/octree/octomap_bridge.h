@@ -2,6 +2,7 @@
 // This header only declares OctoMap's type; its .cpp is the one file that includes OctoMap.
 #pragma once
 
+#include <istream>
 #include <string>
 
 #include "bvh_collision/octree/octree.h"
@@ -21,6 +22,9 @@ Octree from_octomap(const octomap::OcTree& tree);
 // or .ot (every value), chosen by the file's extension. Both throw std::runtime_error with the
 // path and the reason when a file cannot be read or written, or is not an OcTree.
 Octree load_octree(const std::string& path);
+// The same from a stream; `name` (e.g. the quoted path) starts each error message.
+enum class OctreeFormat { kBinary, kFull };  // .bt, .ot
+Octree read_octree(std::istream& in, OctreeFormat format, const std::string& name);
 void save_octree(const Octree& tree, const std::string& path);
 
 }  // namespace bvh_collision

@@ -1,0 +1,211 @@
+#include <ros/ros.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
+#include <type_traits>
+
+#include "bvh_collision/ros/collision_checker_node.h"
+#include "byte_reader.h"
+#include "message_targets.h"
+
+namespace bvh_collision {
+
+// The handlers, for the service target (a friend of the node).
+struct NodeFuzzAccess {
+  static CollisionCheckerNode& node();
+  template <class Request, class Response>
+  static bool call(Request& req, Response& res) {
+    CollisionCheckerNode& n = node();
+    if constexpr (std::is_same_v<Request, CheckState::Request>) return n.check_state(req, res);
+    if constexpr (std::is_same_v<Request, CheckStates::Request>) return n.check_states(req, res);
+    if constexpr (std::is_same_v<Request, CheckMotion::Request>) return n.check_motion(req, res);
+    if constexpr (std::is_same_v<Request, CastRay::Request>) return n.cast_ray(req, res);
+    if constexpr (std::is_same_v<Request, std_srvs::Empty::Request>) return n.clear_environment(req, res);
+    if constexpr (std::is_same_v<Request, ClearBox::Request>) return n.clear_box(req, res);
+    if constexpr (std::is_same_v<Request, SetCollisionObject::Request>) return n.set_collision_object(req, res);
+    if constexpr (std::is_same_v<Request, RemoveCollisionObject::Request>) return n.remove_collision_object(req, res);
+  }
+};
+
+CollisionCheckerNode& NodeFuzzAccess::node() {
+  static std::unique_ptr<CollisionCheckerNode> node = [] {
+    int argc = 1;
+    char name[] = "bvh_collision_fuzz";
+    char* argv[] = {name, nullptr};
+    ros::init(argc, argv, "bvh_collision_fuzz", ros::init_options::AnonymousName | ros::init_options::NoSigintHandler);
+    if (!ros::master::check()) throw std::runtime_error("the service target needs a ROS master (ROS_MASTER_URI)");
+    const std::string ns = ros::this_node::getName();
+    std::ifstream file(std::string(BVH_COLLISION_SOURCE_DIR) + "/urdf/demo_arm.urdf");
+    const std::string urdf((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    ros::param::set(ns + "/robot_description", urdf);
+    ros::param::set(ns + "/checker/proxy_levels", std::vector<double>{0.02});  // one, quickly: both paths
+    ros::param::set(ns + "/checker/joint_state_timeout", 0.0);  // no joint_states come here
+    ros::param::set(ns + "/checker/max_motion_states", 2000);
+    ros::param::set(ns + "/checker/max_batch_states", 2000);
+    static ros::NodeHandle nh(ns), private_nh(ns + "/checker");
+    return std::make_unique<CollisionCheckerNode>(nh, private_nh);
+  }();
+  return *node;
+}
+
+namespace fuzz {
+namespace {
+
+// The demo arm's names (joints, links, frames) and a few others; scripts/make_loader_corpus.py
+// writes its seeds with these indices.
+const std::vector<std::string> kNames = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6",
+                                         "finger_joint_left", "base_link", "link3", "hand", "world", "box", "octree"};
+
+geometry_msgs::Point point(ByteReader& in) {
+  geometry_msgs::Point p;
+  p.x = in.number();
+  p.y = in.number();
+  p.z = in.number();
+  return p;
+}
+
+CollisionShape shape(ByteReader& in) {
+  CollisionShape s;
+  s.type = in.count(7);
+  s.dimensions = in.numbers(4);
+  const std::vector<std::string> uris = {"", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl",
+                                         "file:///nonexistent.stl", "/etc/hostname"};
+  s.mesh_uri = in.name(uris);
+  s.mesh_scale.x = in.number();
+  s.mesh_scale.y = in.number();
+  s.mesh_scale.z = in.number();
+  s.vertices.resize(in.count(8));
+  for (auto& v : s.vertices) v = point(in);
+  s.triangles.resize(in.count(12));
+  for (auto& t : s.triangles) t = in.byte() < 250 ? in.count(9) : in.u32();
+  return s;
+}
+
+// An answer is an error, or it holds what it should.
+// BVH_COLLISION_REPLAY_VERBOSE=1 prints each answer's error (or "answered"), to see what a seed reaches.
+template <class Response>
+std::string error_problem(const Response& res) {
+  if (std::getenv("BVH_COLLISION_REPLAY_VERBOSE")) std::fprintf(stderr, "  -> %s\n", res.error.empty() ? "answered" : res.error.c_str());
+  if (res.error.rfind("internal error", 0) == 0) return res.error;
+  return "";
+}
+
+std::string answer(ByteReader& in) {
+  switch (in.count(7)) {
+    case 0: {
+      CheckState::Request req;
+      req.state.name.resize(in.count(6));
+      for (auto& n : req.state.name) n = in.name(kNames);
+      req.state.position = in.numbers(7);
+      req.checks = in.byte();
+      req.max_contacts = in.count(5);
+      req.distance = in.byte() & 1;
+      req.tolerance = in.number();
+      CheckState::Response res;
+      NodeFuzzAccess::call(req, res);
+      if (res.error.empty() && req.distance && std::isnan(res.min_distance) && (req.checks & 3) != 0) {
+        return "check_state answered a distance of NaN";
+      }
+      return error_problem(res);
+    }
+    case 1: {
+      CheckStates::Request req;
+      req.joint_names.resize(in.count(5));
+      for (auto& n : req.joint_names) n = in.name(kNames);
+      req.positions = in.numbers(24);
+      req.checks = in.byte();
+      req.tolerance = in.number();
+      CheckStates::Response res;
+      NodeFuzzAccess::call(req, res);
+      if (res.error.empty() && !req.joint_names.empty() && res.valid.size() != req.positions.size() / req.joint_names.size()) {
+        return "check_states answered another number of states than it was given";
+      }
+      return error_problem(res);
+    }
+    case 2: {
+      CheckMotion::Request req;
+      req.joint_names.resize(in.count(5));
+      for (auto& n : req.joint_names) n = in.name(kNames);
+      req.start = in.numbers(5);
+      req.goal = in.numbers(5);
+      req.checks = in.byte();
+      req.resolution = in.number();
+      CheckMotion::Response res;
+      NodeFuzzAccess::call(req, res);
+      if (res.error.empty() && !(res.last_valid_fraction >= 0.0 && res.last_valid_fraction <= 1.0)) {
+        return "check_motion answered a last valid fraction outside [0, 1]";
+      }
+      return error_problem(res);
+    }
+    case 3: {
+      CastRay::Request req;
+      req.origin = point(in);
+      const geometry_msgs::Point d = point(in);
+      req.direction.x = d.x;
+      req.direction.y = d.y;
+      req.direction.z = d.z;
+      req.max_range = in.number();
+      CastRay::Response res;
+      NodeFuzzAccess::call(req, res);
+      if (res.error.empty() && res.hit && !std::isfinite(res.distance)) return "cast_ray hit at a distance that is not finite";
+      return error_problem(res);
+    }
+    case 4: {
+      std_srvs::Empty::Request req;
+      std_srvs::Empty::Response res;
+      NodeFuzzAccess::call(req, res);
+      return "";
+    }
+    case 5: {
+      ClearBox::Request req;
+      req.min = point(in);
+      req.max = point(in);
+      ClearBox::Response res;
+      NodeFuzzAccess::call(req, res);
+      return error_problem(res);
+    }
+    case 6: {
+      SetCollisionObject::Request req;
+      req.id = in.name(kNames);
+      req.shape = shape(in);
+      req.pose.position = point(in);
+      req.pose.orientation.x = in.number();
+      req.pose.orientation.y = in.number();
+      req.pose.orientation.z = in.number();
+      req.pose.orientation.w = in.number();
+      req.frame_id = in.name(kNames);
+      SetCollisionObject::Response res;
+      NodeFuzzAccess::call(req, res);
+      return error_problem(res);
+    }
+    default: {
+      RemoveCollisionObject::Request req;
+      req.id = in.name(kNames);
+      RemoveCollisionObject::Response res;
+      NodeFuzzAccess::call(req, res);
+      return error_problem(res);
+    }
+  }
+}
+
+}  // namespace
+
+std::string check_service_request(const std::uint8_t* data, std::size_t size) {
+  ByteReader in(data, size);
+  if (std::string problem = answer(in); !problem.empty()) return problem;
+  // The node still answers: the neutral state, self only.
+  CheckState::Request plain;
+  plain.checks = CheckState::Request::SELF;
+  CheckState::Response res;
+  NodeFuzzAccess::call(plain, res);
+  if (!res.error.empty()) return "after that request a plain check_state failed: " + res.error;
+  return "";
+}
+
+}  // namespace fuzz
+}  // namespace bvh_collision
