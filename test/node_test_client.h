@@ -2,8 +2,13 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
+#include <ros/topic.h>
 
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <random>
 #include <string>
 #include <vector>
@@ -27,6 +32,42 @@ Srv call(const std::string& name, const typename Srv::Request& request) {
   srv.request = request;
   EXPECT_TRUE(ros::service::call(node_service(name), srv)) << "call to " << name << " failed";
   return srv;
+}
+
+// The same on another instance (e.g. "/framed/collision_checker").
+template <class Srv>
+Srv call_on(const std::string& node, const std::string& name, const typename Srv::Request& request) {
+  Srv srv;
+  srv.request = request;
+  EXPECT_TRUE(ros::service::call(node_service(name, node), srv)) << "call to " << node << "/" << name << " failed";
+  return srv;
+}
+
+// A value of the node's diagnostics (published once a second) by its key, from the first
+// message of that node within 15 s (other instances publish on /diagnostics too); "(missing)"
+// if none came.
+inline std::string diagnostic(const std::string& key, const std::string& node = "/collision_checker") {
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::string value;
+  bool found = false;
+  ros::NodeHandle nh;
+  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+        for (const auto& status : msg->status) {
+          if (status.name.rfind(node + ":", 0) != 0) continue;
+          for (const auto& kv : status.values) {
+            if (kv.key != key) continue;
+            const std::lock_guard<std::mutex> lock(mutex);
+            value = kv.value;
+            found = true;
+            arrived.notify_all();
+          }
+        }
+      });
+  std::unique_lock<std::mutex> lock(mutex);
+  arrived.wait_for(lock, std::chrono::seconds(15), [&] { return found; });
+  return found ? value : "(missing)";
 }
 
 inline bool wait_for_node(double seconds = 60.0) {

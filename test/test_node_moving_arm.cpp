@@ -92,19 +92,6 @@ std::vector<ScanPoint> render(const CollisionChecker& checker, const std::vector
   return points;
 }
 
-std::string diagnostic(const std::string& key) {
-  for (int tries = 0; tries < 5; ++tries) {
-    const auto msg = ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5.0));
-    if (!msg) continue;
-    for (const auto& status : msg->status) {
-      for (const auto& kv : status.values) {
-        if (kv.key == key) return kv.value;
-      }
-    }
-  }
-  return "(missing)";
-}
-
 TEST(NodeMovingArm, CloudsMeetTheArmWhereItWasAtTheirStamp) {
   std::string urdf;
   ASSERT_TRUE(ros::param::get("~urdf_file", urdf));

@@ -290,9 +290,24 @@ std::optional<std::vector<double>> CollisionCheckerNode::state_at(const ros::Tim
   return history_->at(t);
 }
 
+// The latest transform from `frame` to world_frame, unless a dynamic one has gone quiet.
+geometry_msgs::TransformStamped CollisionCheckerNode::latest_transform(const std::string& frame) const {
+  geometry_msgs::TransformStamped t = tf_buffer_.lookupTransform(params_.world_frame, frame, ros::Time(0));
+  if (params_.tf_timeout > 0.0 && !t.header.stamp.isZero()) {  // static transforms carry stamp 0 here
+    const double age = (ros::Time::now() - t.header.stamp).toSec();
+    if (age > params_.tf_timeout) {
+      throw RequestError("the latest transform from '" + frame + "' to '" + params_.world_frame + "' is " +
+                         std::to_string(age) + " s old (~tf_timeout " + std::to_string(params_.tf_timeout) +
+                         " s): tf has stopped, so where it is now is unknown");
+    }
+  }
+  return t;
+}
+
 Transform CollisionCheckerNode::root_pose(const ros::Time& stamp, const ros::Duration& timeout) const {
   if (params_.world_frame == root_link_) return Transform::Identity();
   try {
+    if (stamp.isZero()) return to_transform(latest_transform(root_link_).transform);
     return to_transform(tf_buffer_.lookupTransform(params_.world_frame, root_link_, stamp, timeout).transform);
   } catch (const tf2::TransformException& e) {
     throw RequestError("cannot place the root link '" + root_link_ + "' in world frame '" + params_.world_frame +
@@ -303,7 +318,7 @@ Transform CollisionCheckerNode::root_pose(const ros::Time& stamp, const ros::Dur
 Transform CollisionCheckerNode::frame_to_world(const std::string& frame) const {
   if (frame.empty() || frame == params_.world_frame) return Transform::Identity();
   try {
-    return to_transform(tf_buffer_.lookupTransform(params_.world_frame, frame, ros::Time(0)).transform);
+    return to_transform(latest_transform(frame).transform);
   } catch (const tf2::TransformException& e) {
     throw RequestError("unknown frame '" + frame + "' (no transform to '" + params_.world_frame + "'): " + e.what());
   }

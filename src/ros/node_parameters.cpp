@@ -152,6 +152,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.joint_state_history = read_number(nh, "joint_state_history", p.joint_state_history, false);
   p.joint_state_lead = read_number(nh, "joint_state_lead", p.joint_state_lead, false);
   p.joint_state_timeout = read_number(nh, "joint_state_timeout", p.joint_state_timeout, false);
+  p.tf_timeout = read_number(nh, "tf_timeout", p.tf_timeout, false);
   p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
   p.service_threads = static_cast<int>(read_count(nh, "service_threads", p.service_threads, kMostServiceThreads));
   read_limits(nh, p);

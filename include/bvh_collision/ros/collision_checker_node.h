@@ -88,6 +88,10 @@ struct NodeParameters {
   // error once the last joint state is older than this (s): the robot's pose is no longer known.
   // 0: never. Before the first joint state the neutral state is used, as always.
   double joint_state_timeout = 1.0;
+  // tf keeps answering a lookup of the latest transform with the last one it heard, however old:
+  // a query that places the root link (or an object's frame) in world_frame through a transform
+  // that is not static answers an error once that transform is older than this (s). 0: never.
+  double tf_timeout = 1.0;
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
   // ~max_motion_states, ~max_batch_states, ~max_cloud_points, ~max_ray_voxels,
@@ -114,6 +118,9 @@ class CollisionCheckerNode {
   const NodeParameters& parameters() const { return params_; }
 
  private:
+  // The service fuzz target (test/fuzz/message_targets.cpp) calls the handlers directly.
+  friend struct NodeFuzzAccess;
+
   // Start-up (collision_checker_node.cpp).
   void load_robot();
   Environment initial_environment() const;
@@ -139,6 +146,9 @@ class CollisionCheckerNode {
   // The root link in world_frame at `stamp` (0: the latest); throws RequestError when tf2 cannot
   // tell within `timeout`.
   Transform root_pose(const ros::Time& stamp, const ros::Duration& timeout = ros::Duration(0)) const;
+  // The latest transform from `frame` to world_frame; a RequestError when a dynamic one is older
+  // than ~tf_timeout.
+  geometry_msgs::TransformStamped latest_transform(const std::string& frame) const;
   // `frame` to world_frame, the latest transform; throws RequestError naming the frame.
   Transform frame_to_world(const std::string& frame) const;
   void require_geometry() const;
