@@ -6,6 +6,7 @@
 #                CI=true: both
 #   make demo    start the node on the demo robot and report what it does
 #   make bench   build and run the benchmarks (Release); build/bench/report.md with its plots
+#   make soak    the node on panda for 10 minutes under load (build/soak/soak.md); not in make test
 #   make fuzz    the libFuzzer targets (clang, ./build-fuzz), FUZZ_SECONDS each (default 60);
 #                what they find lands in test/fuzz/corpus, which `make test` replays
 SHELL := /bin/bash
@@ -28,7 +29,7 @@ DEB_PACKAGES := \
 # Only `make fuzz` needs clang and its libFuzzer runtime.
 FUZZ_PACKAGES := clang libclang-rt-14-dev
 
-.PHONY: all deps build test demo bench fuzz clean
+.PHONY: all deps build test demo bench soak fuzz clean
 all: build
 
 deps:
@@ -55,6 +56,9 @@ bench: deps build
 	done
 	@echo "== bench_node (the node's services)"; bash scripts/bench_node.sh $(BUILD)/bench
 	@python3 scripts/bench_report.py $(BUILD)/bench
+
+soak: deps build
+	@bash scripts/soak.sh $(BUILD)/soak
 
 fuzz: deps
 	@bash scripts/install_deps.sh $(FUZZ_PACKAGES)

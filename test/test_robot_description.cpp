@@ -256,6 +256,22 @@ TEST(RobotDescription, UrdfdomReadsTheDocumentThatWasValidated) {
   EXPECT_FALSE(model->getLink("base"));
 }
 
+// Numbers split by tabs and line breaks (found by fuzz_robot_description): the validation read
+// three numbers, urdfdom (which splits on spaces) failed the origin and dropped the whole
+// <collision> without a word. XML's attribute normalization makes them spaces for both.
+TEST(RobotDescription, LineBreaksBetweenNumbersKeepTheElement) {
+  const std::string xml =
+      "<robot name=\"r\"><link name=\"b\"><collision><origin xyz=\"0\n\n 0\t0.1\" rpy=\"0\r\n0 0\"/>"
+      "<geometry><box size=\"0.1\n0.2 0.3\"/></geometry></collision></link></robot>";
+  const auto model = parse_robot_description(xml);
+  ASSERT_EQ(model->getLink("b")->collision_array.size(), 1u);
+  const auto& collision = *model->getLink("b")->collision_array[0];
+  EXPECT_DOUBLE_EQ(collision.origin.position.z, 0.1);
+  const auto* box = dynamic_cast<const urdf::Box*>(collision.geometry.get());
+  ASSERT_NE(box, nullptr);
+  EXPECT_DOUBLE_EQ(box->dim.y, 0.2);
+}
+
 TEST(RobotDescription, OnlyRegularFilesAreRead) {
   for (const std::string path : {"/dev/zero", "/tmp", "/dev/null"}) {
     try {

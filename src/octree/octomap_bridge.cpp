@@ -106,7 +106,9 @@ std::size_t data_start(const std::string& bytes) {
 // walked here first, without recursion: no node deeper than the tree's 16 levels, none cut off.
 void check_structure(const std::string& bytes, OctreeFormat format, const std::string& name) {
   std::size_t at = data_start(bytes);
-  if (at == std::string::npos) return;  // OctoMap refuses it itself
+  // Without a header OctoMap's .bt reader falls back to its headerless legacy format and reads on
+  // past the end of the file (an OOM the fuzz target found): only files with a header are read.
+  if (at == std::string::npos) throw std::runtime_error(name + " has no OctoMap header ending in a 'data' line");
   const std::size_t record = format == OctreeFormat::kBinary ? 2 : 5;  // .bt: two bytes; .ot: float and mask
   std::vector<int> pending = {0};  // depths of the node records still to read, last first
   while (!pending.empty()) {

@@ -5,6 +5,7 @@
 #include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -31,6 +32,22 @@ std::mutex& console_mutex() {
   return m;
 }
 
+// XML's attribute-value normalization, which TinyXML 1 (urdfdom) skips: a tab or line break
+// inside a value is a space. urdfdom splits numbers on spaces only, so "0\n0 0.1" passed the
+// validation as three numbers and then lost its whole <collision> in urdfdom (found by
+// fuzz_robot_description).
+void normalize_attribute_whitespace(tinyxml2::XMLElement& e) {
+  for (const tinyxml2::XMLAttribute* a = e.FirstAttribute(); a != nullptr; a = a->Next()) {
+    std::string value = a->Value();
+    if (value.find_first_of("\t\n\r") == std::string::npos) continue;
+    std::replace_if(value.begin(), value.end(), [](char c) { return c == '\t' || c == '\n' || c == '\r'; }, ' ');
+    e.SetAttribute(a->Name(), value.c_str());
+  }
+  for (tinyxml2::XMLElement* c = e.FirstChildElement(); c != nullptr; c = c->NextSiblingElement()) {
+    normalize_attribute_whitespace(*c);
+  }
+}
+
 // tinyxml2 gives the line of a syntax error, which urdfdom's tinyxml parse does not report.
 // Returns the validated document as tinyxml2 prints it back, which is what urdfdom then reads:
 // urdfdom parses with TinyXML 1, which reads some text differently (an unknown entity such as
@@ -41,11 +58,12 @@ std::string check_xml(const std::string& xml) {
     throw RobotDescriptionError("robot description is not well-formed XML (line " +
                                 std::to_string(doc.ErrorLineNum()) + "): " + doc.ErrorStr());
   }
-  const tinyxml2::XMLElement* root = doc.RootElement();
+  tinyxml2::XMLElement* root = doc.RootElement();
   if (root == nullptr || std::string(root->Name()) != "robot") {
     throw RobotDescriptionError(std::string("robot description has no <robot> root element (found <") +
                                 (root ? root->Name() : "nothing") + ">)");
   }
+  normalize_attribute_whitespace(*root);
   validate_robot_xml(*root);  // what urdfdom would drop or accept silently
   tinyxml2::XMLPrinter printer(nullptr, /*compact=*/true);
   doc.Print(&printer);
