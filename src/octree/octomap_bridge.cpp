@@ -105,10 +105,14 @@ std::size_t data_start(const std::string& bytes) {
 // the process down with a stack overflow: found by the octree_file fuzz target). The structure is
 // walked here first, without recursion: no node deeper than the tree's 16 levels, none cut off.
 void check_structure(const std::string& bytes, OctreeFormat format, const std::string& name) {
-  std::size_t at = data_start(bytes);
-  // Without a header OctoMap's .bt reader falls back to its headerless legacy format and reads on
-  // past the end of the file (an OOM the fuzz target found): only files with a header are read.
-  if (at == std::string::npos) throw std::runtime_error(name + " has no OctoMap header ending in a 'data' line");
+  // Without its header line OctoMap's .bt reader falls back to its headerless legacy format and
+  // reads on past the end of the file (out of memory, or a stack overflow: found by the fuzz
+  // target): only files that start with their format's header line and have a data line are read.
+  const std::string header = format == OctreeFormat::kBinary ? "# Octomap OcTree binary file" : "# Octomap OcTree file";
+  std::size_t at = bytes.compare(0, header.size(), header) == 0 ? data_start(bytes) : std::string::npos;
+  if (at == std::string::npos) {
+    throw std::runtime_error(name + " does not start with '" + header + "' and a header ending in a 'data' line");
+  }
   const std::size_t record = format == OctreeFormat::kBinary ? 2 : 5;  // .bt: two bytes; .ot: float and mask
   std::vector<int> pending = {0};  // depths of the node records still to read, last first
   while (!pending.empty()) {
