@@ -15,6 +15,8 @@ set -u
 log="$out/soak.log"
 rostest --text bvh_collision node_soak.test duration:="${SOAK_SECONDS:-600}" > "$log" 2>&1
 status=$?
+# rostest --text exits 0 whatever the test said: the test's own verdict decides.
+grep -a -q '\[  PASSED  \] 1 test' "$log" || status=1
 {
   echo "# Soak: the node on panda, 4 clients, 10 Hz clouds, the arm moving ($(date -u +%F))"
   echo
