@@ -1,6 +1,7 @@
 // The soak (issue 19, point 6): the node on panda under four clients and 10 Hz clouds while the
 // arm moves, for ~duration seconds. Every call must be answered without an error; the node's
-// resident memory after the first window (~window s) may grow by at most ~max_growth; the p99
+// resident memory may grow by at most ~max_growth (the highest of the last window against the
+// highest of the first window after ~window s of warm-up); the p99
 // latency of the last window may be at most ~max_p99_ratio times the first's. `make soak` runs
 // node_soak.test (600 s, 60 s windows); make test runs node_soak_short.test (a short replay).
 // The node's resident memory is read from /proc through its process id, which every ROS node
@@ -213,10 +214,13 @@ TEST(NodeSoak, HoursInMinutes) {
     if (s.at >= window && s.at < 2 * window) first.push_back(s.seconds);
     if (s.at >= duration - window) last.push_back(s.seconds);
   }
-  double after_first = -1.0, peak_after = 0.0;
+  // Each cloud allocates and frees its scan, distance field and environment copy, so the resident
+  // memory swings by tens of MiB within a second; a leak shows as peaks that rise. Growth: the
+  // highest in the last window against the highest in the first window after warm-up.
+  double after_first = 0.0, peak_after = 0.0;
   for (const auto& [at, mib] : memory) {
-    if (at >= window && after_first < 0.0) after_first = mib;
-    if (at >= window) peak_after = std::max(peak_after, mib);
+    if (at >= window && at < 2 * window) after_first = std::max(after_first, mib);
+    if (at >= duration - window) peak_after = std::max(peak_after, mib);
   }
   const double growth = after_first > 0.0 ? peak_after / after_first - 1.0 : 0.0;
   std::printf("\n| s | resident (MiB) |\n|---|---|\n");
@@ -225,9 +229,9 @@ TEST(NodeSoak, HoursInMinutes) {
   }
   const double p99_first = percentile(first, 0.99), p99_last = percentile(last, 0.99);
   const std::string inserted = diagnostic("clouds inserted");
-  std::printf("| calls | failed | clouds inserted | resident after %.0f s | peak after | growth | p99 %.0f-%.0f s | p99 last %.0f s |\n"
+  std::printf("| calls | failed | clouds inserted | resident peak %.0f-%.0f s | resident peak last %.0f s | growth | p99 %.0f-%.0f s | p99 last %.0f s |\n"
               "|---|---|---|---|---|---|---|---|\n",
-              window, window, 2 * window, window);
+              window, 2 * window, window, window, 2 * window, window);
   std::printf("| %zu | %zu | %s | %.1f MiB | %.1f MiB | %.2f %% | %.2f ms | %.2f ms |\n", samples.size(), failures.size(),
               inserted.c_str(), after_first, peak_after, 100.0 * growth, 1e3 * p99_first, 1e3 * p99_last);
   const char* kinds[] = {"check_state", "check_states (50)", "check_motion (certified, 0.2 rad)", "cast_ray"};
@@ -243,8 +247,8 @@ TEST(NodeSoak, HoursInMinutes) {
   RecordProperty("calls", std::to_string(samples.size()));
   RecordProperty("failed", std::to_string(failures.size()));
   RecordProperty("clouds_inserted", inserted);
-  RecordProperty("resident_after_first_window_mib", std::to_string(after_first));
-  RecordProperty("resident_peak_mib", std::to_string(peak_after));
+  RecordProperty("resident_peak_first_window_mib", std::to_string(after_first));
+  RecordProperty("resident_peak_last_window_mib", std::to_string(peak_after));
   RecordProperty("growth_percent", std::to_string(100.0 * growth));
   RecordProperty("p99_first_ms", std::to_string(1e3 * p99_first));
   RecordProperty("p99_last_ms", std::to_string(1e3 * p99_last));
@@ -253,7 +257,7 @@ TEST(NodeSoak, HoursInMinutes) {
   EXPECT_GT(samples.size(), static_cast<std::size_t>(duration));  // far more than one call a second
   EXPECT_GT(std::atoi(inserted.c_str()), static_cast<int>(duration));  // clouds kept coming in
   EXPECT_GT(after_first, 0.0);
-  EXPECT_LT(growth, max_growth) << after_first << " MiB after the first window, " << peak_after << " MiB at the peak";
+  EXPECT_LT(growth, max_growth) << after_first << " MiB at most in the first window, " << peak_after << " MiB in the last";
   ASSERT_FALSE(first.empty());
   ASSERT_FALSE(last.empty());
   EXPECT_LE(p99_last, max_p99_ratio * p99_first) << "p99 " << p99_first << " s at first, " << p99_last << " s at the end";
