@@ -391,9 +391,12 @@ struct BvhBuilder {
       BvhNode<BV>& node = out.nodes_[i];
       const EnclosingBox box = enclosing_box(node.volume);
       double bound = 2.0 * box.half.norm() * (1 + kPoseMargin);  // the node's triangles lie in the box
-      if (!node.is_leaf()) bound = std::min(bound, composed_slack(box, node, box_slack));
-      if (node.count <= corners_up_to) bound = std::min(bound, corner_slack(box, node, large));
-      if (node.count <= sampled_up_to) bound = std::min(bound, sampled_slack(box, node));
+      if (node.count <= sampled_up_to) {  // the tightest; where it is taken the others add little
+        bound = std::min(bound, sampled_slack(box, node));
+      } else {
+        if (!node.is_leaf()) bound = std::min(bound, composed_slack(box, node, box_slack));
+        if (node.count <= corners_up_to) bound = std::min(bound, corner_slack(box, node, large));
+      }
       box_slack[i] = bound;
       node.size = radius(node.volume);
       node.slack = std::min(2.0 * node.size, bound);
