@@ -170,6 +170,20 @@ void send_and_hang_up(const std::string& service, const CheckMotion::Request& re
   ::close(fd);  // gone before the answer
 }
 
+// A self-only fixed-step motion of joint1 from -reach to +reach, every other joint at 0 (all
+// given, so no joint_states are needed).
+CheckMotion::Request joint1_motion(const CollisionChecker& checker, double reach, double resolution) {
+  CheckMotion::Request r;
+  r.joint_names = checker.model().variable_names();
+  r.start.assign(r.joint_names.size(), 0.0);
+  r.goal = r.start;
+  r.start[0] = -reach;
+  r.goal[0] = reach;
+  r.checks = CheckMotion::Request::SELF;
+  r.resolution = resolution;
+  return r;
+}
+
 TEST(NodeFaults, ClientThatHangsUpMidCall) {
   std::string urdf;
   ASSERT_TRUE(ros::param::get("~urdf_file", urdf));
@@ -178,14 +192,7 @@ TEST(NodeFaults, ClientThatHangsUpMidCall) {
   const CheckState::Request quick = state_request(checker, std::vector<double>(checker.model().variable_count(), 0.0));
   // 3,000,000 states of joint1, every joint given (seconds of work), from a client that hangs up
   // after 0.5 s; another client's query is answered meanwhile.
-  CheckMotion::Request long_motion;
-  long_motion.joint_names = checker.model().variable_names();
-  long_motion.start.assign(long_motion.joint_names.size(), 0.0);
-  long_motion.goal = long_motion.start;
-  long_motion.start[0] = -2.5;
-  long_motion.goal[0] = 2.5;
-  long_motion.checks = CheckMotion::Request::SELF;
-  long_motion.resolution = 5.0 / 3e6;
+  const CheckMotion::Request long_motion = joint1_motion(checker, 2.5, 5.0 / 3e6);
   std::thread hang_up([&] { send_and_hang_up(node_service("check_motion"), long_motion, 0.5); });
   ros::WallDuration(0.3).sleep();
   const double during = seconds_for("check_state", quick);
@@ -201,15 +208,7 @@ TEST(NodeFaults, ClientThatHangsUpMidCall) {
   const std::string longest = diagnostic("check_motion p99 (ms)");
   RecordProperty("abandoned_motion_ms", longest);
   EXPECT_GT(std::atof(longest.c_str()), 1500.0) << "the motion should have outlived its client";
-  CheckMotion::Request small;
-  small.joint_names = checker.model().variable_names();
-  small.start.assign(small.joint_names.size(), 0.0);
-  small.goal = small.start;
-  small.start[0] = -0.5;
-  small.goal[0] = 0.5;
-  small.checks = CheckMotion::Request::SELF;
-  small.resolution = 0.01;
-  const CheckMotion::Response moved = call<CheckMotion>("check_motion", small).response;
+  const CheckMotion::Response moved = call<CheckMotion>("check_motion", joint1_motion(checker, 0.5, 0.01)).response;
   EXPECT_EQ(moved.error, "");
   EXPECT_TRUE(moved.valid);
 }
