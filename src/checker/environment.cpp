@@ -122,34 +122,50 @@ void Environment::add_object(const std::string& id, const ObjectShape& shape, co
   add_object(make_collision_object(id, shape, pose));  // throws before anything changes
 }
 
+namespace {
+
+std::ptrdiff_t position_of(const std::vector<CollisionObject>& objects, const std::string& id) {
+  const auto it = std::find_if(objects.begin(), objects.end(), [&](const CollisionObject& x) { return x.id == id; });
+  return it == objects.end() ? -1 : it - objects.begin();
+}
+
+}  // namespace
+
+// Object changes build a new list (records only: hierarchies and hulls stay shared), so the
+// list a snapshot holds never changes under it.
 void Environment::add_object(CollisionObject o) {
-  const std::string& id = o.id;
-  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
-  if (it != objects_.end()) {
-    *it = std::move(o);
+  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
+  const std::ptrdiff_t i = position_of(*next, o.id);
+  if (i >= 0) {
+    (*next)[i] = std::move(o);
   } else {
-    objects_.push_back(std::move(o));
+    next->push_back(std::move(o));
   }
+  objects_ = std::move(next);
 }
 
 bool Environment::move_object(const std::string& id, const Transform& pose) {
-  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
-  if (it == objects_.end()) return false;
+  const std::ptrdiff_t i = position_of(*objects_, id);
+  if (i < 0) return false;
   require_rigid(pose, id);
-  it->pose = pose;
+  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
+  (*next)[i].pose = pose;
+  objects_ = std::move(next);
   return true;
 }
 
 bool Environment::remove_object(const std::string& id) {
-  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
-  if (it == objects_.end()) return false;
-  objects_.erase(it);
+  const std::ptrdiff_t i = position_of(*objects_, id);
+  if (i < 0) return false;
+  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
+  next->erase(next->begin() + i);
+  objects_ = std::move(next);
   return true;
 }
 
 const CollisionObject* Environment::find_object(const std::string& id) const {
-  const auto it = std::find_if(objects_.begin(), objects_.end(), [&](const CollisionObject& x) { return x.id == id; });
-  return it == objects_.end() ? nullptr : &*it;
+  const std::ptrdiff_t i = position_of(*objects_, id);
+  return i < 0 ? nullptr : &(*objects_)[i];
 }
 
 }  // namespace bvh_collision

@@ -7,6 +7,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 
 namespace bvh_collision {
 
@@ -24,11 +25,38 @@ std::uint64_t Octree::next_revision() {
 
 void Octree::clear() {
   revision_ = next_revision();
-  nodes_.clear();
-  nodes_.shrink_to_fit();
+  pages_.clear();
+  pages_.shrink_to_fit();
+  slots_ = 0;
   free_blocks_.clear();
   free_blocks_.shrink_to_fit();
   node_count_ = 0;
+}
+
+std::size_t Octree::distinct_memory_bytes(const std::vector<const Octree*>& trees) {
+  std::unordered_set<const Page*> pages;
+  std::size_t bytes = 0;
+  for (const Octree* tree : trees) {
+    for (const auto& page : tree->pages_) pages.insert(page.get());
+    bytes += tree->pages_.capacity() * sizeof(std::shared_ptr<Page>) + tree->free_blocks_.capacity() * sizeof(std::int32_t);
+  }
+  return bytes + pages.size() * sizeof(Page);
+}
+
+Octree::Node& Octree::edit(std::int32_t node) {
+  std::shared_ptr<Page>& page = pages_[node >> kPageShift];
+  // use_count reads the count relaxed: the fence orders this thread's writes after the reads a
+  // tree that just let go of the page made before its (releasing) decrement.
+  if (page.use_count() > 1) page = std::make_shared<Page>(*page);
+  std::atomic_thread_fence(std::memory_order_acquire);
+  return page->slots[node & (kPageSlots - 1)];
+}
+
+// The root takes slot 0 of the first block (slots 1-7 stay unused: blocks stay page-aligned).
+void Octree::create_root() {
+  allocate_block();
+  edit(0) = Node{};
+  node_count_ = 1;
 }
 
 std::int32_t Octree::allocate_block() {
@@ -37,8 +65,10 @@ std::int32_t Octree::allocate_block() {
     free_blocks_.pop_back();
     return first;
   }
-  const auto first = static_cast<std::int32_t>(nodes_.size());
-  nodes_.resize(nodes_.size() + 8);
+  if (slots_ > std::numeric_limits<std::int32_t>::max() - kPageSlots) throw std::length_error("octree has too many nodes");
+  if (slots_ == static_cast<std::int32_t>(pages_.size()) * kPageSlots) pages_.push_back(std::make_shared<Page>());
+  const std::int32_t first = slots_;
+  slots_ += 8;
   return first;
 }
 
@@ -48,21 +78,24 @@ void Octree::release_block(std::int32_t first) { free_blocks_.push_back(first); 
 // with the node's value, as OctoMap's expandNode.
 void Octree::expand(std::int32_t node) {
   const std::int32_t block = allocate_block();
-  for (int b = 0; b < 8; ++b) nodes_[block + b] = Node{nodes_[node].log_odds, -1, 0};
-  nodes_[node].children = block;
-  nodes_[node].mask = 0xFF;
+  const float value = at(node).log_odds;
+  for (int b = 0; b < 8; ++b) edit(block + b) = Node{value, -1, 0};
+  Node& n = edit(node);
+  n.children = block;
+  n.mask = 0xFF;
   node_count_ += 8;
 }
 
 // Eight leaf children with one value collapse into their parent.
 bool Octree::prune(std::int32_t node) {
-  const Node n = nodes_[node];
+  const Node n = at(node);
   if (n.mask != 0xFF) return false;
+  const float first = at(n.children).log_odds;
   for (int b = 0; b < 8; ++b) {
-    const Node& c = nodes_[n.children + b];
-    if (c.children >= 0 || c.log_odds != nodes_[n.children].log_odds) return false;
+    const Node& c = at(n.children + b);
+    if (c.children >= 0 || c.log_odds != first) return false;
   }
-  nodes_[node] = Node{nodes_[n.children].log_odds, -1, 0};
+  edit(node) = Node{first, -1, 0};
   release_block(n.children);
   node_count_ -= 8;
   return true;
@@ -70,12 +103,12 @@ bool Octree::prune(std::int32_t node) {
 
 // An inner node holds the largest value among its existing children (OctoMap's conservative rule).
 void Octree::refresh(std::int32_t node) {
-  const Node n = nodes_[node];
+  const Node n = at(node);
   float largest = -std::numeric_limits<float>::max();
   for (int b = 0; b < 8; ++b) {
-    if ((n.mask >> b) & 1) largest = std::max(largest, nodes_[n.children + b].log_odds);
+    if ((n.mask >> b) & 1) largest = std::max(largest, at(n.children + b).log_odds);
   }
-  nodes_[node].log_odds = largest;
+  set_value(node, largest);
 }
 
 void Octree::update(const OctreeKey& key, float change) {
@@ -85,12 +118,8 @@ void Octree::update(const OctreeKey& key, float change) {
     if (at_clamp(found->log_odds, change)) return;
   }
   revision_ = next_revision();
-  bool created_root = false;
-  if (nodes_.empty()) {
-    nodes_.push_back(Node{});
-    node_count_ = 1;
-    created_root = true;
-  }
+  const bool created_root = empty();
+  if (created_root) create_root();
   update_below(0, created_root, key, 0, change);
 }
 
@@ -99,41 +128,42 @@ void Octree::update(const OctreeKey& key, float change) {
 // node vector may grow during the descent.
 void Octree::update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change) {
   if (depth == kOctreeDepth) {
-    nodes_[node].log_odds = clamped(nodes_[node].log_odds + change);
+    set_value(node, clamped(at(node).log_odds + change));
     return;
   }
   const int b = child_bits(key, depth);
   bool created = false;
-  if (!((nodes_[node].mask >> b) & 1)) {
-    if (nodes_[node].children < 0 && !just_created) {
+  if (!((at(node).mask >> b) & 1)) {
+    if (at(node).children < 0 && !just_created) {
       expand(node);
     } else {
       add_child(node, b);
       created = true;
     }
   }
-  update_below(nodes_[node].children + b, created, key, depth + 1, change);
+  update_below(at(node).children + b, created, key, depth + 1, change);
   if (!prune(node)) refresh(node);
 }
 
 // A new child (log-odds 0) in slot b of a node that lacks it.
 std::int32_t Octree::add_child(std::int32_t node, int b) {
-  if (nodes_[node].children < 0) nodes_[node].children = allocate_block();
-  nodes_[nodes_[node].children + b] = Node{};
-  nodes_[node].mask = static_cast<std::uint8_t>(nodes_[node].mask | (1u << b));
+  if (at(node).children < 0) {
+    const std::int32_t block = allocate_block();
+    edit(node).children = block;
+  }
+  const std::int32_t slot = at(node).children + b;
+  edit(slot) = Node{};
+  Node& n = edit(node);
+  n.mask = static_cast<std::uint8_t>(n.mask | (1u << b));
   ++node_count_;
-  return nodes_[node].children + b;
+  return slot;
 }
 
 void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
   if (keys.empty()) return;
   revision_ = next_revision();
-  bool created_root = false;
-  if (nodes_.empty()) {
-    nodes_.push_back(Node{});
-    node_count_ = 1;
-    created_root = true;
-  }
+  const bool created_root = empty();
+  if (created_root) create_root();
   update_range(0, created_root, keys.data(), keys.data() + keys.size(), 0, change);
 }
 
@@ -144,19 +174,19 @@ void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
 void Octree::update_range(std::int32_t node, bool just_created, const OctreeKey* first, const OctreeKey* last,
                           int depth, float change) {
   if (depth == kOctreeDepth) {
-    nodes_[node].log_odds = clamped(nodes_[node].log_odds + change);
+    set_value(node, clamped(at(node).log_odds + change));
     return;
   }
-  if (nodes_[node].children < 0 && !just_created) {
-    if (at_clamp(nodes_[node].log_odds, change)) return;
+  if (at(node).children < 0 && !just_created) {
+    if (at_clamp(at(node).log_odds, change)) return;
     expand(node);
   }
   while (first != last) {
     const int b = child_bits(*first, depth);
     const OctreeKey* end = first + 1;
     while (end != last && child_bits(*end, depth) == b) ++end;
-    const bool created = !((nodes_[node].mask >> b) & 1);
-    const std::int32_t child = created ? add_child(node, b) : nodes_[node].children + b;
+    const bool created = !((at(node).mask >> b) & 1);
+    const std::int32_t child = created ? add_child(node, b) : at(node).children + b;
     update_range(child, created, first, end, depth + 1, change);
     first = end;
   }
@@ -164,11 +194,11 @@ void Octree::update_range(std::int32_t node, bool just_created, const OctreeKey*
 }
 
 std::optional<Octree::Lookup> Octree::find(const OctreeKey& key) const {
-  if (nodes_.empty()) return std::nullopt;
+  if (empty()) return std::nullopt;
   std::int32_t node = 0;
   std::uint64_t index = 0;
   for (int depth = 0;; ++depth) {
-    const Node& n = nodes_[node];
+    const Node& n = at(node);
     if (n.children < 0) return Lookup{depth, index, n.log_odds};  // a voxel or a pruned node
     const int b = child_bits(key, depth);
     if (!((n.mask >> b) & 1)) return std::nullopt;
@@ -179,7 +209,7 @@ std::optional<Octree::Lookup> Octree::find(const OctreeKey& key) const {
 
 std::vector<Octree::Leaf> Octree::leaves() const {
   std::vector<Leaf> out;
-  if (nodes_.empty()) return out;
+  if (empty()) return out;
   struct Item {
     std::int32_t node;
     int depth;
@@ -190,7 +220,7 @@ std::vector<Octree::Leaf> Octree::leaves() const {
   while (!stack.empty()) {
     const Item item = stack.back();
     stack.pop_back();
-    const Node& n = nodes_[item.node];
+    const Node& n = at(item.node);
     if (n.children < 0) {
       out.push_back({item.key, item.depth, item.index, n.log_odds});
       continue;
@@ -214,10 +244,10 @@ int octomap_child(int b) { return ((b >> 2) & 1) | (b & 2) | ((b & 1) << 2); }
 }  // namespace
 
 void Octree::write_nodes(std::ostream& out) const {
-  if (nodes_.empty()) return;
+  if (empty()) return;
   std::vector<std::int32_t> stack{0};
   while (!stack.empty()) {
-    const Node n = nodes_[stack.back()];
+    const Node n = at(stack.back());
     stack.pop_back();
     out.write(reinterpret_cast<const char*>(&n.log_odds), sizeof(float));
     unsigned char bits = 0;
@@ -241,18 +271,17 @@ void Octree::read_below(std::int32_t node, int depth, std::istream& in) {
   if (!in) throw std::runtime_error("octree node stream ends early (truncated file?)");
   if (!std::isfinite(value)) throw std::runtime_error("octree node stream holds a non-finite log-odds");
   if (bits != 0 && depth == kOctreeDepth) throw std::runtime_error("octree node stream is deeper than 16 levels");
-  nodes_[node].log_odds = value;
+  edit(node).log_odds = value;
   for (int i = 0; i < 8; ++i) {
     if ((bits >> i) & 1) read_below(add_child(node, octomap_child(i)), depth + 1, in);
   }
-  if (nodes_[node].children >= 0) refresh(node);
+  if (at(node).children >= 0) refresh(node);
 }
 
 Octree Octree::read_nodes(std::istream& in, double resolution, const OccupancyModel& model) {
   Octree tree(resolution, model);
   if (in.peek() == std::char_traits<char>::eof()) return tree;
-  tree.nodes_.push_back(Node{});
-  tree.node_count_ = 1;
+  tree.create_root();
   tree.read_below(0, 0, in);
   tree.revision_ = next_revision();
   return tree;

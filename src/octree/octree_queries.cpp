@@ -117,7 +117,7 @@ std::vector<Octree::Leaf> Octree::occupied_in_sphere(const Vec3& centre, double 
 // is the first hit (the cubes are disjoint, so a later child's entry is past any earlier hit).
 std::optional<Octree::RayHit> Octree::cast_ray(const Vec3& origin, const Vec3& direction, double max_range) const {
   const double length = direction.norm();
-  if (nodes_.empty() || !origin.allFinite() || !(length > 0.0) || !std::isfinite(length) || !(max_range >= 0.0)) {
+  if (empty() || !origin.allFinite() || !(length > 0.0) || !std::isfinite(length) || !(max_range >= 0.0)) {
     return std::nullopt;
   }
   const Vec3 u = direction / length, inv = u.cwiseInverse();
@@ -142,17 +142,18 @@ std::optional<Octree::RayHit> Octree::cast_ray(const Vec3& origin, const Vec3& d
   return hit;
 }
 
-void Octree::release_subtree(std::int32_t node) {
-  const Node n = nodes_[node];
+// Every block below `node` goes back to the free list, unwritten (a released slot is written
+// when it is reused, so a page shared with a snapshot is not copied to release it). The node
+// itself is left to the caller, which unlinks it.
+void Octree::release_below(std::int32_t node) {
+  const Node n = at(node);
   if (n.children < 0) return;
   for (int b = 0; b < 8; ++b) {
     if (!((n.mask >> b) & 1)) continue;
-    release_subtree(n.children + b);
+    release_below(n.children + b);
     --node_count_;
   }
   release_block(n.children);
-  nodes_[node].children = -1;
-  nodes_[node].mask = 0;
 }
 
 // True when `node` is to be deleted: wholly inside the range, or left without children (as
@@ -160,7 +161,7 @@ void Octree::release_subtree(std::int32_t node) {
 bool Octree::clear_below(std::int32_t node, const OctreeKey& corner, int depth, const OctreeKey& lo, const OctreeKey& hi) {
   const KeyRange range{lo, hi};
   if (inside(range, corner, depth)) {
-    release_subtree(node);
+    release_below(node);
     return true;
   }
   if (is_leaf(node)) expand(node);  // a pruned node partly in the box
@@ -168,21 +169,21 @@ bool Octree::clear_below(std::int32_t node, const OctreeKey& corner, int depth, 
     const std::int32_t c = child(node, b);
     if (c < 0 || !meets(range, child_corner(corner, depth, b), depth + 1)) continue;
     if (clear_below(c, child_corner(corner, depth, b), depth + 1, lo, hi)) {
-      nodes_[node].mask = static_cast<std::uint8_t>(nodes_[node].mask & ~(1u << b));
+      Node& n = edit(node);
+      n.mask = static_cast<std::uint8_t>(n.mask & ~(1u << b));
       --node_count_;
     }
   }
-  if (nodes_[node].mask == 0) {
-    release_block(nodes_[node].children);
-    nodes_[node].children = -1;
-    return true;
+  if (at(node).mask == 0) {
+    release_block(at(node).children);
+    return true;  // the caller unlinks it (or the tree is cleared)
   }
   if (!prune(node)) refresh(node);
   return false;
 }
 
 void Octree::clear_box(const Vec3& min, const Vec3& max) {
-  if (nodes_.empty() || !min.allFinite() || !max.allFinite() || !(min.array() <= max.array()).all()) return;
+  if (empty() || !min.allFinite() || !max.allFinite() || !(min.array() <= max.array()).all()) return;
   const KeyRange range = key_range(grid_, min, max);
   if (!meets(range, OctreeKey{}, 0)) return;
   revision_ = next_revision();

@@ -49,6 +49,9 @@ struct CollisionObject {
 // Throws std::invalid_argument as Environment::add_object does.
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
 
+// A copy shares the octree's pages (octree.h) and the object list; a change copies what it
+// writes: the octree pages it touches, or the list of object records (each object's hierarchy
+// and hull stay shared). Snapshots that readers keep thus cost only what changed since.
 class Environment {
  public:
   // Throws std::invalid_argument for a resolution that is not a positive finite number.
@@ -72,8 +75,8 @@ class Environment {
   // False (and nothing changes) when no object has this id; move throws for a bad pose.
   bool move_object(const std::string& id, const Transform& pose);
   bool remove_object(const std::string& id);
-  void clear_objects() { objects_.clear(); }
-  const std::vector<CollisionObject>& objects() const { return objects_; }
+  void clear_objects() { objects_ = std::make_shared<const std::vector<CollisionObject>>(); }
+  const std::vector<CollisionObject>& objects() const { return *objects_; }
   const CollisionObject* find_object(const std::string& id) const;
 
   // The octree's distance field (octree/distance_field.h) over at least [lo, hi] with at least
@@ -93,7 +96,7 @@ class Environment {
     OctreeDistanceField field;
   };
   Octree octree_;
-  std::vector<CollisionObject> objects_;
+  std::shared_ptr<const std::vector<CollisionObject>> objects_ = std::make_shared<const std::vector<CollisionObject>>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
 };
 

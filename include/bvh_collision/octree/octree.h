@@ -1,8 +1,13 @@
 // The environment octree: OctoMap's occupancy model on the seed's node scheme (octree_key.h).
 //
-// Nodes live in one vector; an inner node owns a block of eight consecutive slots (slot b holds
-// the child with seed bits b, present when bit b of `mask` is set). Only nodes that some update
-// reached exist, so memory follows what was observed, not the bounding cube. Values and their
+// Nodes live in numbered slots; an inner node owns a block of eight consecutive slots (slot b
+// holds the child with seed bits b, present when bit b of `mask` is set). Only nodes that some
+// update reached exist, so memory follows what was observed, not the bounding cube.
+// The slots are stored in fixed pages shared between copies: copying a tree copies a table of
+// page pointers, and a change copies only the pages it writes (copy on write). A snapshot kept
+// by a reader thus costs only the pages changed since, and a one-voxel change on a map of
+// millions of nodes copies a few kilobytes, not the map. A page is written in place only while
+// no other tree holds it. Values and their
 // evolution are OctoMap's, float for float: log-odds updates with clamping, new nodes at 0, an
 // inner node holds the maximum of its existing children, eight equal leaf children are pruned
 // into their parent, and an update inside a pruned node expands it first.
@@ -12,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -73,14 +79,15 @@ class Octree {
 
   // Walking the tree (for queries that descend it together with another hierarchy): node ids,
   // -1 for none. A node's cube follows from the key of its lowest voxel and its depth.
-  std::int32_t root() const { return nodes_.empty() ? -1 : 0; }
-  float value(std::int32_t node) const { return nodes_[node].log_odds; }
-  bool is_leaf(std::int32_t node) const { return nodes_[node].children < 0; }
+  std::int32_t root() const { return empty() ? -1 : 0; }
+  float value(std::int32_t node) const { return at(node).log_odds; }
+  bool is_leaf(std::int32_t node) const { return at(node).children < 0; }
   // Bit b set when child b exists; child b is then node children_block(node) + b.
-  std::uint8_t child_mask(std::int32_t node) const { return nodes_[node].mask; }
-  std::int32_t children_block(std::int32_t node) const { return nodes_[node].children; }
+  std::uint8_t child_mask(std::int32_t node) const { return at(node).mask; }
+  std::int32_t children_block(std::int32_t node) const { return at(node).children; }
   std::int32_t child(std::int32_t node, int b) const {
-    return ((nodes_[node].mask >> b) & 1) ? nodes_[node].children + b : -1;
+    const Node& n = at(node);
+    return ((n.mask >> b) & 1) ? n.children + b : -1;
   }
   // Lowest corner and side of the cube of the node at `depth` whose lowest voxel is `corner`.
   Vec3 cube_min(const OctreeKey& corner) const {
@@ -113,13 +120,17 @@ class Octree {
   void write_nodes(std::ostream& out) const;
   static Octree read_nodes(std::istream& in, double resolution, const OccupancyModel& model = {});
 
-  bool empty() const { return nodes_.empty(); }
+  bool empty() const { return slots_ == 0; }
   // Changes with every update, clear and read, and is never reused by any tree of the process:
   // two trees (a tree and its copy) with the same revision hold the same voxels, so what is
   // computed from a tree (a distance field) can be kept with its revision.
   std::uint64_t revision() const { return revision_; }
   std::size_t node_count() const { return node_count_; }
-  std::size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + free_blocks_.capacity() * sizeof(std::int32_t); }
+  // What this tree holds, counting pages it shares with other trees in full.
+  std::size_t memory_bytes() const { return distinct_memory_bytes({this}); }
+  // What the trees hold together, each shared page counted once: the memory of a set of
+  // snapshots of one map.
+  static std::size_t distinct_memory_bytes(const std::vector<const Octree*>& trees);
   void clear();
 
  private:
@@ -128,6 +139,21 @@ class Octree {
     std::int32_t children = -1;  // first slot of the children's block; -1: leaf
     std::uint8_t mask = 0;       // which of the eight slots hold a child
   };
+
+  // Slot storage: 2^kPageShift slots a page (6 KiB); blocks of eight never straddle a page.
+  static constexpr int kPageShift = 9;
+  static constexpr std::int32_t kPageSlots = std::int32_t(1) << kPageShift;
+  struct Page {
+    Node slots[kPageSlots];
+  };
+  const Node& at(std::int32_t node) const { return pages_[node >> kPageShift]->slots[node & (kPageSlots - 1)]; }
+  // The slot for writing: its page is copied first when another tree shares it. The reference
+  // is valid until the next call to edit (which may copy the page it points into).
+  Node& edit(std::int32_t node);
+  void set_value(std::int32_t node, float value) {
+    if (at(node).log_odds != value) edit(node).log_odds = value;  // an unchanged page stays shared
+  }
+  void create_root();
 
   std::int32_t allocate_block();
   void release_block(std::int32_t first);
@@ -143,12 +169,13 @@ class Octree {
   float clamped(float value) const { return std::min(std::max(value, model_.clamp_min), model_.clamp_max); }
   std::int32_t add_child(std::int32_t node, int b);
   bool clear_below(std::int32_t node, const OctreeKey& corner, int depth, const OctreeKey& lo, const OctreeKey& hi);
-  void release_subtree(std::int32_t node);
+  void release_below(std::int32_t node);
   void read_below(std::int32_t node, int depth, std::istream& in);
 
   OctreeGrid grid_;
   OccupancyModel model_;
-  std::vector<Node> nodes_;               // nodes_[0] is the root once anything was observed
+  std::vector<std::shared_ptr<Page>> pages_;  // slot 0 is the root once anything was observed
+  std::int32_t slots_ = 0;                      // slots in use or released: a multiple of 8
   std::vector<std::int32_t> free_blocks_;  // released blocks, reused first
   std::size_t node_count_ = 0;
   std::uint64_t revision_ = next_revision();
