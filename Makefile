@@ -65,4 +65,4 @@ fuzz: deps
 	@JOBS=$(JOBS) bash scripts/fuzz.sh
 
 clean:
-	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log build-fuzz build-fuzz.configure.log devel
+	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log build-sanitize.build.log build-fuzz build-fuzz.configure.log devel

@@ -31,7 +31,7 @@ struct MeshPair {
   std::vector<std::vector<std::pair<int, int>>> pairs;   // brute-force colliding pairs per pose
   std::vector<double> distances;                         // brute-force distance, first kDistancePoses
 };
-constexpr int kPoses = test::sized(250);  // a quarter under the sanitizers
+const int kPoses = test::sized(250);  // a quarter under the sanitizers
 constexpr int kDistancePoses = 16;
 
 MeshPair make_pair(std::string name, TriangleMesh a, TriangleMesh b) {

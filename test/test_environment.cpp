@@ -363,6 +363,14 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
     if (r > 0) v.head<2>() *= 0.05 / r;  // the polygon's corners on the circle: inscribed
   }
   const Bvh<Obb> post_outer = Bvh<Obb>::build(outer_mesh), post_inner = Bvh<Obb>::build(inner_mesh);
+  // Each link element's hierarchy, built once by the test (not taken from the checker it judges).
+  std::vector<std::vector<Bvh<Obb>>> link_trees(checker.model().links().size());
+  for (std::size_t l = 0; l < link_trees.size(); ++l) {
+    for (const CollisionElement& e : checker.model().links()[l].collision) {
+      ASSERT_NE(e.shape, CollisionElement::Shape::kSphere);  // panda: meshes only
+      link_trees[l].push_back(Bvh<Obb>::build(*e.mesh));
+    }
+  }
   int colliding = 0, free = 0, undecided = 0;
   for (int i = 0; i < 60; ++i) {
     const std::vector<double> state = random_configuration(checker.model(), rng());
@@ -371,9 +379,9 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
     std::set<int> expected;
     for (std::size_t l = 0; l < poses.size(); ++l) {
       const double padding = checker.link_padding(static_cast<int>(l));
-      for (const CollisionElement& e : checker.model().links()[l].collision) {
-        ASSERT_NE(e.shape, CollisionElement::Shape::kSphere);  // panda: meshes only
-        const Bvh<Obb> link = Bvh<Obb>::build(*e.mesh);
+      for (std::size_t k = 0; k < link_trees[l].size(); ++k) {
+        const CollisionElement& e = checker.model().links()[l].collision[k];
+        const Bvh<Obb>& link = link_trees[l][k];
         const Transform pose = poses[l] * e.origin;
         CollisionRequest r;
         r.padding = padding;

@@ -23,7 +23,7 @@ namespace {
 
 // Under the sanitizers (ten times slower, and looking for memory errors, not geometry) the
 // proxies are built at the 20 mm level only.
-const std::vector<double> kLevels = BVH_COLLISION_SANITIZED ? std::vector<double>{0.02} : std::vector<double>{0.02, 0.01};
+const std::vector<double> kLevels = test::sanitized() ? std::vector<double>{0.02} : std::vector<double>{0.02, 0.01};
 
 std::vector<ProxySphere> leaves(const LinkProxy& p) {
   std::vector<ProxySphere> out;
@@ -195,7 +195,7 @@ TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
 // panda's uniform random states and on the near-contact ones among them (exact distance under
 // 4 cm): no false negative, and every collision it reports is within padding + tolerance.
 TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {
-  const std::vector<double> paddings = BVH_COLLISION_SANITIZED ? std::vector<double>{0.005} : std::vector<double>{0.0, 0.005};
+  const std::vector<double> paddings = test::sanitized() ? std::vector<double>{0.005} : std::vector<double>{0.0, 0.005};
   for (const double padding : paddings) {
     CheckerOptions exact_options, proxy_options;
     exact_options.padding = proxy_options.padding = padding;

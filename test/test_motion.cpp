@@ -39,7 +39,10 @@ std::vector<std::vector<Vec3>> link_vertices(const RobotModel& model, const std:
 
 TEST(MotionRates, BoundEveryVertexDisplacement) {
   BVH_REQUIRE_ROBOTS();
-  for (const std::string robot : {"panda", "ur5e", "pr2"}) {
+  // Under the sanitizers panda only: loading ur5e and pr2 there is most of the test's time.
+  const std::vector<std::string> robots = test::sanitized() ? std::vector<std::string>{"panda"}
+                                                            : std::vector<std::string>{"panda", "ur5e", "pr2"};
+  for (const std::string& robot : robots) {
     const CollisionChecker checker = test::load_checker(robot);
     const RobotModel& model = checker.model();
     std::uniform_real_distribution<double> step(-0.05, 0.05);

@@ -208,7 +208,7 @@ TEST(ProxyBatch, DemoArmBatchKeepsTheContract) {
 
 TEST(ProxyBatch, PandaAndUr5eBatchesKeepTheContract) {
   BVH_REQUIRE_ROBOTS();
-  if (BVH_COLLISION_SANITIZED) {
+  if (test::sanitized()) {
     // Their proxies take minutes to build under the sanitizers; the demo arm runs there.
     std::printf("under the sanitizers: the demo arm's test only\n");
     return;
