@@ -116,7 +116,9 @@ TEST(Limits, LargeMeshLoadsInSeconds) {
   const auto& large = meshes[0].triangles().size() > meshes[1].triangles().size() ? meshes[0] : meshes[1];
   EXPECT_TRUE(large.closed());
   EXPECT_EQ(large.triangles().size(), ball.triangles.size());
-  EXPECT_LT(seconds, 6.0) << ball.vertices.size() << " vertices";
+  // The time is the Release build's claim; under the sanitizers (a quarter of the mesh, code ten
+  // to forty times slower) only that it loads at all in a minute.
+  EXPECT_LT(seconds, test::sanitized() ? 60.0 : 6.0) << ball.vertices.size() << " vertices";
   // It answers: a ray down onto the ball (radius 0.1, bumps under 2 mm, centre at 0.5 m) meets it.
   const double state[1] = {0.3};
   const RayCastResult hit = checker.cast_ray(state, Environment(0.05), Vec3(0.0, 0.0, 1.0), Vec3(0.0, 0.0, -1.0), 2.0);
