@@ -71,8 +71,13 @@ def main(argv):
         p = subprocess.run(args, env=env, cwd=build, capture_output=True, text=True)
         seconds = time.time() - start
         failed = p.returncode != 0
-        if not os.path.exists(xml):  # died before gtest wrote its report
-            with open(xml, "w") as f:
+        # A program that died before gtest wrote its report, or failed after it (a leak found at
+        # exit), gets a failure of its own, so that the summary counts it.
+        exit_xml = os.path.join(results, "gtest-%s-exit.xml" % name)
+        if os.path.exists(exit_xml):
+            os.remove(exit_xml)
+        if failed and (not os.path.exists(xml) or 'failures="0"' in open(xml).read().split("<testsuite ", 1)[0]):
+            with open(exit_xml if os.path.exists(xml) else xml, "w") as f:
                 f.write('<testsuites><testsuite name="%s" tests="1" failures="1"><testcase classname="%s" name="run">'
                         '<failure message="%s"/></testcase></testsuite></testsuites>\n'
                         % (name, name, escape("exit status %d" % p.returncode, {'"': "&quot;"})))

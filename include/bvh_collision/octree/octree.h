@@ -2,15 +2,16 @@
 //
 // Nodes live in numbered slots; an inner node owns a block of eight consecutive slots (slot b
 // holds the child with seed bits b, present when bit b of `mask` is set). Only nodes that some
-// update reached exist, so memory follows what was observed, not the bounding cube.
+// update reached exist, so memory follows what was observed, not the bounding cube. Values and
+// their evolution are OctoMap's, float for float: log-odds updates with clamping, new nodes at
+// 0, an inner node holds the maximum of its existing children, eight equal leaf children are
+// pruned into their parent, and an update inside a pruned node expands it first.
+//
 // The slots are stored in fixed pages shared between copies: copying a tree copies a table of
 // page pointers, and a change copies only the pages it writes (copy on write). A snapshot kept
 // by a reader thus costs only the pages changed since, and a one-voxel change on a map of
 // millions of nodes copies a few kilobytes, not the map. A page is written in place only while
-// no other tree holds it. Values and their
-// evolution are OctoMap's, float for float: log-odds updates with clamping, new nodes at 0, an
-// inner node holds the maximum of its existing children, eight equal leaf children are pruned
-// into their parent, and an update inside a pruned node expands it first.
+// no other tree holds it.
 #pragma once
 
 #include <algorithm>
