@@ -1,6 +1,7 @@
 # bvh_collision: the commands of DESIGN.md section 5.
 #   make deps    install the Debian packages the build and tests need (idempotent)
 #   make build   configure and build the package and its tests (Release) in ./build
+#                (make build-node: the node and the demo's programs only, what make demo builds)
 #   make test    catkin_lint + every unit and launch test; last line `N passed, N failed, N skipped`
 #                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
 #                CI=true: both
@@ -20,30 +21,37 @@ DEB_PACKAGES := \
   build-essential cmake python3 python3-catkin-pkg catkin catkin-lint \
   ros-core-dev libroscpp-dev rosbash python3-roslaunch python3-rostest librostest-dev \
   python3-rosnode python3-rosservice python3-rosparam \
-  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev \
+  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libshape-msgs-dev libvisualization-msgs-dev \
   libdiagnostic-msgs-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev ros-robot-state-publisher \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev liboctomap-dev \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
-  libkdl-parser-dev liborocos-kdl-dev python3-matplotlib
+  libkdl-parser-dev liborocos-kdl-dev python3-matplotlib \
+  libompl-dev \
+  python3-rospy python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-shape-msgs \
+  python3-diagnostic-msgs python3-visualization-msgs \
+  rviz xvfb xauth libgl1-mesa-dri imagemagick
 
 # Only `make fuzz` needs clang and its libFuzzer runtime.
 FUZZ_PACKAGES := clang libclang-rt-14-dev
 
-.PHONY: all deps build test demo bench soak fuzz clean
+.PHONY: all deps build-node build test demo bench soak fuzz clean
 all: build
 
 deps:
 	@bash scripts/install_deps.sh $(DEB_PACKAGES)
 
-build: deps
+# The node, its libraries and the demo's programs: all `make demo` needs (no tests, no benchmarks).
+build-node: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
 	$(MAKE) -C $(BUILD) -j$(JOBS) all
+
+build: build-node
 	$(MAKE) -C $(BUILD) -j$(JOBS) tests
 
 test: deps build
 	@BUILD=$(BUILD) JOBS=$(JOBS) bash scripts/run_tests.sh
 
-demo: deps build
+demo: build-node
 	@bash scripts/demo.sh
 
 bench: deps build

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `make demo`: starts launch/demo.launch (the demo robot, robot_state_publisher, a scene publisher
 # with a synthetic obstacle cloud, the checker) on a private ROS master, calls every service with
-# demo_client and prints what it asked, what came back and the round-trip times, then shuts down.
+# demo_client and prints what it asked, what came back and the round-trip times, plans a motion
+# around the obstacle with plan_demo (OMPL), then shuts down.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="/usr/bin:$PATH"
@@ -36,5 +37,10 @@ echo "Scene: the demo arm upright at the origin of 'world'; a camera at (1.2, 0,
 echo "a cloud of a 0.12 x 0.12 x 0.8 m pillar at (0.45, 0.35, 0.4) in its own frame, twice a second."
 echo "Times are round trips from this client (a new connection per call, as rosservice makes)."
 devel/lib/bvh_collision/demo_client
+echo
+echo "Planning (OMPL's RRTConnect) from leaning forward on one side of the pillar to the other side,"
+echo "with the checker in-process (on a copy of the node's octree) and through the node's services:"
+# (only plan_demo's own lines: "plan_demo: ..." and its indented table)
+roslaunch bvh_collision plan_demo.launch hold:="${PLAN_DEMO_HOLD:-0}" 2>&1 | grep -E '^plan_demo: |^  [a-z]' || true
 echo
 echo "rviz (where installed): roslaunch bvh_collision demo.launch rviz:=true"

@@ -462,15 +462,34 @@ def clear_box(lo=(-0.1, -0.1, -0.1), hi=(0.1, 0.1, 0.1)):
     return bytes([5]) + point(lo) + point(hi)
 
 
-def set_object(ident="box", kind=1, dims=(0.1, 0.2, 0.3), uri="", scale=(1, 1, 1), vertices=(), triangles=(),
-               position=(0.5, 0, 0.2), orientation=(0, 0, 0, 1), frame="base_link"):
-    out = bytes([6]) + name(ident) + bytes([kind]) + nums(dims)
-    uris = ["", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl", "file:///nonexistent.stl",
-            "/etc/hostname"]
-    out += bytes([uris.index(uri)]) + point(scale)
-    out += bytes([len(vertices)]) + b"".join(point(v) for v in vertices)
-    out += bytes([len(triangles)]) + b"".join(bytes([0, t]) for t in triangles)
-    return out + point(position) + point(orientation) + name(frame)
+POSE = ((0, 0, 0), (0, 0, 0, 1))
+URIS = ["", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl", "file:///nonexistent.stl",
+        "/etc/hostname"]
+
+
+def pose(p=POSE):
+    return point(p[0]) + point(p[1])
+
+
+def set_object(ident="box", primitives=((1, (0.1, 0.2, 0.3)),), primitive_poses=None, meshes=(), mesh_poses=None,
+               resources=(), scales=(), resource_poses=None, position=(0.5, 0, 0.2), orientation=(0, 0, 0, 1),
+               frame="base_link"):
+    """SetCollisionObject (service_target.cpp's shapes()): primitives as (type, dims), meshes as
+    (vertices, triangles as index triples), resources as URIs; one identity pose per shape unless given."""
+    out = bytes([6]) + name(ident) + pose((position, orientation)) + name(frame)
+    out += bytes([len(primitives)]) + b"".join(bytes([kind]) + nums(dims) for kind, dims in primitives)
+    poses = [POSE] * len(primitives) if primitive_poses is None else primitive_poses
+    out += bytes([len(poses)]) + b"".join(pose(p) for p in poses)
+    out += bytes([len(meshes)])
+    for vertices, triangles in meshes:
+        out += bytes([len(vertices)]) + b"".join(point(v) for v in vertices)
+        out += bytes([len(triangles)]) + b"".join(b"".join(bytes([0, i]) for i in t) for t in triangles)
+    poses = [POSE] * len(meshes) if mesh_poses is None else mesh_poses
+    out += bytes([len(poses)]) + b"".join(pose(p) for p in poses)
+    out += bytes([len(resources)]) + b"".join(bytes([URIS.index(u)]) for u in resources)
+    out += bytes([len(scales)]) + b"".join(point(s) for s in scales)
+    poses = [POSE] * len(resources) if resource_poses is None else resource_poses
+    return out + bytes([len(poses)]) + b"".join(pose(p) for p in poses)
 
 
 def service_cases():
@@ -491,16 +510,26 @@ def service_cases():
         ("ray_huge_range", cast_ray(max_range=1e300)), ("ray_inf_range", cast_ray(max_range="inf")), ("ray_negative_range", cast_ray(max_range=-1.0)),
         ("clear_environment", bytes([4])), ("clear_box", clear_box()), ("clear_box_inverted", clear_box((1, 1, 1), (-1, -1, -1))),
         ("clear_box_nan", clear_box(("nan", 0, 0))), ("clear_box_huge", clear_box((-1e300,) * 3, (1e300,) * 3)),
-        ("object_box", set_object()), ("object_sphere", set_object(kind=2, dims=(0.1,))), ("object_cylinder", set_object(kind=3, dims=(0.3, 0.05))),
-        ("object_capsule", set_object(kind=6, dims=(0.3, 0.05))), ("object_mesh", set_object(kind=4, uri="package://bvh_collision/test/fuzz/meshes/box.stl")),
-        ("object_mesh_missing", set_object(kind=4, uri="package://nothing/x.stl")), ("object_mesh_garbage", set_object(kind=4, uri="/etc/hostname")),
-        ("object_triangles", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1, 2, 0, 1, 3, 0, 2, 3, 1, 2, 3))),
-        ("object_triangles_out_of_range", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1, 9))),
-        ("object_triangles_ragged", set_object(kind=5, dims=(), vertices=tri, triangles=(0, 1))),
-        ("object_nan_size", set_object(dims=("nan", 1, 1))), ("object_negative", set_object(dims=(-1, 1, 1))), ("object_huge", set_object(dims=(1e300, 1, 1))),
+        ("object_box", set_object()), ("object_sphere", set_object(primitives=((2, (0.1,)),))),
+        ("object_cylinder", set_object(primitives=((3, (0.3, 0.05)),))), ("object_cone", set_object(primitives=((4, (0.3, 0.05)),))),
+        ("object_cone_one_dimension", set_object(primitives=((4, (0.3,)),))),
+        ("object_several", set_object(primitives=((1, (0.1, 0.2, 0.3)), (4, (0.3, 0.05))),
+                                      primitive_poses=(POSE, ((0, 0, 0.3), (0, 0, 0, 1))))),
+        ("object_poses_missing", set_object(primitives=((1, (0.1, 0.2, 0.3)), (2, (0.1,))), primitive_poses=(POSE,))),
+        ("object_no_shape", set_object(primitives=())),
+        ("object_mesh", set_object(primitives=(), resources=("package://bvh_collision/test/fuzz/meshes/box.stl",))),
+        ("object_mesh_missing", set_object(primitives=(), resources=("package://nothing/x.stl",))),
+        ("object_mesh_garbage", set_object(primitives=(), resources=("/etc/hostname",))),
+        ("object_triangles", set_object(primitives=(), meshes=((tri, ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))),))),
+        ("object_triangles_out_of_range", set_object(primitives=(), meshes=((tri, ((0, 1, 9),)),))),
+        ("object_triangles_no_pose", set_object(primitives=(), meshes=((tri, ((0, 1, 2),)),), mesh_poses=())),
+        ("object_nan_size", set_object(primitives=((1, ("nan", 1, 1)),))), ("object_negative", set_object(primitives=((1, (-1, 1, 1)),))),
+        ("object_huge", set_object(primitives=((1, (1e300, 1, 1)),))),
         ("object_zero_quaternion", set_object(orientation=(0, 0, 0, 0))), ("object_unknown_frame", set_object(frame="nothing")),
-        ("object_empty_id", set_object(ident="")), ("object_kind_0", set_object(kind=0)), ("object_kind_7", set_object(kind=7)),
-        ("object_zero_scale", set_object(kind=4, uri="package://bvh_collision/test/fuzz/meshes/box.stl", scale=(0, 1, 1))),
+        ("object_shape_zero_quaternion", set_object(primitive_poses=(((0, 0, 0), (0, 0, 0, 0)),))),
+        ("object_empty_id", set_object(ident="")), ("object_kind_0", set_object(primitives=((0, (1,)),))),
+        ("object_kind_5", set_object(primitives=((5, (1,)),))),
+        ("object_zero_scale", set_object(primitives=(), resources=("package://bvh_collision/test/fuzz/meshes/box.stl",), scales=((0, 1, 1),))),
         ("remove", bytes([7]) + name("box")), ("remove_unknown", bytes([7]) + name("nothing")), ("empty", b""),
     ]
 

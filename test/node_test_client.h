@@ -114,12 +114,38 @@ inline CheckState::Request state_request(const CollisionChecker& checker, const 
   return r;
 }
 
+inline geometry_msgs::Pose pose_at(const Vec3& position) {
+  geometry_msgs::Pose p;
+  p.position.x = position.x(), p.position.y = position.y(), p.position.z = position.z();
+  p.orientation.w = 1.0;
+  return p;
+}
+
+// A shape_msgs primitive: `type` (SolidPrimitive::BOX...) with its dimensions in the message's order.
+inline shape_msgs::SolidPrimitive solid(std::uint8_t type, std::vector<double> dimensions) {
+  shape_msgs::SolidPrimitive s;
+  s.type = type;
+  s.dimensions = std::move(dimensions);
+  return s;
+}
+
+// An object of one primitive at the object's origin.
+inline SetCollisionObject::Request primitive_object(const std::string& id, const shape_msgs::SolidPrimitive& shape,
+                                                     const Vec3& centre) {
+  SetCollisionObject::Request r;
+  r.id = id;
+  r.primitives = {shape};
+  r.primitive_poses = {pose_at(Vec3::Zero())};
+  r.pose = pose_at(centre);
+  return r;
+}
+
 // A box object of edge lengths `size` centred at `centre` in world_frame.
 inline SetCollisionObject::Request box_object(const std::string& id, const Vec3& size, const Vec3& centre) {
   SetCollisionObject::Request r;
   r.id = id;
-  r.shape.type = CollisionShape::BOX;
-  r.shape.dimensions = {size.x(), size.y(), size.z()};
+  r.primitives = {solid(shape_msgs::SolidPrimitive::BOX, {size.x(), size.y(), size.z()})};
+  r.primitive_poses = {pose_at(Vec3::Zero())};
   r.pose.position.x = centre.x();
   r.pose.position.y = centre.y();
   r.pose.position.z = centre.z();

@@ -25,8 +25,9 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"octree", {"geometry", "octree"}},
     {"robot", {"geometry", "bvh", "robot"}},
     {"checker", {"geometry", "bvh", "octree", "robot", "checker"}},
-    {"ros", {"geometry", "bvh", "octree", "robot", "checker", "ros"}},
-    {"nodes", {"geometry", "bvh", "octree", "robot", "checker", "ros"}},
+    {"planning", {"geometry", "bvh", "octree", "robot", "checker", "planning"}},
+    {"ros", {"geometry", "bvh", "octree", "robot", "checker", "planning", "ros"}},
+    {"nodes", {"geometry", "bvh", "octree", "robot", "checker", "planning", "ros"}},
 };
 const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "checker"};
 
@@ -90,6 +91,20 @@ TEST(Layers, LowerLayersNeverIncludeHigherOnes) {
         if (!std::regex_search(inc.target, m, project)) continue;
         EXPECT_TRUE(kAllowed.at(layer).count(m[1])) << inc.file << ":" << inc.line << " (layer "
                                                     << layer << ") includes " << inc.target;
+      }
+    }
+  }
+}
+
+// The planning adapter is ROS-free too (a planner without ROS links it); OMPL only there.
+TEST(Layers, PlanningIncludesNoRosHeaderAndOnlyItIncludesOmpl) {
+  const auto layers = files_by_layer();
+  ASSERT_TRUE(layers.count("planning")) << "no planning layer (planning/ompl_validity.h)";
+  for (const auto& [layer, files] : layers) {
+    for (const auto& file : files) {
+      for (const Include& inc : includes_of(file)) {
+        if (layer == "planning") EXPECT_FALSE(is_ros_header(inc.target)) << inc.file << ":" << inc.line << " includes " << inc.target;
+        if (kCore.count(layer)) EXPECT_NE(inc.target.rfind("ompl/", 0), 0u) << inc.file << ":" << inc.line << ": OMPL in the core";
       }
     }
   }

@@ -170,39 +170,68 @@ TEST_F(NodeBadRequests, CollisionObjects) {
     edit(r);
     return call<SetCollisionObject>("set_collision_object", r).response.error;
   };
-  EXPECT_THAT(error([](auto& r) { r.shape.type = 9; }), Says("unknown shape type 9"));
-  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::BOX, r.shape.dimensions = {1, 1}; }),
-              Says("BOX needs 3 dimensions"));
-  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {-1}; }),
-              Says("positive and finite"));
-  EXPECT_THAT(error([](auto& r) { r.shape.type = CollisionShape::MESH_FILE, r.shape.mesh_uri = "/no/such/mesh.stl"; }),
-              Says("mesh '/no/such/mesh.stl'"));
-  EXPECT_THAT(error([](auto& r) {
-                r.shape.type = CollisionShape::TRIANGLES;
-                r.shape.vertices.resize(2);
-                r.shape.triangles = {0, 1, 2};
+  using shape_msgs::SolidPrimitive;
+  auto one = [](auto& r, const SolidPrimitive& shape) { r.primitives = {shape}, r.primitive_poses = {pose_at(Vec3::Zero())}; };
+  EXPECT_THAT(error([&](auto& r) { one(r, solid(9, {})); }), Says("primitives[0]: unknown solid primitive type 9"));
+  EXPECT_THAT(error([&](auto& r) { one(r, solid(SolidPrimitive::BOX, {1, 1})); }), Says("BOX needs 3 dimensions"));
+  EXPECT_THAT(error([&](auto& r) { one(r, solid(SolidPrimitive::SPHERE, {-1})); }), Says("positive and finite"));
+  EXPECT_THAT(error([&](auto& r) { one(r, solid(SolidPrimitive::CONE, {0.2})); }), Says("CONE needs 2 dimensions (height, radius)"));
+  EXPECT_THAT(error([&](auto& r) {
+                r.mesh_resources = {"/no/such/mesh.stl"};
+                r.mesh_resource_poses = {pose_at(Vec3::Zero())};
               }),
-              Says("out of range"));
-  EXPECT_THAT(error([](auto& r) {
-                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+              Says("mesh_resources[0]: mesh '/no/such/mesh.stl'"));
+  EXPECT_THAT(error([&](auto& r) {
+                r.mesh_resources = {"/no/such/mesh.stl"};
+                r.mesh_resource_poses = {pose_at(Vec3::Zero())};
+                r.mesh_resource_scales.resize(2);
+              }),
+              Says("mesh_resource_scales holds 2 scales for 1 mesh resources"));
+  EXPECT_THAT(error([&](auto& r) {
+                r.meshes.resize(1);
+                r.meshes[0].vertices.resize(2);
+                r.meshes[0].triangles.resize(1);
+                r.meshes[0].triangles[0].vertex_indices = {0, 1, 2};
+                r.mesh_poses = {pose_at(Vec3::Zero())};
+              }),
+              Says("meshes[0]: triangle vertex index 2 is out of range"));
+  EXPECT_THAT(error([&](auto& r) { r.primitives = {solid(SolidPrimitive::SPHERE, {0.1})}; }),
+              Says("primitives: 1 shapes but 0 poses"));
+  EXPECT_THAT(error([&](auto&) {}), Says("has no shape"));
+  EXPECT_THAT(error([&](auto& r) {
+                one(r, solid(SolidPrimitive::SPHERE, {0.1}));
+                r.primitive_poses[0].orientation.w = 0.0;
+              }),
+              Says("primitives[0]: "));
+  EXPECT_THAT(error([&](auto& r) {
+                one(r, solid(SolidPrimitive::SPHERE, {0.1}));
                 r.pose.orientation.w = 2.0;
               }),
               Says("unit quaternion"));
-  EXPECT_THAT(error([](auto& r) {
-                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+  EXPECT_THAT(error([&](auto& r) {
+                one(r, solid(SolidPrimitive::SPHERE, {0.1}));
                 r.frame_id = "nowhere";
               }),
               Says("unknown frame 'nowhere'"));
-  EXPECT_THAT(error([](auto& r) {
-                r.shape.type = CollisionShape::SPHERE, r.shape.dimensions = {0.1};
+  EXPECT_THAT(error([&](auto& r) {
+                one(r, solid(SolidPrimitive::SPHERE, {0.1}));
                 r.id = "";
               }),
               Says("id is empty"));
-  EXPECT_THAT(error([](auto& r) {  // 101 triangles; the .test file sets ~max_object_triangles 100
-                r.shape.type = CollisionShape::TRIANGLES;
-                r.shape.vertices.resize(3);
-                r.shape.vertices[1].x = r.shape.vertices[2].y = 0.1;
-                for (int i = 0; i < 101; ++i) r.shape.triangles.insert(r.shape.triangles.end(), {0, 1, 2});
+  EXPECT_THAT(error([&](auto& r) {
+                one(r, solid(SolidPrimitive::SPHERE, {0.1}));
+                r.id = "table#1";
+              }),
+              Says("contains '#'"));
+  EXPECT_THAT(error([&](auto& r) {  // 101 triangles in two meshes; the .test file sets ~max_object_triangles 100
+                r.meshes.resize(2);
+                for (int m = 0; m < 2; ++m) {
+                  r.meshes[m].vertices.resize(3);
+                  r.meshes[m].vertices[1].x = r.meshes[m].vertices[2].y = 0.1;
+                  r.meshes[m].triangles.resize(m == 0 ? 50 : 51);
+                  for (auto& t : r.meshes[m].triangles) t.vertex_indices = {0, 1, 2};
+                }
+                r.mesh_poses = {pose_at(Vec3::Zero()), pose_at(Vec3::Zero())};
               }),
               Says("~max_object_triangles"));
   RemoveCollisionObject::Request remove;

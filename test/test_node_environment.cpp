@@ -185,6 +185,34 @@ TEST_F(NodeEnvironment, MarkersAndDiagnosticsShowTheCloud) {
   EXPECT_TRUE(eventually([&] { return value("check_state requests") >= 1; }));
 }
 
+// rviz started after a colliding query still shows its contacts: the topic is latched and the
+// node publishes contacts whether or not anyone listens at the time (rviz, started late, showed
+// none).
+TEST_F(NodeEnvironment, ContactsReachASubscriberThatComesLater) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 1, true);
+  sensor_msgs::PointCloud2 cloud = wall_cloud();
+  cloud.header.stamp = ros::Time::now();
+  pub.publish(cloud);
+  ASSERT_TRUE(eventually([&] { return !check(arm(0.0, 1.0)).valid; }));
+  ros::WallDuration(0.2).sleep();  // past the node's 10 Hz limit on contact markers
+  const auto answer = check(arm(0.0, 1.0), 3);
+  ASSERT_FALSE(answer.contacts.empty());
+  std::mutex mutex;
+  std::size_t spheres = 0;
+  ros::Subscriber sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      "/collision_checker/contacts", 1, [&](const visualization_msgs::MarkerArray::ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& marker : m->markers) {
+          if (marker.type == visualization_msgs::Marker::SPHERE_LIST) spheres = marker.points.size();
+        }
+      });
+  EXPECT_TRUE(eventually([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return spheres == answer.contacts.size();
+  })) << spheres << " contact spheres received, " << answer.contacts.size() << " contacts answered";
+}
+
 TEST_F(NodeEnvironment, TheBasePoseComesFromTf) {
   SetCollisionObject::Request object = box_object("crate", Vec3(0.3, 0.3, 0.3), Vec3(2.0, 0.0, 0.6));
   ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
@@ -261,13 +289,7 @@ TEST_F(NodeEnvironment, CastRayHitsLinksObjectsAndVoxels) {
   EXPECT_EQ(r.body.rfind("link", 0), 0u) << "the upright arm is hit first, not " << r.body;
   EXPECT_NEAR(r.point.x, 0.05, 0.02);
 
-  SetCollisionObject::Request ball;
-  ball.id = "ball";
-  ball.shape.type = CollisionShape::SPHERE;
-  ball.shape.dimensions = {0.1};
-  ball.pose.position.x = 0.6;
-  ball.pose.position.z = 0.5;
-  ball.pose.orientation.w = 1.0;
+  const auto ball = primitive_object("ball", solid(shape_msgs::SolidPrimitive::SPHERE, {0.1}), Vec3(0.6, 0.0, 0.5));
   ASSERT_EQ(call<SetCollisionObject>("set_collision_object", ball).response.error, "");
   r = call<CastRay>("cast_ray", ray).response;
   ASSERT_TRUE(r.hit);
@@ -275,6 +297,66 @@ TEST_F(NodeEnvironment, CastRayHitsLinksObjectsAndVoxels) {
   EXPECT_NEAR(r.distance, 0.3, 1e-6);
   ray.max_range = 0.2;
   EXPECT_FALSE(call<CastRay>("cast_ray", ray).response.hit) << "max_range ends the ray before the ball";
+  RemoveCollisionObject::Request remove;
+  remove.id = "ball";
+  EXPECT_EQ(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
+}
+
+// shape_msgs as MoveIt's CollisionObject carries them: an object of several shapes, each at its
+// own pose, its parts named id#k; a cone is exact (a ray meets its slanted side where the
+// cone's radius puts it, not where a faceted cone would), and replacing or removing the object
+// takes every part.
+TEST_F(NodeEnvironment, ShapeMsgsObjectsWithExactConesAndSeveralShapes) {
+  using shape_msgs::SolidPrimitive;
+  SetCollisionObject::Request object;
+  object.id = "post";
+  object.pose = pose_at(Vec3(0.6, 0.0, 0.5));
+  // A cone (height 0.4, base radius 0.1: radius 0.05 at mid height) over a box plinth below it.
+  object.primitives = {solid(SolidPrimitive::CONE, {0.4, 0.1}), solid(SolidPrimitive::BOX, {0.3, 0.3, 0.1})};
+  object.primitive_poses = {pose_at(Vec3::Zero()), pose_at(Vec3(0.0, 0.0, -0.25))};
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+  CastRay::Request ray;
+  ray.origin.x = 1.0, ray.origin.y = 0.0, ray.origin.z = 0.5;
+  ray.direction.x = -1.0;
+  auto r = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.body, "post#0");
+  EXPECT_NEAR(r.distance, 0.35, 1e-9) << "the cone's radius at mid height is exactly 0.05";
+  ray.origin.z = 0.69;  // 1 cm below the tip: radius 0.0025
+  r = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.distance, 0.4 - 0.0025, 1e-9);
+  ray.origin.z = 0.25;  // the plinth
+  r = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.body, "post#1");
+  EXPECT_NEAR(r.distance, 0.25, 1e-9);
+
+  // Replaced by one shape: no part of the old object stays behind.
+  object.primitives = {solid(SolidPrimitive::CYLINDER, {0.4, 0.02})};
+  object.primitive_poses = {pose_at(Vec3::Zero())};
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+  r = call<CastRay>("cast_ray", ray).response;
+  EXPECT_TRUE(!r.hit || r.body.rfind("post", 0) != 0) << "the plinth was replaced, hit " << r.body;
+  ray.origin.z = 0.5;
+  r = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.body, "post");
+  EXPECT_NEAR(r.distance, 0.38, 1e-9);
+
+  // Two shapes again, then removed together by the object's id.
+  object.primitives.push_back(solid(SolidPrimitive::SPHERE, {0.05}));
+  object.primitive_poses.push_back(pose_at(Vec3(0.0, 0.0, -0.3)));
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
+  RemoveCollisionObject::Request remove;
+  remove.id = "post";
+  EXPECT_EQ(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
+  for (const double z : {0.5, 0.2}) {
+    ray.origin.z = z;
+    r = call<CastRay>("cast_ray", ray).response;
+    EXPECT_TRUE(!r.hit || r.body.rfind("post", 0) != 0) << "removed, still hit " << r.body << " at z " << z;
+  }
+  EXPECT_NE(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
 }
 
 }  // namespace

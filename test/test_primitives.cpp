@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "bvh_collision/bvh/primitive_queries.h"
 #include "bvh_collision/geometry/convex_distance.h"
@@ -31,6 +32,19 @@ double point_cylinder(double r, double h, const Vec3& q) {
   return std::hypot(std::max(0.0, std::hypot(q.x(), q.y()) - r), std::max(0.0, std::abs(q.z()) - h));
 }
 
+// A cone (base radius r at z = -h, tip at +h) in the half plane (rho, z): the distance to the
+// triangle (0, -h), (r, -h), (0, h), by its two outer edges (0 inside).
+double point_cone(double r, double h, const Vec3& q) {
+  const double rho = std::hypot(q.x(), q.y()), z = q.z();
+  if (std::abs(z) <= h && rho <= r * (h - z) / (2 * h)) return 0.0;
+  auto segment = [&](double ax, double az, double bx, double bz) {
+    const double ex = bx - ax, ez = bz - az;
+    const double t = std::max(0.0, std::min(1.0, ((rho - ax) * ex + (z - az) * ez) / (ex * ex + ez * ez)));
+    return std::hypot(rho - (ax + t * ex), z - (az + t * ez));
+  };
+  return std::min(segment(0, -h, r, -h), segment(r, -h, 0, h));
+}
+
 // The distance from p (world) to a placed primitive, by closed form.
 double point_primitive(const Primitive& prim, const Transform& pose, const Vec3& p) {
   const Vec3 q = pose.inverse() * p;
@@ -42,6 +56,7 @@ double point_primitive(const Primitive& prim, const Transform& pose, const Vec3&
       const double z = std::max(-prim.half_length, std::min(prim.half_length, q.z()));
       return std::max(0.0, (q - Vec3(0, 0, z)).norm() - prim.radius);
     }
+    case Primitive::Kind::kCone: return point_cone(prim.radius, prim.half_length, q);
   }
   return NAN;
 }
@@ -73,12 +88,35 @@ Samples cylinder_surface(double r, double h, const Transform& pose, int around, 
   return s;
 }
 
+// The same for a cone's surface: its side by angle and by steps along the generators (a point
+// lies within half an arc step and half a generator step of a grid point: their sum bounds the
+// distance), its base by rings as a cylinder's cap.
+Samples cone_surface(double r, double h, const Transform& pose, int around, int along) {
+  Samples s;
+  const double dtheta = 2 * M_PI / around, generator = std::hypot(r, 2 * h);
+  for (int i = 0; i < around; ++i) {
+    const double t = i * dtheta;
+    for (int k = 0; k <= along; ++k) {
+      const double f = static_cast<double>(k) / along;  // 0 at the rim, 1 at the tip
+      s.points.push_back(pose * Vec3((1 - f) * r * std::cos(t), (1 - f) * r * std::sin(t), -h + 2 * h * f));
+    }
+  }
+  const int rings = std::max(1, static_cast<int>(std::ceil(r / (generator / along))));
+  for (int ring = 0; ring <= rings; ++ring) {
+    const double rho = r * ring / rings;
+    for (int i = 0; i < around; ++i) s.points.push_back(pose * Vec3(rho * std::cos(i * dtheta), rho * std::sin(i * dtheta), -h));
+  }
+  s.delta = std::max(0.5 * (r * dtheta + generator / along), 0.5 * (r * dtheta + r / rings));
+  return s;
+}
+
 // ---------------------------------------------------------------- the primitives themselves
 
 TEST(Primitives, SupportClosestPointContainmentAndRaysAgainstSampling) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Primitive shapes[] = {Primitive::sphere(0.3), Primitive::box(Vec3(0.2, 0.5, 0.9)),
-                              Primitive::cylinder(0.25, 0.8), Primitive::capsule(0.15, 0.6)};
+                              Primitive::cylinder(0.25, 0.8), Primitive::capsule(0.15, 0.6),
+                              Primitive::cone(0.35, 0.9), Primitive::cone(0.5, 0.1)};
   for (const Primitive& p : shapes) {
     for (int i = 0; i < 300; ++i) {
       const Vec3 d(u(rng()), u(rng()), u(rng()));
@@ -138,13 +176,15 @@ double other_distance(const Other& o, const Transform& pose, const Vec3& p) {
   return best;
 }
 
-TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval) {
-  const double r = 0.1, h = 0.2;
-  const Primitive cylinder = Primitive::cylinder(r, 2 * h);
+// `shape` (a cylinder or a cone, radius r, half length h) against a box, a sphere, a cylinder, a
+// cone and a mesh: our distance within the sampled interval, and no contact missed.
+void against_others_within_the_sampled_interval(const Primitive& shape) {
+  const double r = shape.radius, h = shape.half_length;
   const Other others[] = {
       {"box", Primitive::box(Vec3(0.3, 0.15, 0.2)), {}},
       {"sphere", Primitive::sphere(0.12), {}},
       {"cylinder", Primitive::cylinder(0.08, 0.5), {}},
+      {"cone", Primitive::cone(0.12, 0.3), {}},
       {"mesh", {}, test::bumpy_sphere(rng(), 0.15, 6, 8, 0.15)},
   };
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -154,7 +194,8 @@ TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval
     for (int i = 0; i < test::sized(24); ++i) {
       const Transform pa = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), u(rng())) * 0.1);
       const Transform pb = test::random_rotation(rng(), pa.t + Vec3(u(rng()), u(rng()), u(rng())) * 0.35);
-      const Samples s = cylinder_surface(r, h, pa, 240, 120);
+      const Samples s = shape.kind == Primitive::Kind::kCone ? cone_surface(r, h, pa, 240, 120)
+                                                              : cylinder_surface(r, h, pa, 240, 120);
       double sampled = std::numeric_limits<double>::infinity();
       for (const Vec3& p : s.points) sampled = std::min(sampled, other_distance(o, pb, p));
       // The truth: in [sampled - delta, sampled] when the sets are apart (a point of the cylinder
@@ -162,31 +203,39 @@ TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval
       double ours;
       bool collides;
       if (o.mesh.empty()) {
-        const ConvexDistance d = convex_distance(ConvexShape::of(cylinder), ConvexShape::of(o.primitive),
+        const ConvexDistance d = convex_distance(ConvexShape::of(shape), ConvexShape::of(o.primitive),
                                                  relative_transform(pa, pb));
         ours = d.distance;
-        collides = convex_within(ConvexShape::of(cylinder), ConvexShape::of(o.primitive), relative_transform(pa, pb), 0.0);
+        collides = convex_within(ConvexShape::of(shape), ConvexShape::of(o.primitive), relative_transform(pa, pb), 0.0);
         EXPECT_LE(d.lower_bound, d.distance);
       } else {
-        ours = distance(bvh, pb, cylinder, pa).distance;
+        ours = distance(bvh, pb, shape, pa).distance;
         CollisionRequest c;
         c.solids = false;  // the sampled oracle sees the mesh's surface only
-        collides = collide(bvh, pb, cylinder, pa, c).collision;
+        collides = collide(bvh, pb, shape, pa, c).collision;
       }
       if (sampled > s.delta) {
         ++decided;
-        EXPECT_FALSE(collides) << o.name << " " << i;
-        EXPECT_GE(ours, sampled - s.delta - 1e-12) << o.name << " " << i;
-        EXPECT_LE(ours, sampled + 1e-12) << o.name << " " << i;
+        EXPECT_FALSE(collides) << primitive_name(shape.kind) << " and " << o.name << " " << i;
+        EXPECT_GE(ours, sampled - s.delta - 1e-12) << primitive_name(shape.kind) << " and " << o.name << " " << i;
+        EXPECT_LE(ours, sampled + 1e-12) << primitive_name(shape.kind) << " and " << o.name << " " << i;
       } else if (sampled == 0.0 && o.mesh.empty()) {
-        EXPECT_TRUE(collides) << o.name << " " << i;
-        EXPECT_EQ(ours, 0.0) << o.name << " " << i;
+        EXPECT_TRUE(collides) << primitive_name(shape.kind) << " and " << o.name << " " << i;
+        EXPECT_EQ(ours, 0.0) << primitive_name(shape.kind) << " and " << o.name << " " << i;
       }
     }
     // At least a third of the placements are apart by more than the sampling's bound (the
     // others test only that no contact is missed).
     EXPECT_GE(decided, test::sized(24) / 3) << o.name;
   }
+}
+
+TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval) {
+  against_others_within_the_sampled_interval(Primitive::cylinder(0.1, 0.4));
+}
+
+TEST(Primitives, ConeAgainstBoxSphereCylinderConeAndMeshWithinTheSampledInterval) {
+  against_others_within_the_sampled_interval(Primitive::cone(0.12, 0.4));
 }
 
 // ------------------------------------------------ constructed contacts, scales and offsets
@@ -240,6 +289,81 @@ TEST(Primitives, TouchingCollidesAndJustApartIsFreeAtEveryScaleAndOffset) {
           EXPECT_NEAR(d.distance, std::max(0.0, gap), 1e-10 * scale + 1e-9 * gap) << what;
         }
       }
+    }
+  }
+}
+
+// A cone (base radius s/4, length s: base at z = -s/2, tip at +s/2) touching other shapes at its
+// tip, its rim and its base, then moved apart along `away`: every placement is exact in doubles
+// (dyadic sizes; the half turn about x is an exact matrix).
+TEST(Primitives, ConeTouchingCollidesAndJustApartIsFreeAtEveryScaleAndOffset) {
+  struct ConeContact {
+    const char* name;
+    Primitive b;
+    Transform b_pose;
+    Vec3 away;  // a unit axis
+  };
+  Mat3 flip = Mat3::Identity();
+  flip(1, 1) = flip(2, 2) = -1.0;  // a half turn about x: the tip down
+  for (const double scale : {0.0009765625, 0.0625, 1.0, 128.0}) {
+    for (const double offset : {0.0, 1e4}) {
+      const double r = scale / 4, h = scale / 2;
+      const Primitive cone = Primitive::cone(r, 2 * h);
+      const ConeContact contacts[] = {
+          {"tip on box face", Primitive::box(Vec3(scale, scale, scale)), Transform::Translation(Vec3(0, 0, h + scale / 2)), Vec3::UnitZ()},
+          {"base on box face", Primitive::box(Vec3(scale, scale, scale)), Transform::Translation(Vec3(0, 0, -h - scale / 2)), -Vec3::UnitZ()},
+          {"rim on box face", Primitive::box(Vec3(scale, scale, scale)), Transform::Translation(Vec3(r + scale / 2, 0, -h)), Vec3::UnitX()},
+          {"tip on sphere", Primitive::sphere(r), Transform::Translation(Vec3(0, 0, h + r)), Vec3::UnitZ()},
+          {"base on sphere", Primitive::sphere(r), Transform::Translation(Vec3(0, 0, -h - r)), -Vec3::UnitZ()},
+          {"base on cylinder end", Primitive::cylinder(r, 2 * h), Transform::Translation(Vec3(0, 0, -2 * h)), -Vec3::UnitZ()},
+          {"rim on cylinder side", Primitive::cylinder(r, 2 * h), Transform::Translation(Vec3(2 * r, 0, -2 * h)), Vec3::UnitX()},
+          {"base to base", Primitive::cone(r, 2 * h), {flip, Vec3(0, 0, -2 * h)}, -Vec3::UnitZ()},
+          {"tip to tip", Primitive::cone(r, 2 * h), {flip, Vec3(0, 0, 2 * h)}, Vec3::UnitZ()},
+      };
+      const Vec3 shift = Vec3::Constant(offset);
+      const double ulp = offset > 0 ? std::nextafter(offset, 2 * offset) - offset : 0.0;
+      const double small = std::max(1e-12 * scale, 8 * ulp);
+      for (const ConeContact& c : contacts) {
+        for (const double nominal : {0.0, small, 1e-6 * scale}) {
+          const Transform pa = Transform::Translation(shift);
+          Transform pb = c.b_pose;
+          pb.t = pb.t + shift + nominal * c.away;
+          const Transform rel = relative_transform(pa, pb);
+          const double gap = (rel.t - c.b_pose.t).dot(c.away);  // exact: one coordinate
+          const ConvexDistance d = convex_distance(ConvexShape::of(cone), ConvexShape::of(c.b), rel);
+          const bool collides = convex_within(ConvexShape::of(cone), ConvexShape::of(c.b), rel, 0.0);
+          const std::string what = std::string(c.name) + " scale " + std::to_string(scale) + " offset " +
+                                   std::to_string(offset) + " gap " + std::to_string(gap / scale) + " x scale";
+          EXPECT_EQ(collides, gap <= 0.0) << what;
+          EXPECT_LE(d.lower_bound, gap + 1e-15 * scale) << what;
+          EXPECT_NEAR(d.distance, std::max(0.0, gap), 1e-10 * scale + 1e-9 * gap) << what;
+          // The swapped pair decides alike.
+          EXPECT_EQ(convex_within(ConvexShape::of(c.b), ConvexShape::of(cone), rel.inverse(), 0.0), gap <= 0.0) << what;
+        }
+      }
+    }
+  }
+}
+
+// A cone against a mesh face: its rim on the plane x = r, its tip on the plane z = h.
+TEST(Primitives, ConeTouchingAMeshFace) {
+  for (const double scale : {0.0009765625, 1.0, 128.0}) {
+    const double r = scale / 4, h = scale / 2;
+    const Primitive cone = Primitive::cone(r, 2 * h);
+    TriangleMesh wall;  // in the plane x = 0, centred on z = -h (the rim's height)
+    wall.vertices = {Vec3(0, -scale, -h - scale), Vec3(0, scale, -h - scale), Vec3(0, scale, -h + scale), Vec3(0, -scale, -h + scale)};
+    wall.triangles = {{0, 1, 2}, {0, 2, 3}};
+    TriangleMesh ceiling;  // in the plane z = 0
+    ceiling.vertices = {Vec3(-scale, -scale, 0), Vec3(scale, -scale, 0), Vec3(scale, scale, 0), Vec3(-scale, scale, 0)};
+    ceiling.triangles = {{0, 1, 2}, {0, 2, 3}};
+    const Bvh<Obb> wall_bvh = Bvh<Obb>::build(wall), ceiling_bvh = Bvh<Obb>::build(ceiling);
+    for (const double gap : {0.0, 1e-12 * scale, 1e-6 * scale}) {
+      const Transform wall_pose = Transform::Translation(Vec3(r + gap, 0, 0));
+      EXPECT_EQ(collide(wall_bvh, wall_pose, cone, Transform::Identity()).collision, gap == 0.0) << scale << " " << gap;
+      EXPECT_NEAR(distance(wall_bvh, wall_pose, cone, Transform::Identity()).distance, gap, 1e-12 * scale) << scale;
+      const Transform ceiling_pose = Transform::Translation(Vec3(0, 0, h + gap));
+      EXPECT_EQ(collide(ceiling_bvh, ceiling_pose, cone, Transform::Identity()).collision, gap == 0.0) << scale << " " << gap;
+      EXPECT_NEAR(distance(ceiling_bvh, ceiling_pose, cone, Transform::Identity()).distance, gap, 1e-12 * scale) << scale;
     }
   }
 }

@@ -128,48 +128,91 @@ TEST(Poses, QuaternionsBecomeTheRotationEigenBuilds) {
   EXPECT_NE(error_of([&] { to_transform(pose); }).find("NaN"), std::string::npos);
 }
 
-TEST(Shapes, EveryTypeAndItsErrors) {
-  const PackageResolver resolver({});
-  CollisionShape s;
-  s.type = CollisionShape::BOX;
+// shape_msgs with the messages' own dimension indices (CYLINDER_HEIGHT = 0, CYLINDER_RADIUS = 1:
+// the opposite of the old CollisionShape's [radius, length]).
+TEST(Shapes, EverySolidPrimitiveWithItsDimensionIndicesAndItsErrors) {
+  using shape_msgs::SolidPrimitive;
+  SolidPrimitive s;
+  s.type = SolidPrimitive::BOX;
   s.dimensions = {0.1, 0.2, 0.3};
-  EXPECT_EQ(to_object_shape(s, resolver).size, Vec3(0.1, 0.2, 0.3));
-  s.type = CollisionShape::SPHERE;
+  EXPECT_EQ(to_object_shape(s).size, Vec3(0.1, 0.2, 0.3));
+  s.type = SolidPrimitive::SPHERE;
   s.dimensions = {0.4};
-  EXPECT_EQ(to_object_shape(s, resolver).radius, 0.4);
-  s.type = CollisionShape::CYLINDER;
-  s.dimensions = {0.1, 0.5};
-  const ObjectShape cylinder = to_object_shape(s, resolver);
+  EXPECT_EQ(to_object_shape(s).radius, 0.4);
+  s.type = SolidPrimitive::CYLINDER;
+  s.dimensions.assign(2, 0.0);
+  s.dimensions[SolidPrimitive::CYLINDER_HEIGHT] = 0.5;
+  s.dimensions[SolidPrimitive::CYLINDER_RADIUS] = 0.1;
+  const ObjectShape cylinder = to_object_shape(s);
   EXPECT_EQ(cylinder.kind, ObjectShape::Kind::kCylinder);
   EXPECT_EQ(cylinder.length, 0.5);
+  EXPECT_EQ(cylinder.radius, 0.1);
+  s.type = SolidPrimitive::CONE;
+  s.dimensions[SolidPrimitive::CONE_HEIGHT] = 0.3;
+  s.dimensions[SolidPrimitive::CONE_RADIUS] = 0.05;
+  const ObjectShape cone = to_object_shape(s);
+  EXPECT_EQ(cone.kind, ObjectShape::Kind::kCone);
+  EXPECT_EQ(cone.length, 0.3);
+  EXPECT_EQ(cone.radius, 0.05);
   s.dimensions = {0.1};
-  EXPECT_EQ(error_of([&] { to_object_shape(s, resolver); }),
-            "CYLINDER needs 2 dimensions (radius, length), got 1");
-  s.type = CollisionShape::CAPSULE;
-  s.dimensions = {0.05, 0.3};
-  const ObjectShape capsule = to_object_shape(s, resolver);
-  EXPECT_EQ(capsule.kind, ObjectShape::Kind::kCapsule);
-  EXPECT_EQ(capsule.radius, 0.05);
-  EXPECT_EQ(capsule.length, 0.3);
-  s.dimensions = {0.05, -0.3};
-  EXPECT_NE(error_of([&] { to_object_shape(s, resolver); }).find("CAPSULE dimensions must be positive"), std::string::npos);
-  s.type = CollisionShape::TRIANGLES;
-  s.vertices.resize(3);
-  s.vertices[1].x = 1.0;
-  s.vertices[2].y = 1.0;
-  s.triangles = {0, 1, 2};
-  const ObjectShape tri = to_object_shape(s, resolver);
+  EXPECT_EQ(error_of([&] { to_object_shape(s); }), "CONE needs 2 dimensions (height, radius), got 1");
+  s.dimensions = {0.3, -0.05};
+  EXPECT_NE(error_of([&] { to_object_shape(s); }).find("CONE dimensions must be positive"), std::string::npos);
+  s.type = 0;
+  EXPECT_NE(error_of([&] { to_object_shape(s); }).find("unknown solid primitive type 0"), std::string::npos);
+}
+
+TEST(Shapes, MeshesAndResourcesAndTheirErrors) {
+  const PackageResolver resolver({});
+  shape_msgs::Mesh m;
+  m.vertices.resize(3);
+  m.vertices[1].x = 1.0;
+  m.vertices[2].y = 1.0;
+  m.triangles.resize(1);
+  m.triangles[0].vertex_indices = {0, 1, 2};
+  const ObjectShape tri = to_object_shape(m);
   ASSERT_TRUE(tri.mesh);
   EXPECT_EQ(tri.mesh->triangles.size(), 1u);
   EXPECT_EQ(tri.mesh->vertices[1], Vec3(1, 0, 0));
-  s.triangles = {0, 1};
-  EXPECT_NE(error_of([&] { to_object_shape(s, resolver); }).find("three vertex indices"), std::string::npos);
-  s.type = CollisionShape::MESH_FILE;
-  s.mesh_uri = "package://no_such_package/mesh.stl";
-  EXPECT_NE(error_of([&] { to_object_shape(s, resolver); }).find("mesh 'package://no_such_package/mesh.stl'"),
+  m.triangles[0].vertex_indices = {0, 1, 3};
+  EXPECT_NE(error_of([&] { to_object_shape(m); }).find("index 3 is out of range"), std::string::npos);
+  m.triangles.clear();
+  EXPECT_NE(error_of([&] { to_object_shape(m); }).find("at least one triangle"), std::string::npos);
+  geometry_msgs::Vector3 scale;
+  EXPECT_NE(error_of([&] { mesh_resource_shape("package://no_such_package/mesh.stl", scale, resolver); })
+                .find("mesh 'package://no_such_package/mesh.stl'"),
             std::string::npos);
-  s.type = 0;
-  EXPECT_NE(error_of([&] { to_object_shape(s, resolver); }).find("unknown shape type 0"), std::string::npos);
+  scale.x = 1.0;  // y and z zero: not "all zeros"
+  EXPECT_NE(error_of([&] { mesh_resource_shape("/a.stl", scale, resolver); }).find("non-zero on every axis"),
+            std::string::npos);
+}
+
+TEST(Shapes, AnObjectsShapesInOrderWithTheirPoses) {
+  const PackageResolver resolver({});
+  SetCollisionObject::Request req;
+  EXPECT_NE(error_of([&] { object_shapes(req, resolver); }).find("has no shape"), std::string::npos);
+  shape_msgs::SolidPrimitive box;
+  box.type = shape_msgs::SolidPrimitive::BOX;
+  box.dimensions = {0.1, 0.1, 0.1};
+  req.primitives = {box, box};
+  geometry_msgs::Pose pose;
+  pose.orientation.w = 1.0;
+  req.primitive_poses = {pose};
+  EXPECT_EQ(error_of([&] { object_shapes(req, resolver); }), "primitives: 2 shapes but 1 poses (one pose per shape)");
+  pose.position.z = 0.5;
+  req.primitive_poses.push_back(pose);
+  req.meshes.resize(1);
+  req.meshes[0].vertices.resize(3);
+  req.meshes[0].triangles.resize(1);
+  req.meshes[0].triangles[0].vertex_indices = {0, 1, 2};
+  req.mesh_poses = {pose};
+  const std::vector<PlacedShape> shapes = object_shapes(req, resolver);
+  ASSERT_EQ(shapes.size(), 3u);
+  EXPECT_EQ(shapes[0].pose.t, Vec3::Zero());
+  EXPECT_EQ(shapes[1].pose.t, Vec3(0, 0, 0.5));
+  EXPECT_TRUE(shapes[2].shape.mesh);
+  req.primitives[1].dimensions.pop_back();
+  EXPECT_EQ(error_of([&] { object_shapes(req, resolver); }).rfind("primitives[1]: BOX needs 3 dimensions", 0), 0u);
 }
 
 TEST(Clouds, RoundTripAndOrganisedRowsWithPadding) {

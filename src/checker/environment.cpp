@@ -42,7 +42,8 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
     }
     case ObjectShape::Kind::kSphere:
     case ObjectShape::Kind::kCylinder:
-    case ObjectShape::Kind::kCapsule: break;
+    case ObjectShape::Kind::kCapsule:
+    case ObjectShape::Kind::kCone: break;
   }
   return {};
 }
@@ -69,7 +70,13 @@ CollisionObject make_collision_object(const std::string& id, const ObjectShape& 
     }
     o.primitive = Primitive::capsule(shape.radius, shape.length);
   }
-  if (o.primitive.radius > 0.0) {  // a sphere, cylinder or capsule: exact, no mesh
+  if (shape.kind == ObjectShape::Kind::kCone) {
+    if (!(positive(shape.radius) && positive(shape.length))) {
+      throw std::invalid_argument("object '" + id + "': cone radius and length must be positive and finite");
+    }
+    o.primitive = Primitive::cone(shape.radius, shape.length);
+  }
+  if (o.primitive.radius > 0.0) {  // a sphere, cylinder, capsule or cone: exact, no mesh
     o.bound_radius = bounding_radius(o.primitive);
     return o;
   }

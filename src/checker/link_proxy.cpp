@@ -31,6 +31,12 @@ double primitive_depth(const Primitive& prim, const Vec3& p) {
       const Vec3 axis(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
       return prim.radius - (p - axis).norm();
     }
+    case Primitive::Kind::kCone: {
+      // The nearer of the base and the slant (its distance in the (rho, z) half plane).
+      const double h = prim.half_length, slope = prim.radius / std::max(2.0 * h, 1e-300);
+      const double slant = (slope * (h - p.z()) - p.head<2>().norm()) / std::sqrt(1.0 + slope * slope);
+      return std::min(p.z() + h, slant);
+    }
   }
   return 0.0;
 }
@@ -57,6 +63,15 @@ Vec3 nearest_surface_point(const Primitive& prim, const Vec3& p) {
       const Vec3 axis(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
       const Vec3 off = p - axis;
       return off.norm() > 0.0 ? Vec3(axis + off * (prim.radius / off.norm())) : Vec3(axis + Vec3(prim.radius, 0, 0));
+    }
+    case Primitive::Kind::kCone: {
+      const double h = prim.half_length, slope = prim.radius / std::max(2.0 * h, 1e-300);
+      const double rho = p.head<2>().norm(), cos_a = 1.0 / std::sqrt(1.0 + slope * slope);
+      const double slant = (slope * (h - p.z()) - rho) * cos_a;
+      if (p.z() + h <= slant) return Vec3(p.x(), p.y(), -h);
+      // Out along the slant's normal (rho, z) ~ (1, slope) in the half plane through p.
+      const Vec3 radial = rho > 0.0 ? Vec3(p.x() / rho, p.y() / rho, 0.0) : Vec3(1.0, 0.0, 0.0);
+      return p + slant * cos_a * (radial + Vec3(0.0, 0.0, slope));
     }
   }
   return p;

@@ -293,6 +293,7 @@ ShapeKind kind_of(const ShapeRef& s) {
     case Primitive::Kind::kBox: return ShapeKind::kBox;
     case Primitive::Kind::kCylinder: return ShapeKind::kCylinder;
     case Primitive::Kind::kCapsule: return ShapeKind::kCapsule;
+    case Primitive::Kind::kCone: return ShapeKind::kCone;
   }
   return ShapeKind::kMesh;
 }

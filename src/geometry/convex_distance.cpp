@@ -314,7 +314,7 @@ bool curved(const ConvexShape& s) {
 }
 
 // Directions where a set's faces make the gap function kink: flat faces (a triangle's normal, a
-// box's or a cylinder's axes), in a's frame. The gap along them is exact where rounding tilts
+// box's or a cylinder's axes, a cone's base), in a's frame. The gap along them is exact where rounding tilts
 // GJK's direction most (face against face).
 int face_directions(const ConvexShape& s, const Mat3& R, Vec3* out) {
   if (s.kind == ConvexShape::Kind::kTriangle) {
@@ -328,8 +328,8 @@ int face_directions(const ConvexShape& s, const Mat3& R, Vec3* out) {
     for (int i = 0; i < 3; ++i) out[i] = R.col(i);
     return 3;
   }
-  if (s.primitive.kind == Primitive::Kind::kCylinder) {
-    out[0] = R.col(2);
+  if (s.primitive.kind == Primitive::Kind::kCylinder || s.primitive.kind == Primitive::Kind::kCone) {
+    out[0] = R.col(2);  // the caps' (the base's) normal
     return 1;
   }
   return 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "bvh_collision/geometry/intersection.h"
 
@@ -45,6 +46,61 @@ double cylinder_entry(double r, double h, const Vec3& o, const Vec3& u, double l
   return lo;
 }
 
+// The cone (base radius r at z = -h, tip at z = +h) seen in the half plane (rho, z), rho >= 0:
+// the triangle (0, -h), (r, -h), (0, h). Its radius at height z, for |z| <= h.
+double cone_radius_at(const Primitive& c, double z) {
+  return c.half_length > 0.0 ? c.radius * (c.half_length - z) / (2.0 * c.half_length) : c.radius;
+}
+
+// The point of the triangle's base or slant edge nearest (rho, z) (outside it), as (rho, z).
+std::pair<double, double> cone_nearest_edge_point(const Primitive& c, double rho, double z) {
+  const double r = c.radius, h = c.half_length;
+  const double base_rho = std::min(rho, r);
+  const double base_d2 = (rho - base_rho) * (rho - base_rho) + (z + h) * (z + h);
+  // The slant from (r, -h) to (0, h).
+  const double ex = -r, ez = 2.0 * h, len2 = ex * ex + ez * ez;
+  const double t = len2 > 0.0 ? std::clamp(((rho - r) * ex + (z + h) * ez) / len2, 0.0, 1.0) : 0.0;
+  const double slant_rho = r + t * ex, slant_z = -h + t * ez;
+  const double slant_d2 = (rho - slant_rho) * (rho - slant_rho) + (z - slant_z) * (z - slant_z);
+  return base_d2 <= slant_d2 ? std::make_pair(base_rho, -h) : std::make_pair(slant_rho, slant_z);
+}
+
+Vec3 cone_closest_point(const Primitive& c, const Vec3& p) {
+  const double rho = std::hypot(p.x(), p.y());
+  const auto [q_rho, q_z] = cone_nearest_edge_point(c, rho, p.z());
+  // Around the axis the nearest point keeps p's direction (any direction when p is on the axis).
+  if (rho > 0.0) return {p.x() * (q_rho / rho), p.y() * (q_rho / rho), q_z};
+  return {q_rho, 0.0, q_z};
+}
+
+// Where the ray enters the solid cone. Inside the slab |z| <= h the cone is the set
+// x^2 + y^2 <= k^2 (h - z)^2, k = r / 2h (the lower nappe: the upper one starts at the tip), so
+// the ray is inside where a quadratic in s is at most 0, within the slab's interval.
+double cone_entry(const Primitive& c, const Vec3& o, const Vec3& u, double length) {
+  const double h = c.half_length;
+  if (!(h > 0.0)) return cylinder_entry(c.radius, 0.0, o, u, length);  // a flat cone: a disc
+  double lo = 0.0, hi = length;
+  if (!slab(o.z(), u.z(), h, lo, hi)) return kInf;
+  const double k = c.radius / (2.0 * h), k2 = k * k, w0 = h - o.z();
+  const double a = u.x() * u.x() + u.y() * u.y() - k2 * u.z() * u.z();
+  const double b = o.x() * u.x() + o.y() * u.y() + k2 * w0 * u.z();
+  const double cc = o.x() * o.x() + o.y() * o.y() - k2 * w0 * w0;
+  auto first_from = [&](double s) { return s <= hi ? std::max(lo, s) : kInf; };
+  if (a == 0.0) {  // the ray runs parallel to a generator: f(s) = 2 b s + cc
+    if (b == 0.0) return cc <= 0.0 ? lo : kInf;
+    const double root = -cc / (2.0 * b);
+    return b > 0.0 ? (lo <= root ? lo : kInf) : first_from(root);
+  }
+  const double disc = b * b - a * cc;
+  if (disc < 0.0) return a < 0.0 ? lo : kInf;
+  const double q = -(b + std::copysign(std::sqrt(disc), b));
+  double s0 = q / a, s1 = q != 0.0 ? cc / q : s0;
+  if (s0 > s1) std::swap(s0, s1);
+  if (a > 0.0) return std::max(lo, s0) <= std::min(hi, s1) ? std::max(lo, s0) : kInf;
+  // a < 0: inside before s0 and after s1.
+  return lo <= s0 ? lo : first_from(s1);
+}
+
 }  // namespace
 
 const char* primitive_name(Primitive::Kind kind) {
@@ -53,6 +109,7 @@ const char* primitive_name(Primitive::Kind kind) {
     case Primitive::Kind::kBox: return "box";
     case Primitive::Kind::kCylinder: return "cylinder";
     case Primitive::Kind::kCapsule: return "capsule";
+    case Primitive::Kind::kCone: return "cone";
   }
   return "?";
 }
@@ -75,6 +132,14 @@ Vec3 support(const Primitive& p, const Vec3& d) {
       const Vec3 end(0.0, 0.0, sign_or_plus(d.z()) * p.half_length);
       return n > 0.0 ? Vec3(end + d * (p.radius / n)) : end;
     }
+    case Primitive::Kind::kCone: {
+      // The tip or a point of the base's rim, whichever goes farther along d.
+      const double n = std::hypot(d.x(), d.y());
+      const Vec3 rim = n > 0.0 ? Vec3(d.x() * (p.radius / n), d.y() * (p.radius / n), -p.half_length)
+                               : Vec3(0.0, 0.0, -p.half_length);
+      const Vec3 tip(0.0, 0.0, p.half_length);
+      return d.dot(tip) >= d.dot(rim) ? tip : rim;
+    }
   }
   return Vec3::Zero();
 }
@@ -85,6 +150,7 @@ Vec3 half_extents(const Primitive& p) {
     case Primitive::Kind::kBox: return p.half;
     case Primitive::Kind::kCylinder: return {p.radius, p.radius, p.half_length};
     case Primitive::Kind::kCapsule: return {p.radius, p.radius, p.half_length + p.radius};
+    case Primitive::Kind::kCone: return {p.radius, p.radius, p.half_length};
   }
   return Vec3::Zero();
 }
@@ -95,6 +161,7 @@ double bounding_radius(const Primitive& p) {
     case Primitive::Kind::kBox: return p.half.norm();
     case Primitive::Kind::kCylinder: return std::hypot(p.radius, p.half_length);
     case Primitive::Kind::kCapsule: return p.half_length + p.radius;
+    case Primitive::Kind::kCone: return std::hypot(p.radius, p.half_length);  // the rim (the tip is nearer)
   }
   return 0.0;
 }
@@ -108,6 +175,11 @@ bool contains(const Primitive& prim, const Vec3& p) {
     case Primitive::Kind::kCapsule: {
       const Vec3 off(p.x(), p.y(), p.z() - std::clamp(p.z(), -prim.half_length, prim.half_length));
       return off.squaredNorm() <= prim.radius * prim.radius;
+    }
+    case Primitive::Kind::kCone: {
+      if (!(std::abs(p.z()) <= prim.half_length)) return false;
+      const double r = cone_radius_at(prim, p.z());
+      return p.x() * p.x() + p.y() * p.y() <= r * r;
     }
   }
   return false;
@@ -133,6 +205,7 @@ Vec3 closest_point(const Primitive& prim, const Vec3& p) {
       const double n = off.norm();
       return n <= prim.radius ? p : Vec3(axis_point + off * (prim.radius / n));
     }
+    case Primitive::Kind::kCone: return contains(prim, p) ? p : cone_closest_point(prim, p);
   }
   return p;
 }
@@ -155,6 +228,7 @@ double ray_entry(const Primitive& prim, const Vec3& origin, const Vec3& unit, do
                        ray_ball_entry(origin, unit, length, end, prim.radius),
                        ray_ball_entry(origin, unit, length, -end, prim.radius)});
     }
+    case Primitive::Kind::kCone: return cone_entry(prim, origin, unit, length);
   }
   return kInf;
 }

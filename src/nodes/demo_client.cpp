@@ -163,8 +163,11 @@ int main(int argc, char** argv) {
 
   SetCollisionObject box;
   box.request.id = "table";
-  box.request.shape.type = CollisionShape::BOX;
-  box.request.shape.dimensions = {0.6, 1.0, 0.04};
+  box.request.primitives.resize(1);
+  box.request.primitives[0].type = shape_msgs::SolidPrimitive::BOX;
+  box.request.primitives[0].dimensions = {0.6, 1.0, 0.04};
+  box.request.primitive_poses.resize(1);
+  box.request.primitive_poses[0].orientation.w = 1.0;
   box.request.pose.position.x = -0.6;
   box.request.pose.position.z = 0.5;
   box.request.pose.orientation.w = 1.0;

@@ -188,7 +188,8 @@ void CollisionCheckerNode::advertise() {
   cloud_spinner_->start();
 
   cells_pub_ = private_nh_.advertise<visualization_msgs::MarkerArray>("occupied_cells", 1);
-  contacts_pub_ = private_nh_.advertise<visualization_msgs::MarkerArray>("contacts", 1);
+  // Latched: rviz started after a query still shows its contacts.
+  contacts_pub_ = private_nh_.advertise<visualization_msgs::MarkerArray>("contacts", 1, true);
   diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
   cells_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.marker_rate),
                                      &CollisionCheckerNode::publish_occupied_cells, this);

@@ -135,10 +135,9 @@ geometry_msgs::Pose to_pose_msg(const Transform& transform) {
 
 namespace {
 
-void expect_dimensions(const CollisionShape& shape, std::size_t n, const char* what) {
+void expect_dimensions(const shape_msgs::SolidPrimitive& shape, std::size_t n, const char* what, const char* names) {
   if (shape.dimensions.size() != n) {
-    throw RequestError(std::string(what) + " needs " + std::to_string(n) + " dimensions (" +
-                       (n == 3 ? "size x, y, z" : n == 2 ? "radius, length" : "radius") + "), got " +
+    throw RequestError(std::string(what) + " needs " + std::to_string(n) + " dimensions (" + names + "), got " +
                        std::to_string(shape.dimensions.size()));
   }
   for (double d : shape.dimensions) {
@@ -148,17 +147,45 @@ void expect_dimensions(const CollisionShape& shape, std::size_t n, const char* w
   }
 }
 
-ObjectShape triangles_shape(const CollisionShape& shape) {
-  if (shape.triangles.empty() || shape.triangles.size() % 3 != 0) {
-    throw RequestError("TRIANGLES needs three vertex indices per triangle, got " +
-                       std::to_string(shape.triangles.size()) + " indices");
+// A pose per shape: the request's arrays must pair up.
+void expect_poses(std::size_t shapes, std::size_t poses, const char* what) {
+  if (shapes != poses) {
+    throw RequestError(std::string(what) + ": " + std::to_string(shapes) + " shapes but " + std::to_string(poses) +
+                       " poses (one pose per shape)");
   }
+}
+
+}  // namespace
+
+ObjectShape to_object_shape(const shape_msgs::SolidPrimitive& shape) {
+  using P = shape_msgs::SolidPrimitive;
+  switch (shape.type) {
+    case P::BOX:
+      expect_dimensions(shape, 3, "BOX", "x, y, z");
+      return ObjectShape::box(Vec3(shape.dimensions[P::BOX_X], shape.dimensions[P::BOX_Y], shape.dimensions[P::BOX_Z]));
+    case P::SPHERE:
+      expect_dimensions(shape, 1, "SPHERE", "radius");
+      return ObjectShape::sphere(shape.dimensions[P::SPHERE_RADIUS]);
+    case P::CYLINDER:
+      expect_dimensions(shape, 2, "CYLINDER", "height, radius");
+      return ObjectShape::cylinder(shape.dimensions[P::CYLINDER_RADIUS], shape.dimensions[P::CYLINDER_HEIGHT]);
+    case P::CONE:
+      expect_dimensions(shape, 2, "CONE", "height, radius");
+      return ObjectShape::cone(shape.dimensions[P::CONE_RADIUS], shape.dimensions[P::CONE_HEIGHT]);
+    default:
+      throw RequestError("unknown solid primitive type " + std::to_string(int(shape.type)) +
+                         " (BOX=1, SPHERE=2, CYLINDER=3, CONE=4)");
+  }
+}
+
+ObjectShape to_object_shape(const shape_msgs::Mesh& shape) {
+  if (shape.triangles.empty()) throw RequestError("a mesh needs at least one triangle");
   TriangleMesh mesh;
   for (const auto& v : shape.vertices) mesh.vertices.emplace_back(v.x, v.y, v.z);
-  for (std::size_t i = 0; i < shape.triangles.size(); i += 3) {
+  for (const shape_msgs::MeshTriangle& triangle : shape.triangles) {
     std::array<std::int32_t, 3> t{};
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t index = shape.triangles[i + k];
+      const std::uint32_t index = triangle.vertex_indices[k];
       if (index >= mesh.vertices.size()) {
         throw RequestError("triangle vertex index " + std::to_string(index) + " is out of range (" +
                            std::to_string(mesh.vertices.size()) + " vertices)");
@@ -170,44 +197,52 @@ ObjectShape triangles_shape(const CollisionShape& shape) {
   return ObjectShape::triangles(std::move(mesh));
 }
 
-ObjectShape mesh_file_shape(const CollisionShape& shape, const PackageResolver& resolver) {
-  if (shape.mesh_uri.empty()) throw RequestError("MESH_FILE needs a mesh_uri");
-  Vec3 scale(shape.mesh_scale.x, shape.mesh_scale.y, shape.mesh_scale.z);
+ObjectShape mesh_resource_shape(const std::string& uri, const geometry_msgs::Vector3& scale_msg,
+                                const PackageResolver& resolver) {
+  if (uri.empty()) throw RequestError("a mesh resource is empty");
+  Vec3 scale(scale_msg.x, scale_msg.y, scale_msg.z);
   if (scale.isZero(0.0)) scale = Vec3::Ones();
   if (!scale.allFinite() || (scale.array() == 0.0).any()) {
-    throw RequestError("mesh_scale must be finite and non-zero on every axis");
+    throw RequestError("mesh scale must be finite and non-zero on every axis");
   }
   try {
-    return ObjectShape::triangles(load_mesh(resolver.resolve(shape.mesh_uri), scale));
+    return ObjectShape::triangles(load_mesh(resolver.resolve(uri), scale));
   } catch (const std::exception& e) {  // MeshLoadError, or invalid_argument from resolve()
-    throw RequestError("mesh " + quoted(shape.mesh_uri) + ": " + e.what());
+    throw RequestError("mesh " + quoted(uri) + ": " + e.what());
   }
 }
 
-}  // namespace
-
-ObjectShape to_object_shape(const CollisionShape& shape, const PackageResolver& resolver) {
-  switch (shape.type) {
-    case CollisionShape::BOX:
-      expect_dimensions(shape, 3, "BOX");
-      return ObjectShape::box(Vec3(shape.dimensions[0], shape.dimensions[1], shape.dimensions[2]));
-    case CollisionShape::SPHERE:
-      expect_dimensions(shape, 1, "SPHERE");
-      return ObjectShape::sphere(shape.dimensions[0]);
-    case CollisionShape::CYLINDER:
-      expect_dimensions(shape, 2, "CYLINDER");
-      return ObjectShape::cylinder(shape.dimensions[0], shape.dimensions[1]);
-    case CollisionShape::CAPSULE:
-      expect_dimensions(shape, 2, "CAPSULE");
-      return ObjectShape::capsule(shape.dimensions[0], shape.dimensions[1]);
-    case CollisionShape::MESH_FILE:
-      return mesh_file_shape(shape, resolver);
-    case CollisionShape::TRIANGLES:
-      return triangles_shape(shape);
-    default:
-      throw RequestError("unknown shape type " + std::to_string(int(shape.type)) +
-                         " (BOX=1, SPHERE=2, CYLINDER=3, MESH_FILE=4, TRIANGLES=5, CAPSULE=6)");
+std::vector<PlacedShape> object_shapes(const SetCollisionObject::Request& req, const PackageResolver& resolver) {
+  expect_poses(req.primitives.size(), req.primitive_poses.size(), "primitives");
+  expect_poses(req.meshes.size(), req.mesh_poses.size(), "meshes");
+  expect_poses(req.mesh_resources.size(), req.mesh_resource_poses.size(), "mesh_resources");
+  if (!req.mesh_resource_scales.empty() && req.mesh_resource_scales.size() != req.mesh_resources.size()) {
+    throw RequestError("mesh_resource_scales holds " + std::to_string(req.mesh_resource_scales.size()) +
+                       " scales for " + std::to_string(req.mesh_resources.size()) + " mesh resources (none, or one each)");
   }
+  std::vector<PlacedShape> out;
+  // Each shape's own error names it: "primitives[1]: CONE needs ...".
+  auto add = [&](const std::string& which, auto&& make, const geometry_msgs::Pose& pose) {
+    try {
+      out.push_back({make(), to_transform(pose)});
+    } catch (const RequestError& e) {
+      throw RequestError(which + ": " + e.what());
+    }
+  };
+  for (std::size_t i = 0; i < req.primitives.size(); ++i) {
+    add("primitives[" + std::to_string(i) + "]", [&] { return to_object_shape(req.primitives[i]); }, req.primitive_poses[i]);
+  }
+  for (std::size_t i = 0; i < req.meshes.size(); ++i) {
+    add("meshes[" + std::to_string(i) + "]", [&] { return to_object_shape(req.meshes[i]); }, req.mesh_poses[i]);
+  }
+  const geometry_msgs::Vector3 unit_scale;
+  for (std::size_t i = 0; i < req.mesh_resources.size(); ++i) {
+    const auto& scale = req.mesh_resource_scales.empty() ? unit_scale : req.mesh_resource_scales[i];
+    add("mesh_resources[" + std::to_string(i) + "]",
+        [&] { return mesh_resource_shape(req.mesh_resources[i], scale, resolver); }, req.mesh_resource_poses[i]);
+  }
+  if (out.empty()) throw RequestError("the object has no shape (primitives, meshes and mesh_resources are all empty)");
+  return out;
 }
 
 namespace {

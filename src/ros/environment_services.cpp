@@ -13,6 +13,18 @@ namespace {
 // Beyond the robot's reach, by this much, obstacles are ignored (DESIGN.md section 4).
 constexpr double kWorkspaceMargin = 0.5;
 
+// Removes object `id`, or every shape "id#k" of an object of several; false when there was none.
+bool remove_object_shapes(Environment& env, const std::string& id) {
+  std::vector<std::string> names;
+  for (const CollisionObject& o : env.objects()) {
+    const bool part = o.id.size() > id.size() + 1 && o.id.compare(0, id.size(), id) == 0 && o.id[id.size()] == '#' &&
+                      o.id.find_first_not_of("0123456789", id.size() + 1) == std::string::npos;
+    if (o.id == id || part) names.push_back(o.id);
+  }
+  for (const std::string& name : names) env.remove_object(name);
+  return !names.empty();
+}
+
 }  // namespace
 
 void CollisionCheckerNode::on_cloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
@@ -119,27 +131,34 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
   return serve("set_collision_object", res, [&] {
     if (req.id.empty()) throw RequestError("collision object id is empty");
     if (req.id == "octree") throw RequestError("'octree' is reserved: it names the obstacle octree in contacts");
+    if (req.id.find('#') != std::string::npos) {
+      throw RequestError("collision object id '" + req.id + "' contains '#' (it names an object's shapes: id#k)");
+    }
     const Transform pose = frame_to_world(req.frame_id) * to_transform(req.pose);
     // Meshes are read before the environment is locked: a slow file delays no other change.
-    const ObjectShape shape = to_object_shape(req.shape, resolver_);
-    if (shape.mesh) {
-      check_limit("collision object '" + req.id + "' with its triangles", double(shape.mesh->triangles.size()),
-                  params_.limits.object_triangles, "max_object_triangles");
+    const std::vector<PlacedShape> shapes = object_shapes(req, resolver_);
+    double triangles = 0.0;
+    for (const PlacedShape& s : shapes) triangles += s.shape.mesh ? double(s.shape.mesh->triangles.size()) : 0.0;
+    check_limit("collision object '" + req.id + "' with its triangles", triangles, params_.limits.object_triangles,
+                "max_object_triangles");
+    // The hierarchies and hulls too: the store's write lock is held only to swap the objects in.
+    std::vector<CollisionObject> parts;
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+      const std::string name = shapes.size() == 1 ? req.id : req.id + "#" + std::to_string(k);
+      parts.push_back(make_collision_object(name, shapes[k].shape, pose * shapes[k].pose));
     }
-    // The hierarchy and hull too: the store's write lock is held only to insert the result.
-    CollisionObject object = make_collision_object(req.id, shape, pose);
-    store_->modify([&](Environment& env) { env.add_object(std::move(object)); });
+    store_->modify([&](Environment& env) {
+      remove_object_shapes(env, req.id);  // a replaced object may have had more or fewer shapes
+      for (CollisionObject& part : parts) env.add_object(std::move(part));
+    });
   });
 }
 
 bool CollisionCheckerNode::remove_collision_object(RemoveCollisionObject::Request& req,
                                                    RemoveCollisionObject::Response& res) {
   return serve("remove_collision_object", res, [&] {
-    if (store_->snapshot()->find_object(req.id) == nullptr) {
+    if (!store_->modify([&](Environment& env) { return remove_object_shapes(env, req.id); })) {
       throw RequestError("no collision object with id '" + req.id + "'");
-    }
-    if (!store_->modify([&](Environment& env) { return env.remove_object(req.id); })) {
-      throw RequestError("no collision object with id '" + req.id + "'");  // removed meanwhile
     }
   });
 }

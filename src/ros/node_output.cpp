@@ -107,8 +107,8 @@ void CollisionCheckerNode::publish_occupied_cells(const ros::WallTimerEvent&) {
 }
 
 void CollisionCheckerNode::publish_contacts(const std::vector<Contact>& contacts) {
-  if (contacts_pub_.getNumSubscribers() == 0) return;
-  // At most 10 Hz: a planner may call thousands of times a second.
+  // Published (latched) whether or not anyone listens now, at most 10 Hz: a planner may call
+  // thousands of times a second.
   const double now = ros::WallTime::now().toSec();
   double last = last_contacts_time_.load();
   if (now - last < 0.1 || !last_contacts_time_.compare_exchange_strong(last, now)) return;

@@ -69,21 +69,49 @@ geometry_msgs::Point point(ByteReader& in) {
   return p;
 }
 
-CollisionShape shape(ByteReader& in) {
-  CollisionShape s;
-  s.type = in.count(7);
-  s.dimensions = in.numbers(4);
+geometry_msgs::Pose pose(ByteReader& in) {
+  geometry_msgs::Pose p;
+  p.position = point(in);
+  p.orientation.x = in.number();
+  p.orientation.y = in.number();
+  p.orientation.z = in.number();
+  p.orientation.w = in.number();
+  return p;
+}
+
+// A SetCollisionObject request's shapes: primitives (types 0-5: every SolidPrimitive and two
+// unknown), meshes, mesh resources, each with its pose; the arrays' lengths may disagree.
+void shapes(ByteReader& in, SetCollisionObject::Request& req) {
+  req.primitives.resize(in.count(4));
+  for (auto& s : req.primitives) {
+    s.type = in.count(6);
+    s.dimensions = in.numbers(4);
+  }
+  req.primitive_poses.resize(in.count(4));
+  for (auto& p : req.primitive_poses) p = pose(in);
+  req.meshes.resize(in.count(3));
+  for (auto& m : req.meshes) {
+    m.vertices.resize(in.count(8));
+    for (auto& v : m.vertices) v = point(in);
+    m.triangles.resize(in.count(12));
+    for (auto& t : m.triangles) {
+      for (auto& index : t.vertex_indices) index = in.byte() < 250 ? in.count(9) : in.u32();
+    }
+  }
+  req.mesh_poses.resize(in.count(3));
+  for (auto& p : req.mesh_poses) p = pose(in);
   const std::vector<std::string> uris = {"", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl",
                                          "file:///nonexistent.stl", "/etc/hostname"};
-  s.mesh_uri = in.name(uris);
-  s.mesh_scale.x = in.number();
-  s.mesh_scale.y = in.number();
-  s.mesh_scale.z = in.number();
-  s.vertices.resize(in.count(8));
-  for (auto& v : s.vertices) v = point(in);
-  s.triangles.resize(in.count(12));
-  for (auto& t : s.triangles) t = in.byte() < 250 ? in.count(9) : in.u32();
-  return s;
+  req.mesh_resources.resize(in.count(3));
+  for (auto& uri : req.mesh_resources) uri = in.name(uris);
+  req.mesh_resource_scales.resize(in.count(3));
+  for (auto& scale : req.mesh_resource_scales) {
+    scale.x = in.number();
+    scale.y = in.number();
+    scale.z = in.number();
+  }
+  req.mesh_resource_poses.resize(in.count(3));
+  for (auto& p : req.mesh_resource_poses) p = pose(in);
 }
 
 // An answer is an error, or it holds what it should.
@@ -172,13 +200,9 @@ std::string answer(ByteReader& in) {
     case 6: {
       SetCollisionObject::Request req;
       req.id = in.name(kNames);
-      req.shape = shape(in);
-      req.pose.position = point(in);
-      req.pose.orientation.x = in.number();
-      req.pose.orientation.y = in.number();
-      req.pose.orientation.z = in.number();
-      req.pose.orientation.w = in.number();
+      req.pose = pose(in);
       req.frame_id = in.name(kNames);
+      shapes(in, req);
       SetCollisionObject::Response res;
       NodeFuzzAccess::call(req, res);
       return error_problem(res);

@@ -15,11 +15,11 @@
 namespace bvh_collision {
 
 struct ObjectShape {
-  enum class Kind { kBox, kSphere, kCylinder, kCapsule, kMesh };
+  enum class Kind { kBox, kSphere, kCylinder, kCapsule, kCone, kMesh };
   Kind kind = Kind::kBox;
   Vec3 size = Vec3::Zero();  // box: edge lengths
-  double radius = 0.0;       // sphere, cylinder, capsule
-  double length = 0.0;       // cylinder, along its z axis; capsule: its axis segment (caps beyond)
+  double radius = 0.0;       // sphere, cylinder, capsule; cone: its base
+  double length = 0.0;       // cylinder and cone, along their z axis; capsule: its axis segment (caps beyond)
   std::shared_ptr<const TriangleMesh> mesh;
 
   static ObjectShape box(const Vec3& size) { return {Kind::kBox, size, 0.0, 0.0, nullptr}; }
@@ -27,6 +27,8 @@ struct ObjectShape {
   static ObjectShape cylinder(double radius, double length) { return {Kind::kCylinder, Vec3::Zero(), radius, length, nullptr}; }
   // The points within `radius` of the segment of `length` along z through the origin.
   static ObjectShape capsule(double radius, double length) { return {Kind::kCapsule, Vec3::Zero(), radius, length, nullptr}; }
+  // Base (radius) at z = -length/2, tip at +length/2 (shape_msgs/SolidPrimitive's cone).
+  static ObjectShape cone(double radius, double length) { return {Kind::kCone, Vec3::Zero(), radius, length, nullptr}; }
   static ObjectShape triangles(TriangleMesh m) {
     return {Kind::kMesh, Vec3::Zero(), 0.0, 0.0, std::make_shared<const TriangleMesh>(std::move(m))};
   }
@@ -36,7 +38,7 @@ struct CollisionObject {
   std::string id;
   ObjectShape shape;
   Transform pose;  // in the world frame
-  // Geometry as the checker uses it: spheres, cylinders and capsules stay exact primitives (no mesh);
+  // Geometry as the checker uses it: spheres, cylinders, capsules and cones stay exact primitives (no mesh);
   // boxes (exact as 12 triangles) and meshes get a BVH and a hull.
   std::shared_ptr<const Bvh<Obb>> mesh;
   std::shared_ptr<const ConvexHull> hull;

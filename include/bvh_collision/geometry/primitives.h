@@ -1,6 +1,7 @@
 // Exact convex primitives: the solids URDF and collision objects name (sphere, box, cylinder,
-// capsule), kept as the shapes they are instead of polygons. Each lives in its own frame, centred
-// on the origin; cylinders and capsules run along z. Everything here is a closed solid: touching
+// capsule, cone), kept as the shapes they are instead of polygons. Each lives in its own frame,
+// centred on the origin; cylinders, capsules and cones run along z (a cone as shape_msgs has it:
+// its bounding box centred on the origin, the base disc at z = -length/2, the tip at +length/2). Everything here is a closed solid: touching
 // a primitive's surface is touching the primitive.
 #pragma once
 
@@ -12,17 +13,18 @@
 namespace bvh_collision {
 
 struct Primitive {
-  enum class Kind : std::uint8_t { kSphere, kBox, kCylinder, kCapsule };
+  enum class Kind : std::uint8_t { kSphere, kBox, kCylinder, kCapsule, kCone };
   Kind kind = Kind::kSphere;
   Vec3 half = Vec3::Zero();  // box: half the edge lengths
-  double radius = 0.0;       // sphere, cylinder, capsule
-  double half_length = 0.0;  // cylinder, capsule: half the length of the axis segment (z)
+  double radius = 0.0;       // sphere, cylinder, capsule; cone: of its base
+  double half_length = 0.0;  // cylinder, capsule, cone: half the length of the axis segment (z)
 
   static Primitive sphere(double r) { return {Kind::kSphere, Vec3::Zero(), r, 0.0}; }
   static Primitive box(const Vec3& size) { return {Kind::kBox, 0.5 * size, 0.0, 0.0}; }
   // A capsule's length is that of its axis segment; its caps add `r` at each end (as in FCL).
   static Primitive cylinder(double r, double length) { return {Kind::kCylinder, Vec3::Zero(), r, 0.5 * length}; }
   static Primitive capsule(double r, double length) { return {Kind::kCapsule, Vec3::Zero(), r, 0.5 * length}; }
+  static Primitive cone(double r, double length) { return {Kind::kCone, Vec3::Zero(), r, 0.5 * length}; }
 };
 
 const char* primitive_name(Primitive::Kind kind);

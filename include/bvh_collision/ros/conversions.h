@@ -10,8 +10,10 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <shape_msgs/Mesh.h>
+#include <shape_msgs/SolidPrimitive.h>
 
-#include "bvh_collision/CollisionShape.h"
+#include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/environment.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/package_resolver.h"
@@ -62,9 +64,24 @@ Transform to_transform(const geometry_msgs::Pose& pose);
 Transform to_transform(const geometry_msgs::Transform& transform);
 geometry_msgs::Pose to_pose_msg(const Transform& transform);
 
-// A CollisionShape message as an object shape; meshes are read through `resolver`. Throws
-// RequestError naming the problem (unknown type, wrong number of dimensions, unreadable file...).
-ObjectShape to_object_shape(const CollisionShape& shape, const PackageResolver& resolver);
+// shape_msgs as object shapes (a primitive with its message's dimension indices; cones and
+// cylinders stay exact). Throw RequestError naming the problem (unknown type, wrong number of
+// dimensions, a vertex index out of range...).
+ObjectShape to_object_shape(const shape_msgs::SolidPrimitive& shape);
+ObjectShape to_object_shape(const shape_msgs::Mesh& shape);
+// A mesh file (package://, file:// or a path) read through `resolver`, scaled per axis (all zeros: 1).
+ObjectShape mesh_resource_shape(const std::string& uri, const geometry_msgs::Vector3& scale,
+                                const PackageResolver& resolver);
+
+// One shape of a collision object and its pose in the object's frame.
+struct PlacedShape {
+  ObjectShape shape;
+  Transform pose;
+};
+// Every shape of a SetCollisionObject request, in its order: primitives, meshes, mesh resources.
+// Throws RequestError naming the field ("primitives[1]: CONE needs 2 dimensions ...") for a bad
+// shape or pose, arrays whose lengths do not pair up, or no shape at all.
+std::vector<PlacedShape> object_shapes(const SetCollisionObject::Request& req, const PackageResolver& resolver);
 
 // The points of a cloud, in its own frame. Fields x, y and z must be FLOAT32 or FLOAT64 and lie
 // within point_step; the data must hold height * row_step bytes. Throws RequestError otherwise.

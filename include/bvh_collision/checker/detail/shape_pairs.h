@@ -19,7 +19,7 @@ struct ShapeRef {
 };
 
 // The kinds the dispatch table is indexed by.
-enum class ShapeKind : int { kSphere, kBox, kCylinder, kCapsule, kMesh, kCount };
+enum class ShapeKind : int { kSphere, kBox, kCylinder, kCapsule, kCone, kMesh, kCount };
 ShapeKind kind_of(const ShapeRef& s);
 
 struct PairRequest {

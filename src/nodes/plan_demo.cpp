@@ -1,0 +1,264 @@
+// plan_demo: plans a motion with OMPL's RRTConnect through the collision checker twice, once with
+// the checker in this process (planning/ompl_validity.h, on a copy of the node's octree) and once
+// through the running node's services (ros/service_validity.h), then certifies each path's
+// segments with the node's check_motion and prints what each variant cost. The path's tool
+// positions go out as a marker (planned_path) for rviz.
+//   ~checker        the node's namespace (default /collision_checker)
+//   ~group          the joints to plan for (default: every joint variable)
+//   ~start, ~goal   values for ~group
+//   ~planning_time  seconds per planning run (default 10)
+//   ~tool_link      the link whose path is drawn (default: the last link of the chain)
+//   ~seed           OMPL's random seed (default 1: the same plan each run)
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+#include <ros/ros.h>
+#include <ros/topic.h>
+#include <sensor_msgs/JointState.h>
+#include <tf2_ros/transform_listener.h>
+#include <unistd.h>
+#include <visualization_msgs/Marker.h>
+
+#include "bvh_collision/SaveOctree.h"
+#include "bvh_collision/octree/octomap_bridge.h"
+#include "bvh_collision/robot/allowed_collision_matrix.h"
+#include "bvh_collision/robot/package_resolver.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/ros/conversions.h"
+#include "bvh_collision/ros/service_validity.h"
+
+namespace bvh_collision {
+namespace {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+struct PlanRun {
+  std::string name;
+  bool solved = false;
+  double planning_seconds = 0.0, validity_seconds = 0.0;
+  std::uint64_t state_checks = 0, motion_checks = 0;
+  std::vector<std::vector<double>> waypoints;  // group values
+};
+
+std::vector<std::vector<double>> waypoints_of(const og::PathGeometric& path, std::size_t dims) {
+  std::vector<std::vector<double>> out;
+  for (std::size_t i = 0; i < path.getStateCount(); ++i) {
+    const double* v = path.getState(static_cast<unsigned>(i))->as<ob::RealVectorStateSpace::StateType>()->values;
+    out.emplace_back(v, v + dims);
+  }
+  return out;
+}
+
+// One planning run: the validators on `setup`, RRTConnect, the path simplified (its shortcuts
+// checked by the same motion validator).
+PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::ValidityCounters& counters,
+             const std::vector<double>& start, const std::vector<double>& goal, double seconds) {
+  ompl::RNG::setSeed(1);  // after setSeed, every run of the demo draws the same samples
+  PlanRun run{name};
+  ob::ScopedState<> a(setup.getStateSpace()), b(setup.getStateSpace());
+  for (std::size_t i = 0; i < start.size(); ++i) a[i] = start[i], b[i] = goal[i];
+  setup.setStartAndGoalStates(a, b);
+  setup.setPlanner(std::make_shared<og::RRTConnect>(setup.getSpaceInformation()));
+  setup.setup();
+  counters.reset();
+  const auto t0 = ros::WallTime::now();
+  run.solved = setup.solve(seconds) == ob::PlannerStatus::EXACT_SOLUTION;
+  if (run.solved) setup.simplifySolution();
+  run.planning_seconds = (ros::WallTime::now() - t0).toSec();
+  run.validity_seconds = counters.seconds();
+  run.state_checks = counters.states;
+  run.motion_checks = counters.motions;
+  if (run.solved) run.waypoints = waypoints_of(setup.getSolutionPath(), start.size());
+  return run;
+}
+
+// The node's octree as a file read back here: the in-process checker sees what the node sees.
+std::shared_ptr<const Environment> node_environment(const std::string& checker, double resolution) {
+  SaveOctree save;
+  save.request.path = "/tmp/bvh_collision_plan_demo_" + std::to_string(::getpid()) + ".bt";
+  if (!ros::service::call(checker + "/save_octree", save) || !save.response.error.empty()) {
+    throw std::runtime_error("save_octree failed: " + save.response.error);
+  }
+  auto env = std::make_shared<Environment>(resolution);
+  env->octree() = load_octree(save.request.path);
+  std::remove(save.request.path.c_str());
+  return env;
+}
+
+CollisionChecker checker_from_parameters() {
+  std::string urdf, srdf;
+  if (!ros::param::get("robot_description", urdf)) throw std::runtime_error("no robot_description parameter");
+  RobotModel model = RobotModel::from_urdf(*parse_robot_description(urdf), PackageResolver::from_environment());
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  if (ros::param::get("robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf), model, acm);
+  return CollisionChecker(std::move(model), std::move(acm));
+}
+
+void print_header() {
+  std::printf("  %-22s %-7s %10s %8s %8s %22s %9s\n", "variant", "result", "planning", "states", "motions",
+              "time in the checks", "waypoints");
+}
+
+void print_run(const PlanRun& r) {
+  std::printf("  %-22s %-7s %8.3f s %8llu %8llu %11.3f s (%3.0f%%) %9zu\n", r.name.c_str(), r.solved ? "solved" : "FAILED",
+              r.planning_seconds, static_cast<unsigned long long>(r.state_checks),
+              static_cast<unsigned long long>(r.motion_checks), r.validity_seconds,
+              r.planning_seconds > 0 ? 100.0 * r.validity_seconds / r.planning_seconds : 0.0, r.waypoints.size());
+}
+
+}  // namespace
+}  // namespace bvh_collision
+
+namespace bvh_collision {
+namespace {
+
+std::vector<double> param_list(const ros::NodeHandle& pnh, const std::string& name) {
+  std::vector<double> v;
+  if (!pnh.getParam(name, v)) throw std::runtime_error("parameter ~" + name + " (a list of joint values) is not set");
+  return v;
+}
+
+// The robot's current joint values for the joints outside the group (joint_states, once).
+std::vector<double> current_state(const RobotModel& model) {
+  std::vector<double> q(model.variable_count(), 0.0);
+  const auto msg = ros::topic::waitForMessage<sensor_msgs::JointState>("joint_states", ros::Duration(5.0));
+  if (!msg) return q;
+  for (std::size_t i = 0; i < msg->name.size() && i < msg->position.size(); ++i) {
+    const auto& names = model.variable_names();
+    const auto it = std::find(names.begin(), names.end(), msg->name[i]);
+    if (it != names.end()) q[it - names.begin()] = msg->position[i];
+  }
+  return q;
+}
+
+// world_frame -> the root link from tf (identity when they are the same frame).
+Transform root_pose(const std::string& world, const std::string& root) {
+  if (world.empty() || world == root) return Transform::Identity();
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  return to_transform(buffer.lookupTransform(world, root, ros::Time(0), ros::Duration(5.0)).transform);
+}
+
+// The tool's positions along the path (each segment in 20 steps), as a line for rviz.
+visualization_msgs::Marker path_marker(const planning::CheckerPlanningContext& c, const PlanRun& run,
+                                       const std::string& frame, int tool) {
+  visualization_msgs::Marker m;
+  m.header.frame_id = frame;
+  m.header.stamp = ros::Time::now();
+  m.ns = "planned_path";
+  m.type = visualization_msgs::Marker::LINE_STRIP;
+  m.pose.orientation.w = 1.0;
+  m.scale.x = 0.01;
+  m.color.r = 1.0, m.color.g = 1.0, m.color.b = 0.0, m.color.a = 1.0;  // yellow: no voxel has it
+  ob::RealVectorStateSpace space(static_cast<unsigned>(c.group.size()));
+  ob::State* s = space.allocState();
+  std::vector<Transform> poses;
+  for (std::size_t w = 0; w + 1 < run.waypoints.size(); ++w) {
+    for (int k = 0; k <= 20; ++k) {
+      double* v = s->as<ob::RealVectorStateSpace::StateType>()->values;
+      for (std::size_t i = 0; i < c.group.size(); ++i) v[i] = run.waypoints[w][i] + k / 20.0 * (run.waypoints[w + 1][i] - run.waypoints[w][i]);
+      const std::vector<double> q = c.full_state(s);
+      forward_kinematics(c.checker.model(), q.data(), poses);
+      const Vec3 p = c.root_pose * poses[tool].t;
+      geometry_msgs::Point point;
+      point.x = p.x(), point.y = p.y(), point.z = p.z();
+      m.points.push_back(point);
+    }
+  }
+  space.freeState(s);
+  return m;
+}
+
+// Each segment of the path through the node's certified check_motion; prints the result.
+bool certify(const ServicePlanningContext& service, const PlanRun& run) {
+  bool all = run.solved;
+  for (std::size_t w = 0; w + 1 < run.waypoints.size(); ++w) {
+    const bool free = service.motion_valid(run.waypoints[w].data(), run.waypoints[w + 1].data());
+    all = all && free;
+    if (!free) std::printf("    segment %zu of the %s path: COLLIDING\n", w, run.name.c_str());
+  }
+  std::printf("  %-22s %zu segments, each certified free by check_motion: %s\n", run.name.c_str(),
+              run.waypoints.empty() ? 0 : run.waypoints.size() - 1, all ? "yes" : "NO");
+  return all;
+}
+
+int run(ros::NodeHandle& pnh) {
+  const std::string node = pnh.param<std::string>("checker", "/collision_checker");
+  const double seconds = pnh.param("planning_time", 10.0);
+  std::vector<std::string> names;
+  pnh.getParam("group", names);
+  const std::vector<double> start = param_list(pnh, "start"), goal = param_list(pnh, "goal");
+  const CollisionChecker checker = checker_from_parameters();
+  const planning::JointGroup group = planning::JointGroup::of(checker.model(), names);
+  if (start.size() != group.size() || goal.size() != group.size()) {
+    throw std::runtime_error("~start and ~goal need " + std::to_string(group.size()) + " values each");
+  }
+  auto service = std::make_shared<ServicePlanningContext>(node, group);
+  // The node sees the obstacles once a cloud is in: wait for a non-empty octree (up to 20 s).
+  std::shared_ptr<const Environment> env;
+  const double resolution = ros::param::param(node + "/resolution", 0.02);
+  for (int i = 0; i < 40 && ros::ok(); ++i, ros::WallDuration(0.5).sleep()) {
+    env = node_environment(node, resolution);
+    if (!env->octree().empty()) break;
+  }
+  if (!env || env->octree().empty()) throw std::runtime_error("the node's octree stayed empty (no obstacle cloud?)");
+  const std::string world = ros::param::param<std::string>(node + "/world_frame", "");
+  const RobotModel& model = checker.model();
+  auto context = std::make_shared<planning::CheckerPlanningContext>(checker, env, group, current_state(model));
+  context->root_pose = root_pose(world, model.links()[model.root_link()].name);
+
+  auto space = group.make_space();
+  og::SimpleSetup in_process(space);
+  in_process.setStateValidityChecker(std::make_shared<planning::CheckerStateValidityChecker>(in_process.getSpaceInformation(), context));
+  in_process.getSpaceInformation()->setMotionValidator(
+      std::make_shared<planning::CheckerMotionValidator>(in_process.getSpaceInformation(), context));
+  og::SimpleSetup through_node(group.make_space());
+  through_node.setStateValidityChecker(std::make_shared<ServiceStateValidityChecker>(through_node.getSpaceInformation(), service));
+  through_node.getSpaceInformation()->setMotionValidator(
+      std::make_shared<ServiceMotionValidator>(through_node.getSpaceInformation(), service));
+
+  std::printf("plan_demo: RRTConnect for %zu joints in the node's octree (%zu nodes), up to %.0f s per run\n",
+              group.size(), env->octree().node_count(), seconds);
+  double straight = 0.0;
+  const bool straight_free = service->motion_valid(start.data(), goal.data(), &straight);
+  std::printf("  the straight motion from start to goal: %s\n",
+              straight_free ? "free" : ("colliding (free up to " + std::to_string(straight) + " of the way)").c_str());
+  print_header();
+  const PlanRun local = plan("in-process", in_process, *context->counters, start, goal, seconds);
+  print_run(local);
+  const PlanRun remote = plan("through the services", through_node, *service->counters, start, goal, seconds);
+  print_run(remote);
+  const bool certified = certify(*service, local) & certify(*service, remote);
+
+  ros::NodeHandle nh;
+  ros::Publisher marker = nh.advertise<visualization_msgs::Marker>("planned_path", 1, true);
+  int tool = model.link_index(pnh.param<std::string>("tool_link", ""));
+  if (tool < 0) tool = static_cast<int>(model.links().size()) - 1;
+  if (local.solved) marker.publish(path_marker(*context, local, world.empty() ? model.links()[model.root_link()].name : world, tool));
+  const double hold = pnh.param("hold", 0.0);  // keep the latched path up for rviz this long
+  if (hold > 0) ros::WallDuration(hold).sleep();
+  return local.solved && remote.solved && certified ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace bvh_collision
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "plan_demo");
+  ros::NodeHandle pnh("~");
+  ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+  try {
+    return bvh_collision::run(pnh);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "plan_demo: %s\n", e.what());
+    return 1;
+  }
+}

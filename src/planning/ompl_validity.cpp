@@ -1,0 +1,158 @@
+#include "bvh_collision/planning/ompl_validity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <ompl/base/SpaceInformation.h>
+
+namespace bvh_collision::planning {
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+const double* values(const ompl::base::State* state) {
+  return state->as<ompl::base::RealVectorStateSpace::StateType>()->values;
+}
+
+}  // namespace
+
+JointGroup JointGroup::of(const RobotModel& model, const std::vector<std::string>& names) {
+  JointGroup g;
+  g.names = names.empty() ? model.variable_names() : names;
+  for (const std::string& name : g.names) {
+    const auto& all = model.variable_names();
+    if (std::find(all.begin(), all.end(), name) == all.end()) {
+      throw std::invalid_argument("'" + name + "' is not a joint variable of robot '" + model.name() + "'");
+    }
+    const RobotJoint& joint = model.joints()[model.joint_index(name)];
+    const bool limited = joint.bounded && std::isfinite(joint.lower) && std::isfinite(joint.upper);
+    g.lower.push_back(limited ? joint.lower : -kPi);
+    g.upper.push_back(limited ? joint.upper : kPi);
+  }
+  return g;
+}
+
+std::shared_ptr<ompl::base::RealVectorStateSpace> JointGroup::make_space() const {
+  auto space = std::make_shared<ompl::base::RealVectorStateSpace>(static_cast<unsigned>(size()));
+  ompl::base::RealVectorBounds bounds(static_cast<unsigned>(size()));
+  for (std::size_t i = 0; i < size(); ++i) {
+    bounds.setLow(static_cast<unsigned>(i), lower[i]);
+    bounds.setHigh(static_cast<unsigned>(i), upper[i]);
+    space->setDimensionName(static_cast<unsigned>(i), names[i]);
+  }
+  space->setBounds(bounds);
+  return space;
+}
+
+ValidityTimer::~ValidityTimer() {
+  const auto spent = std::chrono::steady_clock::now() - start_;
+  counters_->nanoseconds += static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(spent).count());
+}
+
+CheckerPlanningContext::CheckerPlanningContext(CollisionChecker checker_, std::shared_ptr<const Environment> environment_,
+                                               JointGroup group_, std::vector<double> base_state_)
+    : checker(std::move(checker_)),
+      environment(std::move(environment_)),
+      group(std::move(group_)),
+      base_state(std::move(base_state_)) {
+  const RobotModel& model = checker.model();
+  if (base_state.size() != model.variable_count()) {
+    throw std::invalid_argument("the base state has " + std::to_string(base_state.size()) + " values; robot '" +
+                                model.name() + "' has " + std::to_string(model.variable_count()) + " variables");
+  }
+  if (!environment) throw std::invalid_argument("no environment to plan in");
+  for (const std::string& name : group.names) {
+    const auto& all = model.variable_names();
+    const auto it = std::find(all.begin(), all.end(), name);
+    if (it == all.end()) throw std::invalid_argument("'" + name + "' is not a joint variable of the robot");
+    variables_.push_back(static_cast<int>(it - all.begin()));
+  }
+}
+
+std::vector<double> CheckerPlanningContext::full_state(const ompl::base::State* state) const {
+  std::vector<double> full = base_state;
+  const double* v = values(state);
+  for (std::size_t i = 0; i < variables_.size(); ++i) full[variables_[i]] = v[i];
+  return full;
+}
+
+CheckerStateValidityChecker::CheckerStateValidityChecker(const ompl::base::SpaceInformationPtr& si,
+                                                         std::shared_ptr<const CheckerPlanningContext> context)
+    : ompl::base::StateValidityChecker(si), context_(std::move(context)) {
+  specs_.clearanceComputationType = ompl::base::StateValidityCheckerSpecs::EXACT;
+}
+
+bool CheckerStateValidityChecker::isValid(const ompl::base::State* state) const {
+  const CheckerPlanningContext& c = *context_;
+  ++c.counters->states;
+  ValidityTimer timer(c.counters.get());
+  const std::vector<double> q = c.full_state(state);
+  BatchRequest request;
+  request.self = c.self;
+  request.environment = c.obstacles;
+  request.tolerance = c.tolerance;
+  request.root_pose = c.root_pose;
+  return c.checker.check_batch(q.data(), 1, c.environment.get(), request).front() == 0;
+}
+
+double CheckerStateValidityChecker::clearance(const ompl::base::State* state) const {
+  const CheckerPlanningContext& c = *context_;
+  ValidityTimer timer(c.counters.get());
+  const std::vector<double> q = c.full_state(state);
+  double nearest = std::numeric_limits<double>::infinity();
+  if (c.self) {
+    SelfCollisionRequest request;
+    request.distance = true;
+    request.all_pairs = true;
+    const SelfCollisionResult r = c.checker.check_self(q.data(), request);
+    nearest = r.collision ? 0.0 : std::min(nearest, r.min_distance);
+  }
+  if (c.obstacles && nearest > 0.0) {
+    EnvironmentRequest request;
+    request.distance = true;
+    request.all_links = true;
+    request.contacts = false;
+    request.root_pose = c.root_pose;
+    const EnvironmentResult r = c.checker.check_environment(q.data(), *c.environment, request);
+    nearest = r.collision ? 0.0 : std::min(nearest, r.min_distance);
+  }
+  return nearest;
+}
+
+CheckerMotionValidator::CheckerMotionValidator(const ompl::base::SpaceInformationPtr& si,
+                                               std::shared_ptr<const CheckerPlanningContext> context)
+    : ompl::base::MotionValidator(si), context_(std::move(context)) {}
+
+MotionResult CheckerMotionValidator::check(const ompl::base::State* s1, const ompl::base::State* s2) const {
+  const CheckerPlanningContext& c = *context_;
+  ++c.counters->motions;
+  ValidityTimer timer(c.counters.get());
+  const std::vector<double> a = c.full_state(s1), b = c.full_state(s2);
+  MotionRequest request;
+  request.self = c.self;
+  request.environment = c.obstacles;
+  request.tolerance = c.tolerance;
+  request.root_pose = c.root_pose;
+  return c.checker.check_motion(a.data(), b.data(), *c.environment, request);
+}
+
+bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const {
+  const bool free = check(s1, s2).valid;
+  ++(free ? valid_ : invalid_);
+  return free;
+}
+
+bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
+                                         std::pair<ompl::base::State*, double>& last_valid) const {
+  const MotionResult r = check(s1, s2);
+  if (!r.valid) {
+    last_valid.second = r.last_valid_fraction;
+    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, r.last_valid_fraction, last_valid.first);
+  }
+  ++(r.valid ? valid_ : invalid_);
+  return r.valid;
+}
+
+}  // namespace bvh_collision::planning

@@ -1,0 +1,144 @@
+// OMPL over the checker in-process (planning/ompl_validity.h): RRTConnect plans the demo arm
+// around a pillar its straight motion runs into, and every segment of the path it returns is free
+// by the certified check_motion and by a dense sweep (an independent brute-force check: states
+// 1e-3 rad apart, each checked exactly); the validators agree with the checker's own queries,
+// count the planner's calls, and refuse a group or state that does not fit the robot.
+#include <gtest/gtest.h>
+
+#include <ompl/base/ScopedState.h>
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "bvh_collision/planning/ompl_validity.h"
+#include "checker_fixtures.h"
+
+namespace bvh_collision::planning {
+namespace {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+// The demo arm's scene: the pillar of demo.launch (0.12 x 0.12 x 0.8 m at (0.45, 0.35, 0.4)).
+std::shared_ptr<const Environment> pillar_scene() {
+  auto env = std::make_shared<Environment>(0.02);
+  env->add_object("pillar", ObjectShape::box(Vec3(0.12, 0.12, 0.8)), Transform::Translation(Vec3(0.45, 0.35, 0.4)));
+  return env;
+}
+
+const std::vector<std::string> kArm = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
+// Leaning forward at 1 rad, swung from +x past the pillar (at about 0.66 rad of joint1).
+const std::vector<double> kStart = {0.0, 1.0, 0.0, 0.0, 0.0, 0.0}, kGoal = {1.3, 1.0, 0.0, 0.0, 0.0, 0.0};
+
+std::shared_ptr<CheckerPlanningContext> demo_context() {
+  const CollisionChecker checker = test::demo_arm_checker();
+  std::vector<double> base(checker.model().variable_count(), 0.0);
+  return std::make_shared<CheckerPlanningContext>(checker, pillar_scene(), JointGroup::of(checker.model(), kArm), base);
+}
+
+// Exact checks every `step` of joint motion (max norm), both ends included: a brute-force sweep.
+bool dense_sweep_free(const CheckerPlanningContext& c, const std::vector<double>& a, const std::vector<double>& b,
+                      double step) {
+  double longest = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) longest = std::max(longest, std::abs(b[i] - a[i]));
+  const int n = std::max(1, static_cast<int>(std::ceil(longest / step)));
+  ob::RealVectorStateSpace space(static_cast<unsigned>(a.size()));
+  ob::State* s = space.allocState();
+  bool free = true;
+  for (int k = 0; k <= n && free; ++k) {
+    double* v = s->as<ob::RealVectorStateSpace::StateType>()->values;
+    for (std::size_t i = 0; i < a.size(); ++i) v[i] = a[i] + (b[i] - a[i]) * k / n;
+    const std::vector<double> q = c.full_state(s);
+    free = !c.checker.check_self(q.data()).collision && !c.checker.check_environment(q.data(), *c.environment).collision;
+  }
+  space.freeState(s);
+  return free;
+}
+
+TEST(OmplValidity, RrtConnectPlansAroundThePillarAndEverySegmentIsFree) {
+  ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+  ompl::RNG::setSeed(3);
+  const auto context = demo_context();
+  og::SimpleSetup setup(context->group.make_space());
+  setup.setStateValidityChecker(std::make_shared<CheckerStateValidityChecker>(setup.getSpaceInformation(), context));
+  setup.getSpaceInformation()->setMotionValidator(std::make_shared<CheckerMotionValidator>(setup.getSpaceInformation(), context));
+  ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
+  for (std::size_t i = 0; i < kArm.size(); ++i) start[i] = kStart[i], goal[i] = kGoal[i];
+  setup.setStartAndGoalStates(start, goal);
+  setup.setPlanner(std::make_shared<og::RRTConnect>(setup.getSpaceInformation()));
+
+  // The straight motion runs into the pillar: planning is needed.
+  ASSERT_FALSE(setup.getSpaceInformation()->checkMotion(start.get(), goal.get()));
+  ASSERT_FALSE(dense_sweep_free(*context, kStart, kGoal, 1e-3));
+  context->counters->reset();
+  ASSERT_EQ(setup.solve(20.0), ob::PlannerStatus::EXACT_SOLUTION);
+  setup.simplifySolution();
+  EXPECT_GT(context->counters->states.load(), 0u);
+  EXPECT_GT(context->counters->motions.load(), 0u);
+  EXPECT_GT(context->counters->seconds(), 0.0);
+
+  const og::PathGeometric& path = setup.getSolutionPath();
+  ASSERT_GE(path.getStateCount(), 3u) << "a detour has at least one waypoint between start and goal";
+  for (std::size_t w = 0; w + 1 < path.getStateCount(); ++w) {
+    const std::vector<double> a = context->full_state(path.getState(w)), b = context->full_state(path.getState(w + 1));
+    MotionRequest certified;
+    EXPECT_TRUE(context->checker.check_motion(a.data(), b.data(), *context->environment, certified).valid) << "segment " << w;
+    std::vector<double> ga(a.begin(), a.begin() + 6), gb(b.begin(), b.begin() + 6);
+    EXPECT_TRUE(dense_sweep_free(*context, ga, gb, 1e-3)) << "segment " << w;
+  }
+}
+
+TEST(OmplValidity, ValidatorsAgreeWithTheCheckersOwnQueries) {
+  const auto context = demo_context();
+  auto si = std::make_shared<ob::SpaceInformation>(context->group.make_space());
+  CheckerStateValidityChecker states(si, context);
+  CheckerMotionValidator motions(si, context);
+  ob::ScopedState<> s(si->getStateSpace()), t(si->getStateSpace());
+  std::mt19937_64 rng(5);
+  int valid = 0, invalid = 0;
+  for (int i = 0; i < test::sized(200); ++i) {
+    s.random();
+    const std::vector<double> q = context->full_state(s.get());
+    const bool colliding = context->checker.check_self(q.data()).collision ||
+                           context->checker.check_environment(q.data(), *context->environment).collision;
+    EXPECT_EQ(states.isValid(s.get()), !colliding) << i;
+    (colliding ? invalid : valid)++;
+    const double clearance = states.clearance(s.get());
+    if (colliding) EXPECT_EQ(clearance, 0.0);
+    if (!colliding) EXPECT_GT(clearance, 0.0);
+  }
+  EXPECT_GT(valid, 0);
+  EXPECT_GT(invalid, 0);
+  // The motion validator: the last valid state lies on the segment at the fraction it reports,
+  // and the state there is free.
+  for (std::size_t i = 0; i < kArm.size(); ++i) s[i] = kStart[i], t[i] = kGoal[i];
+  ob::State* last = si->allocState();
+  std::pair<ob::State*, double> last_valid(last, -1.0);
+  ASSERT_FALSE(motions.checkMotion(s.get(), t.get(), last_valid));
+  EXPECT_GT(last_valid.second, 0.0);
+  EXPECT_LT(last_valid.second, 1.0);
+  EXPECT_TRUE(states.isValid(last));
+  EXPECT_EQ(motions.getCheckedMotionCount(), 1u);
+  EXPECT_EQ(motions.getInvalidMotionCount(), 1u);
+  si->freeState(last);
+}
+
+TEST(OmplValidity, BadGroupsAndStatesAreNamed) {
+  const CollisionChecker checker = test::demo_arm_checker();
+  EXPECT_THROW(JointGroup::of(checker.model(), {"joint1", "no_such_joint"}), std::invalid_argument);
+  EXPECT_THROW(JointGroup::of(checker.model(), {"hand_joint"}), std::invalid_argument) << "a fixed joint is no variable";
+  const JointGroup all = JointGroup::of(checker.model());
+  EXPECT_EQ(all.size(), checker.model().variable_count());
+  EXPECT_EQ(all.lower[0], -2.9);
+  EXPECT_EQ(all.upper[0], 2.9);
+  EXPECT_THROW(CheckerPlanningContext(checker, pillar_scene(), all, std::vector<double>(3, 0.0)), std::invalid_argument);
+  EXPECT_THROW(CheckerPlanningContext(checker, nullptr, all, std::vector<double>(checker.model().variable_count(), 0.0)),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bvh_collision::planning
