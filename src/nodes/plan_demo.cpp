@@ -61,7 +61,6 @@ std::vector<std::vector<double>> waypoints_of(const og::PathGeometric& path, std
 // checked by the same motion validator).
 PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::ValidityCounters& counters,
              const std::vector<double>& start, const std::vector<double>& goal, double seconds) {
-  ompl::RNG::setSeed(1);  // after setSeed, every run of the demo draws the same samples
   PlanRun run{name};
   ob::ScopedState<> a(setup.getStateSpace()), b(setup.getStateSpace());
   for (std::size_t i = 0; i < start.size(); ++i) a[i] = start[i], b[i] = goal[i];
@@ -255,6 +254,7 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "plan_demo");
   ros::NodeHandle pnh("~");
   ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+  ompl::RNG::setSeed(1);  // before any sampler exists: every run of the demo draws the same samples
   try {
     return bvh_collision::run(pnh);
   } catch (const std::exception& e) {

@@ -114,6 +114,9 @@ void check_structure(const std::string& bytes, OctreeFormat format, const std::s
     throw std::runtime_error(name + " does not start with '" + header + "' and a header ending in a 'data' line");
   }
   const std::size_t record = format == OctreeFormat::kBinary ? 2 : 5;  // .bt: two bytes; .ot: float and mask
+  // An empty tree ("size 0", as OctoMap and save_octree write it) has no node record at all: its
+  // data section must be empty too (check_read sees to that).
+  if (const auto declared = declared_size(bytes); declared && *declared == 0) return;
   std::vector<int> pending = {0};  // depths of the node records still to read, last first
   while (!pending.empty()) {
     const int depth = pending.back();

@@ -99,6 +99,7 @@ void CollisionCheckerNode::publish_occupied_cells(const ros::WallTimerEvent&) {
     p.z = c.z();
     m.points.push_back(p);
     m.colors.push_back(height_colour(c.z(), lo, hi));
+    m.colors.back().a = static_cast<float>(params_.marker_alpha);
   }
   visualization_msgs::MarkerArray array;
   array.markers.push_back(delete_all(params_.world_frame));
@@ -115,8 +116,10 @@ void CollisionCheckerNode::publish_contacts(const std::vector<Contact>& contacts
   visualization_msgs::MarkerArray array;
   array.markers.push_back(delete_all(params_.world_frame));
   auto points = marker(params_.world_frame, "contacts", 0, visualization_msgs::Marker::SPHERE_LIST);
-  points.scale.x = points.scale.y = points.scale.z = 0.02;
-  points.color.r = 1.0f;
+  // Cyan: no height colour of the voxels has it, and rviz draws collision geometry red.
+  points.scale.x = points.scale.y = points.scale.z = 0.03;
+  points.color.g = 1.0f;
+  points.color.b = 1.0f;
   for (const Contact& c : contacts) points.points.push_back(c.position);
   array.markers.push_back(points);
   for (std::size_t i = 0; i < contacts.size() && i < 50; ++i) {

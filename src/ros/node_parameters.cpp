@@ -154,6 +154,10 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.joint_state_timeout = read_number(nh, "joint_state_timeout", p.joint_state_timeout, false);
   p.tf_timeout = read_number(nh, "tf_timeout", p.tf_timeout, false);
   p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
+  p.marker_alpha = read_number(nh, "marker_alpha", p.marker_alpha, true);
+  if (p.marker_alpha > 1.0) {
+    throw NodeStartupError("parameter ~marker_alpha must be in (0, 1], got " + std::to_string(p.marker_alpha));
+  }
   p.service_threads = static_cast<int>(read_count(nh, "service_threads", p.service_threads, kMostServiceThreads));
   read_limits(nh, p);
   return p;

@@ -93,6 +93,7 @@ struct NodeParameters {
   // that is not static answers an error once that transform is older than this (s). 0: never.
   double tf_timeout = 1.0;
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
+  double marker_alpha = 1.0;             // opacity of the occupied_cells cubes (below 1: the cloud shows through)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
   // ~max_motion_states, ~max_batch_states, ~max_cloud_points, ~max_ray_voxels,
   // ~max_object_triangles, ~max_robot_links, ~max_checked_pairs (geometry/limits.h).
