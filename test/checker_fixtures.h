@@ -11,16 +11,6 @@
 
 namespace bvh_collision::test {
 
-// Under the sanitizers a robot's clearance grids get 512 cells a pair instead of 4096: the same
-// code on coarser grids, built in an eighth of the cells (grid filling was a fifth to a third of
-// a robot's load there, 20-40x slower than in Release). Options that set a size keep it.
-inline CheckerOptions for_this_build(CheckerOptions options) {
-  if (sanitized() && options.pair_clearance_cells == CheckerOptions{}.pair_clearance_cells) {
-    options.pair_clearance_cells = 512;
-  }
-  return options;
-}
-
 // The package's own demo arm (urdf/demo_arm.urdf: primitives only, no mesh files).
 inline RobotModel demo_arm_model() {
   return RobotModel::from_urdf(*load_robot_description_file(source_dir() + "/urdf/demo_arm.urdf"), PackageResolver({}));
@@ -29,14 +19,14 @@ inline RobotModel demo_arm_model() {
 inline CollisionChecker demo_arm_checker(const CheckerOptions& options = {}) {
   RobotModel model = demo_arm_model();
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm), for_this_build(options));
+  return CollisionChecker(std::move(model), std::move(acm), options);
 }
 
 inline CollisionChecker load_checker(const std::string& robot, const CheckerOptions& options = {}) {
   const std::string dir = robots_dir() + "/" + robot;
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm), for_this_build(options));
+  return CollisionChecker(std::move(model), std::move(acm), options);
 }
 
 }  // namespace bvh_collision::test

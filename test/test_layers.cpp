@@ -10,6 +10,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -152,6 +153,38 @@ TEST(Layers, CoreLibraryLinksNoRosLibrary) {
   static const std::regex ros_lib(
       R"(lib(roscpp|rosconsole|rostime|cpp_common|xmlrpcpp|tf2|tf2_ros|message_filters|roslib)[._])");
   EXPECT_FALSE(std::regex_search(output, ros_lib)) << "core links ROS:\n" << output;
+}
+
+
+// make demo builds the `all` target only (make build-node): the node, its libraries and the
+// demo's programs. Tests and benchmarks build under make test and make bench (a fresh machine's
+// make demo took over 10 minutes when they were in it). A dry run of `all` lists what it compiles.
+TEST(Build, TheDemoBuildCompilesNoTestNorBenchmark) {
+  const std::string command = std::string("make -C '") + BVH_COLLISION_BINARY_DIR + "' -nB all 2>/dev/null";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buffer[4096];
+  for (std::size_t n; (n = fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
+  ASSERT_EQ(pclose(pipe), 0) << command;
+  const std::string source = std::string(" -c ") + BVH_COLLISION_SOURCE_DIR + "/";
+  std::istringstream lines(out);
+  int compiled = 0;
+  std::set<std::string> programs;
+  for (std::string line; std::getline(lines, line);) {
+    const std::size_t at = line.find(source);
+    if (at == std::string::npos) continue;
+    ++compiled;
+    const std::string file = line.substr(at + source.size(), line.find(' ', at + source.size()) - at - source.size());
+    EXPECT_NE(file.rfind("test/", 0), 0u) << "make demo compiles the test file " << file;
+    EXPECT_NE(file.rfind("bench/", 0), 0u) << "make demo compiles the benchmark " << file;
+    if (file.rfind("src/nodes/", 0) == 0) programs.insert(file);
+  }
+  EXPECT_GT(compiled, 40) << "the dry run listed no compilation:\n" << out.substr(0, 2000);
+  for (const char* program : {"src/nodes/collision_checker.cpp", "src/nodes/demo_scene_publisher.cpp",
+                              "src/nodes/demo_client.cpp", "src/nodes/plan_demo.cpp"}) {
+    EXPECT_TRUE(programs.count(program)) << program << " is not in make demo's build";
+  }
 }
 
 }  // namespace
