@@ -5,7 +5,7 @@
 #   make test    catkin_lint + every unit and launch test; last line `N passed, N failed, N skipped`
 #                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
 #                CI=true: both
-#   make demo    start the node on the demo robot and report what it does
+#   make demo    start the node on the demo robot and report what it does (RVIZ=true: with rviz)
 #   make bench   build and run the benchmarks (Release); build/bench/report.md with its plots
 #   make soak    the node on panda for 10 minutes under load (build/soak/soak.md); not in make test
 #   make fuzz    the libFuzzer targets (clang, ./build-fuzz), FUZZ_SECONDS each (default 60);

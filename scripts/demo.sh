@@ -17,7 +17,9 @@ port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); p
 export ROS_MASTER_URI="http://127.0.0.1:$port"
 log=$(mktemp /tmp/bvh_collision_demo.XXXXXX.log)
 export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
-roslaunch --port "$port" bvh_collision demo.launch > "$log" 2>&1 &
+# RVIZ=true (make demo RVIZ=true, on a desktop): rviz too, and the planned path stays up a minute.
+rviz=${RVIZ:-false}
+roslaunch --port "$port" bvh_collision demo.launch rviz:="$rviz" > "$log" 2>&1 &
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null; wait $launch_pid 2>/dev/null || true' EXIT
 
@@ -41,6 +43,7 @@ echo
 echo "Planning (OMPL's RRTConnect) from leaning forward on one side of the pillar to the other side,"
 echo "with the checker in-process (on a copy of the node's octree) and through the node's services:"
 # (only plan_demo's own lines: "plan_demo: ..." and its indented table)
-roslaunch bvh_collision plan_demo.launch hold:="${PLAN_DEMO_HOLD:-0}" 2>&1 | grep -E '^plan_demo: |^  [a-z]' || true
+hold=${PLAN_DEMO_HOLD:-$([[ "$rviz" == true ]] && echo 60 || echo 0)}
+roslaunch bvh_collision plan_demo.launch hold:="$hold" 2>&1 | grep -E '^plan_demo: |^  [a-z]' || true
 echo
-echo "rviz (where installed): roslaunch bvh_collision demo.launch rviz:=true"
+[[ "$rviz" == true ]] || echo "With rviz: make demo RVIZ=true (the robot, the cloud, the voxels, the contacts and the planned path)"
