@@ -157,9 +157,10 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
 bool CollisionCheckerNode::remove_collision_object(RemoveCollisionObject::Request& req,
                                                    RemoveCollisionObject::Response& res) {
   return serve("remove_collision_object", res, [&] {
-    if (!store_->modify([&](Environment& env) { return remove_object_shapes(env, req.id); })) {
-      throw RequestError("no collision object with id '" + req.id + "'");
-    }
+    // Thrown inside the change: the store then publishes nothing (an unknown id is no new snapshot).
+    store_->modify([&](Environment& env) {
+      if (!remove_object_shapes(env, req.id)) throw RequestError("no collision object with id '" + req.id + "'");
+    });
   });
 }
 
