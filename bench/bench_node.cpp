@@ -33,7 +33,7 @@ CollisionChecker load_checker(const std::string& urdf) {
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(urdf), PackageResolver::from_environment());
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   std::string srdf;
-  if (ros::param::get("/robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf), model, acm);
+  if (ros::param::get("/robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf, &model), model, acm);
   CheckerOptions options;
   options.proxy_levels = {kProxyLevel};  // as the node is started (scripts/bench_node.sh)
   return CollisionChecker(std::move(model), std::move(acm), options);

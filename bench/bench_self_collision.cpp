@@ -155,7 +155,7 @@ CollisionChecker make_checker(const Robot& r, Matrix matrix, const SampledPairs*
                               const CheckerOptions& options = {}) {
   RobotModel model = RobotModel::from_urdf(*parse_robot_description(r.urdf), PackageResolver({r.dir}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  if (matrix == Matrix::kSrdf && !r.srdf.empty()) apply_srdf(parse_srdf(r.srdf), model, acm);
+  if (matrix == Matrix::kSrdf && !r.srdf.empty()) apply_srdf(parse_srdf(r.srdf, &model), model, acm);
   if (sampled) apply_sampled_pairs(*sampled, acm);
   return CollisionChecker(std::move(model), std::move(acm), options);
 }

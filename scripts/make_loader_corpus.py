@@ -224,6 +224,11 @@ def robot_cases():
         "dae": "package://fuzz_meshes/meshes/box.dae", "missing": "package://fuzz_meshes/meshes/none.stl",
         "directory": "package://fuzz_meshes/meshes", "dev_zero": "file:///dev/zero", "dev_null": "/dev/null",
         "http": "http://example.com/box.stl", "no_package": "package://no_such_package/box.stl",
+        # issue 31: a control character in the name, as a character reference (a NUL cut the
+        # name short and box.stl loaded) or written
+        "nul_reference": "package://fuzz_meshes/meshes/box.stl&#0;x", "nul_hex_reference": "package://fuzz_meshes/meshes/box.stl&#x0;",
+        "tab_reference": "package://fuzz_meshes/meshes/box.stl&#9;", "escape_reference": "package://fuzz_meshes/meshes/box.stl&#x1b;",
+        "control_written": "package://fuzz_meshes/meshes/box.stl\x01",
         "empty_uri": "", "package_only": "package://", "relative": "meshes/box.stl", "upper_case": "package://fuzz_meshes/meshes/BOX.STL",
     }.items():
         cases.append(("mesh_uri_" + name, small_robot({"MESH": mesh % uri})))
@@ -261,6 +266,8 @@ def robot_cases():
     }
     for name, change in structure.items():
         cases.append((name, small_robot(change)))
+    # issue 31: links and moving joints but no collision geometry (the CLI answered "0 free")
+    cases.append(("no_collision_geometry", re.sub(r"<collision>.*?</collision>", "", small_robot())))
     seed = small_robot()
     for f in (0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99):
         cases.append(("truncated_%d" % int(f * 100), seed[: int(len(seed) * f)]))
@@ -272,6 +279,9 @@ def robot_cases():
 
 
 # ------------------------------------------------------------------ SRDF
+
+VIRTUAL = '<virtual_joint name="root_joint" type="floating" parent_frame="world" child_link="a"/>'
+
 
 def srdf_cases():
     body = ('<robot name="r"><disable_collisions link1="a" link2="b" reason="Adjacent"/>'
@@ -290,6 +300,20 @@ def srdf_cases():
         "state_no_value": (' value="0.5"', ""), "state_unknown_group": ('group="g"', 'group="nothing"'),
         "wrong_root": ("<robot name=\"r\">", "<srdf name=\"r\">"), "truncated": (body, body[: len(body) // 2]),
         "not_xml": (body, "nothing at all"), "empty": (body, ""),
+        # issue 31: multi-DOF joints take a list (floating: x y z qx qy qz qw; planar: x y theta)
+        "state_floating": ("<group ", VIRTUAL + '<group_state name="half_sitting" group="g"><joint name="root_joint" '
+                           'value="0. 0. 1.01927 0. 0. 0. 1."/></group_state><group '),
+        "state_floating_not_unit": ("<group ", VIRTUAL + '<group_state name="s" group="g"><joint name="root_joint" '
+                                    'value="1 2 3 0 0 0 2"/></group_state><group '),
+        "state_floating_six": ("<group ", VIRTUAL + '<group_state name="s" group="g"><joint name="root_joint" '
+                               'value="0 0 1 0 0 1"/></group_state><group '),
+        "state_floating_zero_quaternion": ("<group ", VIRTUAL + '<group_state name="s" group="g"><joint name="root_joint" '
+                                           'value="0 0 1 0 0 0 0"/></group_state><group '),
+        "state_planar": ('<joint name="j1" value="0.5"/>', '<joint name="j1" value="0.5"/><joint name="j4" value="0.5 -0.25 1."/>'),
+        "state_planar_two": ('<joint name="j1" value="0.5"/>', '<joint name="j1" value="0.5"/><joint name="j4" value="1 2"/>'),
+        "state_revolute_two": ('value="0.5"', 'value="0.5 0.25"'),
+        "state_fixed_value": ('<joint name="j1" value="0.5"/>', '<joint name="j1" value="0.5"/><joint name="j2" value="0"/>'),
+        "virtual_unknown_type": ("<group ", VIRTUAL.replace("floating", "hinge") + "<group "),
         "duplicate_state": ('</group_state>', '</group_state><group_state name="home" group="g"><joint name="j1" value="0"/></group_state>'),
     }.items():
         cases.append((name, body.replace(old, new, 1)))
@@ -464,7 +488,7 @@ def clear_box(lo=(-0.1, -0.1, -0.1), hi=(0.1, 0.1, 0.1)):
 
 POSE = ((0, 0, 0), (0, 0, 0, 1))
 URIS = ["", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl", "file:///nonexistent.stl",
-        "/etc/hostname"]
+        "/etc/hostname", "package://bvh_collision/test/fuzz/meshes/box.stl\0x"]
 
 
 def pose(p=POSE):
@@ -529,6 +553,7 @@ def service_cases():
         ("object_shape_zero_quaternion", set_object(primitive_poses=(((0, 0, 0), (0, 0, 0, 0)),))),
         ("object_empty_id", set_object(ident="")), ("object_kind_0", set_object(primitives=((0, (1,)),))),
         ("object_kind_5", set_object(primitives=((5, (1,)),))),
+        ("object_mesh_nul_in_uri", set_object(primitives=(), resources=(URIS[5],))),
         ("object_zero_scale", set_object(primitives=(), resources=("package://bvh_collision/test/fuzz/meshes/box.stl",), scales=((0, 1, 1),))),
         ("remove", bytes([7]) + name("box")), ("remove_unknown", bytes([7]) + name("nothing")), ("empty", b""),
     ]

@@ -93,7 +93,7 @@ inline CollisionChecker library_checker(const std::string& urdf_path) {
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   std::string srdf;
   if (ros::param::get("/robot_description_semantic", srdf) && !srdf.empty()) {
-    apply_srdf(parse_srdf(srdf), model, acm);
+    apply_srdf(parse_srdf(srdf, &model), model, acm);
   }
   return CollisionChecker(std::move(model), std::move(acm));
 }

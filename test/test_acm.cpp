@@ -63,7 +63,7 @@ TEST(AllowedCollisionMatrix, RealSrdfs) {
     SCOPED_TRACE(robot);
     const std::string dir = test::robots_dir() + "/" + robot;
     const RobotModel m = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-    const Srdf srdf = parse_srdf(read_file(dir + "/robot.srdf"));
+    const Srdf srdf = parse_srdf(read_file(dir + "/robot.srdf"), &m);
     if (disabled > 0) {
       EXPECT_EQ(srdf.disabled_pairs.size(), disabled);
     }
@@ -96,7 +96,7 @@ TEST(AllowedCollisionMatrix, EnableWinsOverDisable) {
   EXPECT_TRUE(acm.allowed(m.link_index("b"), m.link_index("c")));
   EXPECT_EQ(acm.reason(m.link_index("b"), m.link_index("c")), AcmReason::kSrdfDefault);
   EXPECT_FALSE(acm.allowed(m.link_index("a"), m.link_index("c"))) << "enable_collisions wins";
-  EXPECT_DOUBLE_EQ(srdf.group_states.at("home").at("j1"), 0.5);
+  EXPECT_EQ(srdf.group_states.at("home").at("j1").values, std::vector<double>{0.5});
 }
 
 TEST(AllowedCollisionMatrix, MalformedSrdfIsAnError) {
@@ -126,7 +126,108 @@ TEST(AllowedCollisionMatrix, GroupStateValuesAreFiniteNumbers) {
     }
   }
   EXPECT_DOUBLE_EQ(parse_srdf("<robot name=\"r\"><group_state name=\"h\" group=\"a\"><joint name=\"j\" value=\"+1.5e-1\"/>"
-                              "</group_state></robot>").group_states.at("h").at("j"), 0.15);
+                              "</group_state></robot>").group_states.at("h").at("j").values.at(0), 0.15);
+}
+
+// A humanoid with a floating base, as MoveIt loads it: the base is a <virtual_joint> of the SRDF
+// and a <group_state> gives it all seven values in one attribute (x y z qx qy qz qw), written
+// with trailing points as the public description does. srdfdom reads a list; it was refused as
+// "not a finite number".
+const char* const kHumanoidUrdf =
+    "<robot name=\"humanoid\">"
+    "<link name=\"base_link\"><collision><geometry><box size=\"0.3 0.2 0.2\"/></geometry></collision></link>"
+    "<link name=\"leg\"><collision><geometry><cylinder radius=\"0.05\" length=\"0.6\"/></geometry></collision></link>"
+    "<joint name=\"hip\" type=\"revolute\"><parent link=\"base_link\"/><child link=\"leg\"/>"
+    "<origin xyz=\"0 0 -0.4\"/><axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+    "</robot>";
+
+std::string humanoid_srdf(const std::string& root_value) {
+  return "<robot name=\"humanoid\">\n"
+         "<virtual_joint name=\"root_joint\" type=\"floating\" parent_frame=\"world\" child_link=\"base_link\"/>\n"
+         "<group_state name=\"half_sitting\" group=\"all\">\n"
+         "<joint name=\"root_joint\" value=\"" + root_value + "\" />\n"
+         "<joint name=\"hip\" value=\"-0.4\" />\n"
+         "</group_state>\n</robot>";
+}
+
+TEST(AllowedCollisionMatrix, FloatingBaseGroupStateIsAList) {
+  const RobotModel m = model_from(kHumanoidUrdf);
+  const Srdf srdf = parse_srdf(humanoid_srdf("0. 0. 1.01927 0. 0. 0. 1."), &m);
+  ASSERT_EQ(srdf.virtual_joints.size(), 1u);
+  EXPECT_EQ(srdf.virtual_joints[0].type, JointType::kFloating);
+  EXPECT_EQ(srdf.virtual_joints[0].child_link, "base_link");
+  const auto& state = srdf.group_states.at("half_sitting");
+  EXPECT_EQ(state.at("root_joint").values, (std::vector<double>{0, 0, 1.01927, 0, 0, 0, 1}));
+  EXPECT_EQ(state.at("hip").values, std::vector<double>{-0.4});
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(m);
+  EXPECT_TRUE(apply_srdf(srdf, m, acm).empty());
+  // Without the model the virtual joint is still known: its count is checked all the same.
+  EXPECT_EQ(parse_srdf(humanoid_srdf("1 2 3 0 0 0 1")).group_states.at("half_sitting").at("root_joint").values.size(), 7u);
+}
+
+TEST(AllowedCollisionMatrix, FloatingBaseQuaternionIsNormalisedOrRefused) {
+  const RobotModel m = model_from(kHumanoidUrdf);
+  // A quaternion of length 2 (and one of tiny length, whose squares underflow) becomes unit.
+  for (const std::string& value : {"1 2 3 0 0 0 2", "1 2 3 0 0 0 1e-200", "1 2 3 0 0 3e200 4e200"}) {
+    const std::vector<double> v = parse_srdf(humanoid_srdf(value), &m).group_states.at("half_sitting").at("root_joint").values;
+    ASSERT_EQ(v.size(), 7u) << value;
+    EXPECT_EQ(v[0], 1.0);
+    EXPECT_EQ(v[2], 3.0);
+    EXPECT_NEAR(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6], 1.0, 1e-15) << value;
+  }
+  try {
+    parse_srdf(humanoid_srdf("0 0 1 0 0 0 0"), &m);
+    ADD_FAILURE() << "a zero quaternion parsed";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 'root_joint' (floating) has a zero quaternion"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("<group_state name=\"half_sitting\"> (line 4)"), std::string::npos) << e.what();
+  }
+}
+
+// A planar joint in the URDF (x y theta), and one as the SRDF's virtual joint of a mobile base.
+TEST(AllowedCollisionMatrix, PlanarGroupStatesTakeThreeValues) {
+  const RobotModel m = model_from(
+      "<robot name=\"rover\"><link name=\"floor\"/>"
+      "<link name=\"body\"><collision><geometry><box size=\"0.5 0.4 0.2\"/></geometry></collision></link>"
+      "<joint name=\"drive\" type=\"planar\"><parent link=\"floor\"/><child link=\"body\"/><axis xyz=\"0 0 1\"/></joint></robot>");
+  const Srdf srdf = parse_srdf(
+      "<robot name=\"rover\"><virtual_joint name=\"odom\" type=\"planar\" parent_frame=\"map\" child_link=\"floor\"/>"
+      "<group_state name=\"parked\" group=\"base\"><joint name=\"drive\" value=\"0.5 -0.25 1.\"/>"
+      "<joint name=\"odom\" value=\"10 20 -3.\"/></group_state></robot>", &m);
+  EXPECT_EQ(srdf.group_states.at("parked").at("drive").values, (std::vector<double>{0.5, -0.25, 1.0}));
+  EXPECT_EQ(srdf.group_states.at("parked").at("odom").values, (std::vector<double>{10, 20, -3}));
+  EXPECT_EQ(group_state_value_count(JointType::kPlanar), 3u);
+  EXPECT_EQ(group_state_value_count(JointType::kFloating), 7u);
+  EXPECT_EQ(group_state_value_count(JointType::kFixed), 0u);
+  EXPECT_EQ(group_state_value_count(JointType::kContinuous), 1u);
+}
+
+// A wrong count is refused by name: the state, the joint, its type, the count it needs and got.
+TEST(AllowedCollisionMatrix, WrongValueCountIsRefusedByName) {
+  const RobotModel m = model_from(kHumanoidUrdf);
+  const std::pair<std::string, std::string> cases[] = {
+      {humanoid_srdf("0 0 1 0 0 1"), "joint 'root_joint' (floating) needs 7 values (x y z qx qy qz qw), got 6"},
+      {humanoid_srdf("0 0 1 0 0 0 1 0"), "joint 'root_joint' (floating) needs 7 values (x y z qx qy qz qw), got 8"},
+      {"<robot name=\"h\"><group_state name=\"s\" group=\"g\"><joint name=\"hip\" value=\"0.1 0.2\"/></group_state></robot>",
+       "joint 'hip' (revolute) needs 1 value, got 2"},
+      {"<robot name=\"h\"><virtual_joint name=\"v\" type=\"planar\" parent_frame=\"w\" child_link=\"base_link\"/>"
+       "<group_state name=\"s\" group=\"g\"><joint name=\"v\" value=\"1 2\"/></group_state></robot>",
+       "joint 'v' (planar) needs 3 values (x y theta), got 2"},
+      {"<robot name=\"h\"><virtual_joint name=\"v\" type=\"fixed\" parent_frame=\"w\" child_link=\"base_link\"/>"
+       "<group_state name=\"s\" group=\"g\"><joint name=\"v\" value=\"1\"/></group_state></robot>",
+       "joint 'v' (fixed) needs 0 values, got 1"},
+      {humanoid_srdf("0 0 1 0 0 0 1.x"), "'1.x' is not a finite number"},
+      {humanoid_srdf("   "), "holds no number"},
+      {"<robot name=\"h\"><virtual_joint name=\"v\" type=\"hinge\" parent_frame=\"w\" child_link=\"base_link\"/></robot>",
+       "<virtual_joint name=\"v\"> (line 1): type 'hinge' is not fixed, floating or planar"}};
+  for (const auto& [xml, reason] : cases) {
+    try {
+      parse_srdf(xml, &m);
+      ADD_FAILURE() << xml << " parsed";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

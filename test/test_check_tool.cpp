@@ -115,5 +115,71 @@ TEST(CheckTool, ErrorsGoToStderrWithNonZeroExit) {
   }
 }
 
+// Issue 31, the three loader answers that were wrong, through the CLI as a user meets them.
+// 1. A floating-base humanoid's SRDF, as MoveIt loads it: a <group_state> gives the virtual
+//    joint all seven values in one attribute. It stopped the tool ("is not a finite number").
+TEST(CheckTool, FloatingBaseGroupStateIsAccepted) {
+  const std::string urdf = write_states(
+      "<robot name='humanoid'><link name='base_link'><collision><geometry><box size='0.3 0.2 0.2'/></geometry></collision></link>"
+      "<link name='leg'><collision><geometry><cylinder radius='0.05' length='0.6'/></geometry></collision></link>"
+      "<joint name='hip' type='revolute'><parent link='base_link'/><child link='leg'/><origin xyz='0 0 -0.5'/>"
+      "<axis xyz='0 1 0'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>");
+  const std::string srdf = write_states(
+      "<robot name='humanoid'>\n<virtual_joint name='root_joint' type='floating' parent_frame='world' child_link='base_link'/>\n"
+      "<group_state name='half_sitting' group='all'>\n<joint name='root_joint' value='0. 0. 1.01927 0. 0. 0. 1.' />\n"
+      "<joint name='hip' value='-0.4' />\n</group_state>\n</robot>\n");
+  const ToolRun ok = run({"--urdf", urdf, "--srdf", srdf, "--states", write_states("joints: hip\n0.5\n")});
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_EQ(ok.out, "0 free\n");
+  // A wrong count is still refused, by name.
+  const ToolRun bad = run({"--urdf", urdf, "--srdf",
+                           write_states("<robot name='humanoid'><virtual_joint name='root_joint' type='floating' parent_frame='w' "
+                                        "child_link='base_link'/><group_state name='s' group='all'>"
+                                        "<joint name='root_joint' value='0 0 1 0 0 1'/></group_state></robot>"),
+                           "--states", write_states("joints: hip\n0.5\n")});
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("joint 'root_joint' (floating) needs 7 values (x y z qx qy qz qw), got 6"), std::string::npos) << bad.err;
+}
+
+// 2. A robot without any collision geometry printed "0 free" and exited 0; the node answers every
+//    query on it with an error. Same rule here: an error naming the robot.
+TEST(CheckTool, RobotWithoutCollisionGeometryIsAnError) {
+  const std::string urdf = write_states(
+      "<robot name='ghost'><link name='a'/><link name='b'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+      "<axis xyz='0 0 1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>");
+  for (const auto& args : std::vector<std::vector<std::string>>{{"--urdf", urdf, "--states", write_states("joints: j\n0\n")},
+                                                                {"--urdf", urdf, "--print-acm"}}) {
+    const ToolRun r = run(args);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    EXPECT_NE(r.err.find("robot 'ghost' has no collision geometry: there is nothing to check"), std::string::npos) << r.err;
+  }
+}
+
+// 3. A mesh file name with a NUL character reference: tinyxml2 cut the name at the NUL and the
+//    tool loaded the file before it. A control character in the name, referenced or written, is
+//    an error naming the link and the element.
+TEST(CheckTool, MeshFileNameWithAControlCharacterIsAnError) {
+  const std::string stl = write_states(
+      "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n");
+  const std::string states = write_states("joints:\n\n");
+  const ToolRun clean = run({"--urdf", write_states("<robot name='r'><link name='arm'><collision><geometry><mesh filename='file://" + stl +
+                                                    "'/></geometry></collision></link></robot>"),
+                             "--states", states});
+  ASSERT_EQ(clean.code, 0) << clean.err << " (the file itself loads)";
+  for (const std::string& suffix : {"&#0;x", "&#x0;", "&#00;", "&#9;", "&#x1F;", "&#127;", "\x01"}) {
+    const ToolRun r = run({"--urdf", write_states("<robot name='r'><link name='base'/><link name='arm'>"
+                                                  "<collision><geometry><box size='1 1 1'/></geometry></collision>"
+                                                  "<collision><geometry><mesh filename='file://" + stl + suffix +
+                                                  "'/></geometry></collision></link><joint name='j' type='fixed'>"
+                                                  "<parent link='base'/><child link='arm'/></joint></robot>"),
+                           "--states", states});
+    EXPECT_EQ(r.code, 1) << suffix;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    EXPECT_NE(r.err.find("link 'arm', collision element 2: <mesh> attribute 'filename' holds a control character"),
+              std::string::npos) << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace bvh_collision

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"
 
@@ -280,6 +281,38 @@ TEST(RobotDescription, OnlyRegularFilesAreRead) {
     } catch (const RobotDescriptionError& e) {
       EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
     }
+  }
+}
+
+// A mesh file name holding a control character: "&#0;" became a NUL that ended the C string, so
+// "mesh.stl&#0;x" loaded mesh.stl. Refused before any file is opened, naming link and element;
+// the resolver refuses such a URI too (the service path: a ROS string may hold a NUL).
+TEST(RobotDescription, ControlCharactersInMeshFileNamesAreRefused) {
+  for (const std::string& name : {"mesh.stl&#0;x", "mesh.stl&#x00;", "me&#10;sh.stl", "mesh.stl&#X1f;", "mesh.stl&#127;",
+                                  "mesh\x02.stl"}) {
+    try {
+      parse_robot_description("<robot name='r'><link name='arm'><collision><geometry><mesh filename='file:///tmp/" + name +
+                              "'/></geometry></collision></link></robot>");
+      ADD_FAILURE() << name << " parsed";
+    } catch (const RobotDescriptionError& e) {
+      EXPECT_NE(std::string(e.what()).find("link 'arm', collision element 1: <mesh> attribute 'filename' holds a control character"),
+                std::string::npos) << e.what();
+    }
+  }
+  // Character references to other characters are names like any other.
+  const auto model = parse_robot_description(
+      "<robot name='r'><link name='arm'><collision><geometry><mesh filename='file:///tmp/m&#233;sh&#32;&amp;.stl'/>"
+      "</geometry></collision></link></robot>");
+  const auto* mesh = dynamic_cast<const urdf::Mesh*>(model->getLink("arm")->collision->geometry.get());
+  ASSERT_NE(mesh, nullptr);
+  EXPECT_EQ(mesh->filename, "file:///tmp/m\xc3\xa9sh &.stl");
+  const PackageResolver resolver({});
+  EXPECT_EQ(resolver.resolve("file:///tmp/box.stl"), "/tmp/box.stl");
+  try {
+    resolver.resolve(std::string("file:///tmp/box.stl\0x", 21));
+    ADD_FAILURE() << "a URI with a NUL resolved";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("holds a control character (U+0000 at byte 19)"), std::string::npos) << e.what();
   }
 }
 

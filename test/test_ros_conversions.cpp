@@ -182,6 +182,10 @@ TEST(Shapes, MeshesAndResourcesAndTheirErrors) {
   EXPECT_NE(error_of([&] { mesh_resource_shape("package://no_such_package/mesh.stl", scale, resolver); })
                 .find("mesh 'package://no_such_package/mesh.stl'"),
             std::string::npos);
+  // A URI with a NUL inside is refused (a C string stopped at it and opened another file), and
+  // the message writes the NUL as \x00 instead of ending there.
+  EXPECT_EQ(error_of([&] { mesh_resource_shape(std::string("/tmp/a.stl\0x", 12), scale, resolver); }),
+            "mesh '/tmp/a.stl\\x00x': the URI holds a control character (U+0000 at byte 10)");
   scale.x = 1.0;  // y and z zero: not "all zeros"
   EXPECT_NE(error_of([&] { mesh_resource_shape("/a.stl", scale, resolver); }).find("non-zero on every axis"),
             std::string::npos);

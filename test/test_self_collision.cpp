@@ -37,7 +37,7 @@ Fixture make_fixture(const std::string& robot) {
   if (std::ifstream in(dir + "/robot.srdf"); in) {
     std::ostringstream s;
     s << in.rdbuf();
-    f.srdf = parse_srdf(s.str());
+    f.srdf = parse_srdf(s.str(), &model);
     apply_srdf(f.srdf, model, acm);
   }
   f.fcl_shapes.resize(model.links().size());
@@ -207,7 +207,7 @@ TEST_P(SelfCollision, SrdfNamedStates) {
     }
     for (const auto& [joint, value] : values) {
       const int j = m.joint_index(joint);
-      if (j >= 0 && m.joints()[j].variable >= 0) state[m.joints()[j].variable] = value;
+      if (j >= 0 && m.joints()[j].variable >= 0) state[m.joints()[j].variable] = value.values.at(0);
     }
     SelfCollisionRequest request;
     request.all_pairs = true;

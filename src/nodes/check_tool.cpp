@@ -190,10 +190,12 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
     const char* prefixes = std::getenv("CMAKE_PREFIX_PATH");
     RobotModel model = RobotModel::from_urdf(*load_robot_description_file(o.urdf),
                                              PackageResolver(roots, split_path_list(prefixes ? prefixes : "")));
+    // As the node answers every query on such a robot: nothing to check is an error, not "free".
+    if (!has_collision_geometry(model)) throw std::invalid_argument(no_collision_geometry_error(model));
     AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
     const std::string srdf_xml = o.srdf.empty() ? "" : read_file(o.srdf, "SRDF");
     if (!o.srdf.empty()) {
-      for (const std::string& name : apply_srdf(parse_srdf(srdf_xml), model, acm)) {
+      for (const std::string& name : apply_srdf(parse_srdf(srdf_xml, &model), model, acm)) {
         err << "warning: SRDF names '" << name << "', which is not a link of the robot\n";
       }
     }

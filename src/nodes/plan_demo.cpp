@@ -97,7 +97,7 @@ CollisionChecker checker_from_parameters() {
   if (!ros::param::get("robot_description", urdf)) throw std::runtime_error("no robot_description parameter");
   RobotModel model = RobotModel::from_urdf(*parse_robot_description(urdf), PackageResolver::from_environment());
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  if (ros::param::get("robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf), model, acm);
+  if (ros::param::get("robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf, &model), model, acm);
   return CollisionChecker(std::move(model), std::move(acm));
 }
 

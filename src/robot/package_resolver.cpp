@@ -2,6 +2,8 @@
 
 #include <tinyxml2.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -75,6 +77,15 @@ std::optional<std::string> PackageResolver::package_path(const std::string& name
 }
 
 std::string PackageResolver::resolve(const std::string& uri) const {
+  // A control character has no place in a file name, and a NUL would cut the name short: the
+  // open would then read another file ("mesh.stl\0x" opened "mesh.stl").
+  const auto control = std::find_if(uri.begin(), uri.end(), [](unsigned char c) { return c < 0x20 || c == 0x7f; });
+  if (control != uri.end()) {
+    char code[8];
+    std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(static_cast<unsigned char>(*control)));
+    throw std::invalid_argument("the URI holds a control character (" + std::string(code) + " at byte " +
+                                std::to_string(control - uri.begin()) + ")");
+  }
   const std::string package_scheme = "package://", file_scheme = "file://";
   if (uri.rfind(package_scheme, 0) == 0) {
     const std::string rest = uri.substr(package_scheme.size());

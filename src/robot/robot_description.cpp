@@ -63,6 +63,9 @@ std::string check_xml(const std::string& xml) {
     throw RobotDescriptionError(std::string("robot description has no <robot> root element (found <") +
                                 (root ? root->Name() : "nothing") + ">)");
   }
+  tinyxml2::XMLDocument as_written(/*processEntities=*/false);
+  as_written.Parse(xml.c_str(), xml.size());  // the same text, parsed above
+  validate_mesh_file_names(*as_written.RootElement());
   normalize_attribute_whitespace(*root);
   validate_robot_xml(*root);  // what urdfdom would drop or accept silently
   tinyxml2::XMLPrinter printer(nullptr, /*compact=*/true);

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "bvh_collision/robot/robot_model.h"
 
 #include <Eigen/Geometry>
@@ -242,6 +243,14 @@ inline Mat3 axis_rotation(const Vec3& k, double q) {
 }
 
 }  // namespace
+
+bool has_collision_geometry(const RobotModel& model) {
+  return std::any_of(model.links().begin(), model.links().end(), [](const RobotLink& l) { return !l.collision.empty(); });
+}
+
+std::string no_collision_geometry_error(const RobotModel& model) {
+  return "robot '" + model.name() + "' has no collision geometry: there is nothing to check";
+}
 
 std::vector<double> random_configuration(const RobotModel& model, std::mt19937_64& rng) {
   std::vector<double> q(model.variable_count());

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <clocale>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <optional>
@@ -160,7 +161,49 @@ void check_joint(const tinyxml2::XMLElement& joint, std::map<std::string, std::s
   }
 }
 
+// The first control character (U+0000..U+001F, U+007F) in an attribute as written, before
+// tinyxml2 replaces its character references: "&#0;" becomes a NUL that ends the C string, so
+// the decoded value would look clean and name another file. Returns how it was written.
+std::optional<std::string> control_character(const std::string& raw) {
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(raw[i]);
+    if (c < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(c));
+      return std::string(code);
+    }
+    if (raw.compare(i, 2, "&#") != 0) continue;
+    const bool hex = i + 2 < raw.size() && (raw[i + 2] == 'x' || raw[i + 2] == 'X');
+    const std::size_t digits = i + (hex ? 3 : 2), end = raw.find(';', digits);
+    if (end == std::string::npos || end == digits || end - digits > 8) continue;
+    unsigned long code = 0;
+    const auto [stop, error] = std::from_chars(raw.data() + digits, raw.data() + end, code, hex ? 16 : 10);
+    if (error != std::errc() || stop != raw.data() + end) continue;
+    if (code < 0x20 || code == 0x7f) return raw.substr(i, end + 1 - i);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
+
+void validate_mesh_file_names(const tinyxml2::XMLElement& robot_as_written) {
+  for (const tinyxml2::XMLElement* link = robot_as_written.FirstChildElement("link"); link != nullptr;
+       link = link->NextSiblingElement("link")) {
+    int element = 0;
+    for (const tinyxml2::XMLElement* c = link->FirstChildElement("collision"); c != nullptr;
+         c = c->NextSiblingElement("collision")) {
+      ++element;
+      const tinyxml2::XMLElement* geometry = c->FirstChildElement("geometry");
+      const tinyxml2::XMLElement* mesh = geometry ? geometry->FirstChildElement("mesh") : nullptr;
+      const char* file = mesh ? mesh->Attribute("filename") : nullptr;
+      if (file == nullptr) continue;
+      if (const std::optional<std::string> found = control_character(file)) {
+        fail("link '" + name_of(*link) + "', collision element " + std::to_string(element),
+             "<mesh> attribute 'filename' holds a control character (" + *found + "): not a file name");
+      }
+    }
+  }
+}
 
 std::optional<double> parse_decimal(const std::string& word) {
   const char* begin = word.data();

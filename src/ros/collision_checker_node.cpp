@@ -101,7 +101,7 @@ void CollisionCheckerNode::load_robot() {
   std::string srdf;
   if (nh_.getParam("robot_description_semantic", srdf) && !srdf.empty()) {
     try {
-      for (const std::string& name : apply_srdf(parse_srdf(srdf), model, acm)) {
+      for (const std::string& name : apply_srdf(parse_srdf(srdf, &model), model, acm)) {
         ROS_WARN_STREAM("collision_checker: the SRDF names '" << name << "', which the URDF does not have");
       }
     } catch (const std::invalid_argument& e) {
@@ -111,7 +111,7 @@ void CollisionCheckerNode::load_robot() {
   for (const auto& [link, padding] : params_.link_padding) {
     if (model.link_index(link) < 0) throw NodeStartupError("parameter ~link_padding names unknown link '" + link + "'");
   }
-  for (const RobotLink& link : model.links()) has_geometry_ = has_geometry_ || !link.collision.empty();
+  has_geometry_ = has_collision_geometry(model);
   root_link_ = model.links()[model.root_link()].name;
   state_ = neutral_state(model);
   try {
@@ -327,7 +327,7 @@ Transform CollisionCheckerNode::frame_to_world(const std::string& frame) const {
 
 void CollisionCheckerNode::require_geometry() const {
   if (!has_geometry_) {
-    throw RequestError("robot '" + summary_.name + "' has no collision geometry: there is nothing to check");
+    throw RequestError(no_collision_geometry_error(checker()->model()));
   }
 }
 

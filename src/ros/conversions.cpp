@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <set>
 #include <sstream>
@@ -14,7 +15,22 @@ namespace bvh_collision {
 
 namespace {
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+// A name from a request, quoted for a message: control characters (a NUL would end the message
+// for any reader of a C string) are written as \xNN.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+      continue;
+    }
+    char code[5];
+    std::snprintf(code, sizeof code, "\\x%02X", static_cast<unsigned>(u));
+    out += code;
+  }
+  return out + "'";
+}
 
 std::string number(double v) {
   std::ostringstream out;

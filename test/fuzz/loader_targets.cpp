@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,6 +20,7 @@
 #include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/robot/robot_model.h"
+#include "check_tool.h"
 
 namespace bvh_collision::fuzz {
 namespace {
@@ -106,24 +109,89 @@ const std::string& fuzz_package_root() {
   return root;
 }
 
+// Every group-state value finite; a joint of the robot or a virtual joint has the count its type
+// needs, and a floating joint's quaternion is a unit one.
+std::string group_state_problem(const Srdf& srdf, const RobotModel& robot) {
+  for (const auto& [name, joints] : srdf.group_states) {
+    for (const auto& [joint, value] : joints) {
+      for (const double v : value.values) {
+        if (!std::isfinite(v)) return "group state '" + name + "' holds a value that is not finite";
+      }
+      std::optional<JointType> type;
+      if (const int j = robot.joint_index(joint); j >= 0) type = robot.joints()[j].type;
+      for (const SrdfVirtualJoint& v : srdf.virtual_joints) {
+        if (!type && v.name == joint) type = v.type;
+      }
+      if (!type) continue;
+      if (value.values.size() != group_state_value_count(*type)) {
+        return "group state '" + name + "': joint '" + joint + "' has " + std::to_string(value.values.size()) + " values";
+      }
+      if (*type == JointType::kFloating) {
+        const double n = Eigen::Vector4d(value.values[3], value.values[4], value.values[5], value.values[6]).norm();
+        if (!(std::abs(n - 1.0) < 1e-12)) return "group state '" + name + "': joint '" + joint + "' has a quaternion of length " + std::to_string(n);
+      }
+    }
+  }
+  return "";
+}
+
 std::string refusal_problem(const std::string& message) {
   return message.empty() ? "refused without a message" : "";
+}
+
+// What bvh_collision_check answers for the same text: it loads what the library loads and refuses
+// what the library refuses (with the library's message), and a robot without any collision
+// geometry is an error naming the robot, as every query of the node on it is.
+std::string cli_problem(const std::string& xml, const std::string& library_error, const std::string& no_geometry_error) {
+  const std::string base = fuzz_package_root() + "/input";
+  std::ofstream(base + ".urdf", std::ios::binary) << xml;
+  std::ofstream(base + ".states") << "joints:\n\n";
+  std::ostringstream out, err;
+  const int code = run_check_tool({"--urdf", base + ".urdf", "--states", base + ".states", "--package-path", fuzz_package_root()},
+                                  out, err);
+  const std::string expected_error = library_error.empty() ? no_geometry_error : library_error;
+  if (expected_error.empty()) return code == 0 ? "" : "the CLI refused what the library loads: " + err.str();
+  if (code == 0) return "the CLI answered where it must refuse (" + expected_error + ")";
+  return err.str().find(expected_error) == std::string::npos ? "the CLI refused with another message: " + err.str() : "";
+}
+
+// Loaded: the shapes, the kinematics and the CLI's answer; refused: by name, in the CLI too.
+std::string robot_description_problem(const std::string& xml, bool& loaded) {
+  try {
+    RobotModel model =
+        RobotModel::from_urdf(*parse_robot_description(xml), PackageResolver({fuzz_package_root()}));
+    loaded = true;
+    if (std::string problem = check_shapes(model, collision_counts(xml)); !problem.empty()) return problem;
+    const std::string no_geometry = has_collision_geometry(model) ? "" : no_collision_geometry_error(model);
+    if (std::string problem = check_kinematics(std::move(model)); !problem.empty()) return problem;
+    return cli_problem(xml, "", no_geometry);
+  } catch (const RobotDescriptionError& e) {
+    if (std::string problem = refusal_problem(e.what()); !problem.empty()) return problem;
+    return cli_problem(xml, e.what(), "");
+  } catch (const RobotLoadError& e) {
+    if (std::string problem = refusal_problem(e.what()); !problem.empty()) return problem;
+    return cli_problem(xml, e.what(), "");
+  }
+}
+
+// A character reference to a control character inside a mesh's filename attribute (as written):
+// tinyxml2 turns "&#0;" into a NUL that ends the name, so what loads is another file.
+bool references_a_control_character_in_a_file_name(const std::string& xml) {
+  static const std::regex reference("filename\\s*=\\s*(\"[^\"]*|'[^']*)&#(0*([0-9]|[12][0-9]|3[01]|127)|[xX]0*([01]?[0-9a-fA-F]|7[fF]));");
+  return std::regex_search(xml, reference);
 }
 
 }  // namespace
 
 std::string check_robot_description(const std::uint8_t* data, std::size_t size) {
   const std::string xml(reinterpret_cast<const char*>(data), size);
-  try {
-    RobotModel model =
-        RobotModel::from_urdf(*parse_robot_description(xml), PackageResolver({fuzz_package_root()}));
-    if (std::string problem = check_shapes(model, collision_counts(xml)); !problem.empty()) return problem;
-    return check_kinematics(std::move(model));
-  } catch (const RobotDescriptionError& e) {
-    return refusal_problem(e.what());
-  } catch (const RobotLoadError& e) {
-    return refusal_problem(e.what());
+  bool loaded = false;
+  const std::string problem = robot_description_problem(xml, loaded);
+  if (!problem.empty()) return problem;
+  if (loaded && references_a_control_character_in_a_file_name(xml)) {
+    return "a mesh file name with a control character loaded";
   }
+  return "";
 }
 
 std::string check_mesh(const std::uint8_t* data, std::size_t size) {
@@ -163,25 +231,24 @@ std::string check_mesh(const std::uint8_t* data, std::size_t size) {
 }
 
 std::string check_srdf(const std::uint8_t* data, std::size_t size) {
+  // A revolute, a fixed, a prismatic and a planar joint; the SRDF may add virtual joints.
   static const RobotModel robot = RobotModel::from_urdf(
       *parse_robot_description(
           "<robot name=\"r\"><link name=\"a\"><collision><geometry><box size=\"1 1 1\"/></geometry></collision></link>"
           "<link name=\"b\"><collision><geometry><sphere radius=\"0.5\"/></geometry></collision></link>"
           "<link name=\"c\"/><link name=\"d\"><collision><geometry><sphere radius=\"0.5\"/></geometry></collision></link>"
+          "<link name=\"e\"><collision><geometry><sphere radius=\"0.2\"/></geometry></collision></link>"
           "<joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 1\"/>"
           "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
           "<joint name=\"j2\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>"
           "<joint name=\"j3\" type=\"prismatic\"><parent link=\"c\"/><child link=\"d\"/><axis xyz=\"1 0 0\"/>"
-          "<limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>"),
+          "<limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+          "<joint name=\"j4\" type=\"planar\"><parent link=\"d\"/><child link=\"e\"/><axis xyz=\"0 0 1\"/></joint></robot>"),
       PackageResolver({}));
   try {
     AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(robot);
-    const Srdf srdf = parse_srdf(std::string(reinterpret_cast<const char*>(data), size));
-    for (const auto& [name, values] : srdf.group_states) {
-      for (const auto& [joint, value] : values) {
-        if (!std::isfinite(value)) return "group state '" + name + "' holds a value that is not finite";
-      }
-    }
+    const Srdf srdf = parse_srdf(std::string(reinterpret_cast<const char*>(data), size), &robot);
+    if (std::string problem = group_state_problem(srdf, robot); !problem.empty()) return problem;
     apply_srdf(srdf, robot, acm);
     for (std::size_t a = 0; a < acm.size(); ++a) {
       for (std::size_t b = 0; b < acm.size(); ++b) {

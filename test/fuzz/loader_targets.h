@@ -12,8 +12,10 @@
 namespace bvh_collision::fuzz {
 
 // URDF text. Loaded: every <collision> of every <link> became a shape of that link, every size,
-// vertex and pose finite, and a self check at the lower, middle and upper limits gives a
-// finite answer. Refused: a RobotDescriptionError or RobotLoadError with a message.
+// vertex and pose finite, a self check at the lower, middle and upper limits gives a finite
+// answer, no mesh file name referenced a control character (a NUL cut the name short), and
+// bvh_collision_check answers the text (a robot without collision geometry: an error naming it).
+// Refused: a RobotDescriptionError or RobotLoadError with a message, the CLI's message too.
 // Meshes resolve in `package://fuzz_meshes/meshes/...` (the files of test/fuzz/meshes).
 std::string check_robot_description(const std::uint8_t* data, std::size_t size);
 
@@ -25,8 +27,10 @@ std::string check_robot_description(const std::uint8_t* data, std::size_t size);
 // Refused: a MeshLoadError naming the file.
 std::string check_mesh(const std::uint8_t* data, std::size_t size);
 
-// SRDF text, parsed and applied to a four-link robot. Loaded: every group state value finite, the matrix
-// symmetric.
+// SRDF text, parsed and applied to a five-link robot (revolute, fixed, prismatic and planar
+// joints). Loaded: every group state value finite, each joint's values (the robot's, or a
+// virtual joint's of the SRDF) the count its type needs, a floating one's quaternion of unit
+// length, the matrix symmetric.
 // Refused: std::invalid_argument with a message.
 std::string check_srdf(const std::uint8_t* data, std::size_t size);
 

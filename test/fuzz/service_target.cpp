@@ -100,8 +100,10 @@ void shapes(ByteReader& in, SetCollisionObject::Request& req) {
   }
   req.mesh_poses.resize(in.count(3));
   for (auto& p : req.mesh_poses) p = pose(in);
+  // The last: the box's name with a NUL inside (a C string stops at it and would open box.stl).
   const std::vector<std::string> uris = {"", "package://bvh_collision/test/fuzz/meshes/box.stl", "package://nothing/x.stl",
-                                         "file:///nonexistent.stl", "/etc/hostname"};
+                                         "file:///nonexistent.stl", "/etc/hostname",
+                                         std::string("package://bvh_collision/test/fuzz/meshes/box.stl\0x", 51)};
   req.mesh_resources.resize(in.count(3));
   for (auto& uri : req.mesh_resources) uri = in.name(uris);
   req.mesh_resource_scales.resize(in.count(3));
@@ -205,6 +207,9 @@ std::string answer(ByteReader& in) {
       shapes(in, req);
       SetCollisionObject::Response res;
       NodeFuzzAccess::call(req, res);
+      for (const std::string& uri : req.mesh_resources) {
+        if (res.error.empty() && uri.find('\0') != std::string::npos) return "a mesh URI with a NUL inside was loaded";
+      }
       return error_problem(res);
     }
     default: {

@@ -47,17 +47,42 @@ class AllowedCollisionMatrix {
   std::vector<AcmReason> reasons_;
 };
 
+// One joint of a <group_state>: its value attribute as srdfdom reads it, a space-separated list
+// with one number per variable of the joint (floating: x y z qx qy qz qw; planar: x y theta;
+// revolute, continuous, prismatic: one).
+struct GroupStateJoint {
+  std::vector<double> values;
+  int line = 0;  // in the SRDF, for messages
+};
+
+// <virtual_joint>: how the robot's root is attached to a frame outside it (a floating base, a
+// mobile base on a plane, a fixed mount).
+struct SrdfVirtualJoint {
+  std::string name, parent_frame, child_link;
+  JointType type = JointType::kFixed;
+  int line = 0;
+};
+
 // What an SRDF says that the collision checker uses.
 struct Srdf {
   std::vector<std::pair<std::string, std::string>> disabled_pairs;
   std::vector<std::string> disabled_default_links;
   std::vector<std::pair<std::string, std::string>> enabled_pairs;
+  std::vector<SrdfVirtualJoint> virtual_joints;
   // <group_state name group>: joint values by joint name.
-  std::map<std::string, std::map<std::string, double>> group_states;
+  std::map<std::string, std::map<std::string, GroupStateJoint>> group_states;
 };
 
-// Parses SRDF XML with tinyxml2; throws std::invalid_argument (with the XML line) when malformed.
-Srdf parse_srdf(const std::string& xml);
+// How many values a joint of this type takes in a group state (its variables: 0 for fixed).
+std::size_t group_state_value_count(JointType type);
+
+// Parses SRDF XML with tinyxml2; throws std::invalid_argument (with the XML line, and for a group
+// state its name and the joint's) when malformed. Every group-state value is a finite decimal.
+// Where a joint's type is known (a <virtual_joint> of the SRDF, or a joint of `model` when one is
+// given) its values must have that type's count, and a floating joint's quaternion is normalised
+// (a zero one is refused). Joints known to neither keep their values unchecked for count: srdfdom
+// skips them too.
+Srdf parse_srdf(const std::string& xml, const RobotModel* model = nullptr);
 
 // Applies the SRDF to the matrix: default-disabled links, disabled pairs, then enabled pairs
 // (which win). Names absent from the model are skipped and returned, so callers can warn.

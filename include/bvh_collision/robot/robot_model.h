@@ -88,6 +88,11 @@ class RobotModel {
   friend class RobotModelBuilder;
 };
 
+// Whether any link has a collision element. A robot without one has nothing to check: the node
+// answers every query on it with no_collision_geometry_error, and the CLI stops with it.
+bool has_collision_geometry(const RobotModel& model);
+std::string no_collision_geometry_error(const RobotModel& model);
+
 // A configuration drawn uniformly within joint limits (continuous joints over [-pi, pi]).
 std::vector<double> random_configuration(const RobotModel& model, std::mt19937_64& rng);
 

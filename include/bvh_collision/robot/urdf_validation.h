@@ -10,6 +10,7 @@
 //     a complete decimal number, finite, with the count its attribute needs, and within
 //     kMaxCoordinate of 0 (beyond it corners and products overflow or lose every digit);
 //   - sizes, radii and lengths are positive, mesh scales non-zero, a mesh names its file;
+//   - a mesh file name holds no control character (U+0000..U+001F, U+007F), written or referenced;
 //   - a joint's axis is not zero, its lower limit is not above its upper one, its parent is not its
 //     child, and no link is the child of two joints.
 //
@@ -37,5 +38,10 @@ std::optional<double> parse_decimal(const std::string& word);
 
 // Throws RobotDescriptionError for the first problem found under <robot>.
 void validate_robot_xml(const tinyxml2::XMLElement& robot);
+
+// Throws RobotDescriptionError for a <mesh> file name that holds a control character, literally
+// or as a character reference ("mesh.stl&#0;x" would open mesh.stl). `robot_as_written` is the
+// document parsed without replacing character references: once replaced, a NUL ends the value.
+void validate_mesh_file_names(const tinyxml2::XMLElement& robot_as_written);
 
 }  // namespace bvh_collision
