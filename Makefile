@@ -5,6 +5,8 @@
 #   make test    catkin_lint + every unit and launch test; last line `N passed, N failed, N skipped`
 #                SANITIZE=1: the unit tests under ASan+UBSan instead (./build-sanitize);
 #                CI=true: both
+#   make test-busy  the Release unit and launch tests with two busy loops at normal priority
+#                beside them (a robot computer is busy); not part of make test
 #   make demo    start the node on the demo robot and report what it does (RVIZ=true: with rviz)
 #   make bench   build and run the benchmarks (Release); build/bench/report.md with its plots
 #   make soak    the node on panda for 10 minutes under load (build/soak/soak.md); not in make test
@@ -34,7 +36,7 @@ DEB_PACKAGES := \
 # Only `make fuzz` needs clang and its libFuzzer runtime.
 FUZZ_PACKAGES := clang libclang-rt-14-dev
 
-.PHONY: all deps build-node build test demo bench soak fuzz clean
+.PHONY: all deps build-node build test test-busy demo bench soak fuzz clean
 all: build
 
 deps:
@@ -50,6 +52,9 @@ build: build-node
 
 test: deps build
 	@BUILD=$(BUILD) JOBS=$(JOBS) bash scripts/run_tests.sh
+
+test-busy: deps build
+	@BUILD=$(BUILD) JOBS=$(JOBS) bash scripts/test_busy.sh
 
 demo: build-node
 	@bash scripts/demo.sh

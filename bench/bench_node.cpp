@@ -3,12 +3,15 @@
 //   - check_state, boolean, SELF and ENVIRONMENT: round-trip latency (median, p99) against one
 //     in-process check_self / check_environment call;
 //   - check_states with 1, 100 and 10,000 configurations: time per configuration against
-//     CollisionChecker::check_batch in-process.
+//     CollisionChecker::check_batch in-process;
+//   - check_state idle and under a 100 Hz flood of 20,000-point clouds (table service_under_flood).
 // Targets (issue 6): a single call under 300 us round trip; batches within 1.5x of in-process.
 // Figures go to stdout and to <dir>/tables/service.json (section 6 of the report). With
 // _quick:=true, fewer calls and smaller batches (the report's test in make test).
+#include <atomic>
 #include <cstdio>
 #include <random>
+#include <thread>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
@@ -116,6 +119,53 @@ struct Bench {
                ours / base, rows == 1 ? "(latency)" : "within " + bench::format(kTargetBatchRatio) + "x",
                met ? "yes" : "NO"});
   }
+
+  // check_state (self and environment) idle, then while 20,000-point clouds arrive at 100 Hz:
+  // the cloud thread takes one at a time and the newest waits, so queries keep their latency
+  // (moved here from node_faults.test, which counts what became of the clouds instead).
+  void under_flood(ros::NodeHandle& nh, const std::vector<double>& q, int calls, const std::string& frame) {
+    CheckState srv;
+    srv.request.state.name = checker.model().variable_names();
+    srv.request.state.position = q;
+    const auto series = [&] {
+      std::vector<double> us;
+      for (int i = 0; i < calls; ++i) {
+        us.push_back(bench::time_us([&] { single.call(srv); }));
+        if (!srv.response.error.empty()) throw std::runtime_error(srv.response.error);
+      }
+      return us;
+    };
+    const std::vector<double> idle = series();
+    ros::Publisher clouds = nh.advertise<sensor_msgs::PointCloud2>("obstacle_cloud", 10);
+    std::vector<ScanPoint> wall;
+    for (int i = 0; i < 20000; ++i) wall.emplace_back(1.0f, -0.5f + 0.01f * (i % 100), 0.01f * (i / 100));
+    sensor_msgs::PointCloud2 cloud = to_cloud_msg(wall, frame);
+    std::atomic<bool> stop{false};
+    std::atomic<int> sent{0};
+    std::thread flood([&] {
+      for (ros::WallTime next = ros::WallTime::now(); !stop; next += ros::WallDuration(0.01)) {
+        cloud.header.stamp = ros::Time(0);
+        clouds.publish(cloud);
+        ++sent;
+        ros::WallTime::sleepUntil(next + ros::WallDuration(0.01));
+      }
+    });
+    ros::WallDuration(0.5).sleep();  // the flood under way
+    const std::vector<double> flooded = series();
+    stop = true;
+    flood.join();
+    bench::Table flood_table("service_under_flood",
+                             "check_state (self and environment) idle and under a 100 Hz flood of 20,000-point clouds",
+                             {"when", "median us", "p90 us", "p99 us", "median / idle median"});
+    const double idle_median = bench::median(idle);
+    flood_table.row({"idle", idle_median, bench::percentile(idle, 0.9), bench::percentile(idle, 0.99), 1.0});
+    flood_table.row({"under the flood", bench::median(flooded), bench::percentile(flooded, 0.9),
+                     bench::percentile(flooded, 0.99), bench::median(flooded) / idle_median});
+    flood_table.note(std::to_string(calls) + " calls each on a persistent connection; " + std::to_string(sent.load()) +
+                     " clouds sent during the flood. The clouds replace the wall until the next bench run.");
+    flood_table.write(out_dir);
+  }
+  std::string out_dir;
 };
 
 }  // namespace
@@ -178,6 +228,8 @@ int main(int argc, char** argv) {
     b.single_call("ENVIRONMENT", CheckState::Request::ENVIRONMENT, free_q, calls);
     for (std::size_t rows : {std::size_t(1), std::size_t(100), std::size_t(b.quick ? 1000 : 10000)}) b.batch_call(rows, rng);
     b.batch_call(b.quick ? 1000 : 10000, rng, CheckStates::Request::SELF, kProxyLevel);
+    b.out_dir = out_dir;
+    b.under_flood(nh, free_q, b.quick ? 200 : 2000, checker.model().links()[checker.model().root_link()].name);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_node: %s\n", e.what());
     return 1;

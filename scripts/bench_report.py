@@ -449,12 +449,12 @@ def build_report(tables, bench_dir, quick):
     out += [markdown(need(tables, f"self_queries_{r}")) for r in ROBOTS]
 
     out += ["## 6. Service", ""]
-    out += [markdown(need(tables, "service"))]
+    out += [markdown(need(tables, "service")), markdown(need(tables, "service_under_flood"))]
 
     out += ["## 7. Numerical stability", "",
             f"![scale sweep]({plot_scale(need(tables, 'stability_scale'), plots_dir)})", ""]
     out += [markdown(need(tables, i)) for i in ["stability_triangles", "stability_meshes", "stability_scale",
-                                                "stability_cylinders"]]
+                                                "stability_cylinders", "large_mesh"]]
     return "\n".join(out)
 
 

@@ -17,6 +17,7 @@ CheckerError with the node's message.
 """
 import argparse
 import sys
+import time
 
 import rospy
 from bvh_collision.srv import (CastRay, CheckMotion, CheckState, CheckStateRequest, CheckStates, ClearBox,
@@ -49,7 +50,15 @@ class CollisionClient:
                 "clear_environment": Empty}
 
     def __init__(self, node="/collision_checker", timeout=30.0):
+        """Waits up to `timeout` s for the node's ~ready (its robot summary ~robot is set and every
+        service is served), then connects to each service."""
         self._proxies = {}
+        deadline = time.time() + timeout
+        while not rospy.get_param(node + "/ready", False):
+            if time.time() > deadline or rospy.is_shutdown():
+                raise CheckerError("%s did not become ready in %g s" % (node, timeout))
+            time.sleep(0.05)
+        self.robot = rospy.get_param(node + "/robot")
         for name, kind in self.SERVICES.items():
             rospy.wait_for_service(node + "/" + name, timeout=timeout)
             self._proxies[name] = rospy.ServiceProxy(node + "/" + name, kind, persistent=True)

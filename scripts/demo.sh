@@ -24,12 +24,14 @@ launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null; wait $launch_pid 2>/dev/null || true' EXIT
 
 echo "demo: starting the collision checker on the demo robot (log: $log)"
-for _ in $(seq 1 150); do
-  rosparam get /collision_checker/robot/links > /dev/null 2>&1 && break
+# ~ready: the robot summary is set and every service is served (60 s at most).
+ready() { [[ "$(rosparam get /collision_checker/ready 2>/dev/null)" == "true" ]]; }
+for _ in $(seq 1 300); do
+  ready && break
   kill -0 $launch_pid 2>/dev/null || { cat "$log"; echo "demo: roslaunch exited" >&2; exit 1; }
   sleep 0.2
 done
-rosparam get /collision_checker/robot/links > /dev/null 2>&1 || { cat "$log"; echo "demo: the node did not come up" >&2; exit 1; }
+ready || { cat "$log"; echo "demo: the node did not become ready" >&2; exit 1; }
 
 echo
 echo "The node's start-up line:"

@@ -56,35 +56,109 @@ Srv call_on(const std::string& node, const std::string& name, const typename Srv
   return srv;
 }
 
-// A value of the node's diagnostics (published once a second) by its key, from the first
-// message of that node within 15 s (other instances publish on /diagnostics too); "(missing)"
-// if none came.
-inline std::string diagnostic(const std::string& key, const std::string& node = "/collision_checker") {
+// The values of the node's diagnostics (published once a second), from the first message of that
+// node within 15 s (other instances publish on /diagnostics too): every key of its statuses,
+// all from one message; empty if none came.
+inline std::map<std::string, std::string> diagnostics(const std::string& node = "/collision_checker") {
   std::mutex mutex;
   std::condition_variable arrived;
-  std::string value;
+  std::map<std::string, std::string> values;
   bool found = false;
   ros::NodeHandle nh;
   const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (found) return;
         for (const auto& status : msg->status) {
           if (status.name.rfind(node + ":", 0) != 0) continue;
-          for (const auto& kv : status.values) {
-            if (kv.key != key) continue;
-            const std::lock_guard<std::mutex> lock(mutex);
-            value = kv.value;
-            found = true;
-            arrived.notify_all();
-          }
+          for (const auto& kv : status.values) values[kv.key] = kv.value;
+          found = true;
         }
+        if (found) arrived.notify_all();
       });
   std::unique_lock<std::mutex> lock(mutex);
   arrived.wait_for(lock, std::chrono::seconds(15), [&] { return found; });
-  return found ? value : "(missing)";
+  return found ? values : std::map<std::string, std::string>{};
 }
 
-inline bool wait_for_node(double seconds = 60.0) {
-  return ros::service::waitForService(node_service("check_state"), ros::Duration(seconds));
+// One value of the node's diagnostics by its key; "(missing)" if none came.
+inline std::string diagnostic(const std::string& key, const std::string& node = "/collision_checker") {
+  const auto values = diagnostics(node);
+  const auto it = values.find(key);
+  return it == values.end() ? "(missing)" : it->second;
+}
+
+// Waits until the node's diagnostics show `key` with a value for which `holds(value)` is true,
+// or `seconds` pass (a deadline, generous: the condition is the event awaited); the last value.
+template <class Holds>
+std::string wait_for_diagnostic(const std::string& key, Holds holds, double seconds = 60.0,
+                                const std::string& node = "/collision_checker") {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+  std::string value = diagnostic(key, node);
+  while (!holds(value) && ros::WallTime::now() < deadline && ros::ok()) value = diagnostic(key, node);
+  return value;
+}
+
+// Waits until the node is ready (~ready true: its robot summary ~robot is set and every service
+// is served), `seconds` at most.
+inline bool wait_for_node(const std::string& node = "/collision_checker", double seconds = 60.0) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+  for (;;) {
+    bool ready = false;
+    if (ros::param::get(node + "/ready", ready) && ready) return true;
+    if (ros::WallTime::now() > deadline || !ros::ok()) return false;
+    ros::WallDuration(0.05).sleep();
+  }
+}
+
+// Waits until the node has recorded a joint state (a deadline of 60 s) and returns a time no
+// earlier than that state's stamp: a cloud stamped at or after it lies within the node's joint
+// state history (one stamped before the first state the node holds is dropped, rightly: the
+// robot's pose then is unknown; a joint state published before the node connected is lost).
+inline ros::Time joint_states_from(const std::string& node = "/collision_checker") {
+  wait_for_diagnostic("joint states recorded", [](const std::string& v) { return v != "(missing)" && v != "0"; }, 60.0, node);
+  return ros::Time::now();
+}
+
+// What became of the clouds sent to a node, from one diagnostics message: each one sent is
+// received or superseded (a newer one came while the node was busy); each one received is
+// inserted, dropped or rejected with its reason, or still in progress.
+struct CloudCounts {
+  std::uint64_t received = 0, inserted = 0, in_progress = 0, superseded = 0;
+  std::uint64_t no_transform = 0, no_state = 0, malformed = 0, over_limit = 0;
+  std::uint64_t sent() const { return received + superseded; }
+  std::uint64_t outcomes() const { return inserted + no_transform + no_state + malformed + over_limit; }
+};
+
+inline CloudCounts cloud_counts(const std::string& node = "/collision_checker") {
+  const auto values = diagnostics(node);
+  const auto number = [&](const std::string& key) -> std::uint64_t {
+    const auto it = values.find(key);
+    EXPECT_NE(it, values.end()) << "no diagnostic '" << key << "'";
+    return it == values.end() ? 0 : std::stoull(it->second);
+  };
+  CloudCounts c;
+  c.received = number("clouds received");
+  c.inserted = number("clouds inserted");
+  c.in_progress = number("clouds in progress");
+  c.superseded = number("clouds superseded (a newer one came while busy)");
+  c.no_transform = number("clouds dropped (no transform)");
+  c.no_state = number("clouds dropped (no joint state at the stamp)");
+  c.malformed = number("clouds rejected (malformed)");
+  c.over_limit = number("clouds rejected (over ~max_cloud_points)");
+  return c;
+}
+
+// Waits (a generous deadline) until `sent` clouds are accounted for: received or superseded, and
+// none in progress. The caller checks what became of them.
+inline CloudCounts wait_for_clouds(std::uint64_t sent, double seconds = 60.0, const std::string& node = "/collision_checker") {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+  CloudCounts c = cloud_counts(node);
+  while ((c.sent() < sent || c.in_progress > 0) && ros::WallTime::now() < deadline && ros::ok()) c = cloud_counts(node);
+  EXPECT_EQ(c.sent(), sent) << "clouds sent to the node, received (" << c.received << ") or superseded (" << c.superseded << ")";
+  EXPECT_EQ(c.in_progress, 0u);
+  EXPECT_EQ(c.received, c.outcomes()) << "every cloud received is inserted, dropped or rejected";
+  return c;
 }
 
 // The checker the node builds, built here from the same files: answers must be the same.

@@ -168,7 +168,7 @@ TEST(AllowedCollisionMatrix, FloatingBaseGroupStateIsAList) {
 TEST(AllowedCollisionMatrix, FloatingBaseQuaternionIsNormalisedOrRefused) {
   const RobotModel m = model_from(kHumanoidUrdf);
   // A quaternion of length 2 (and one of tiny length, whose squares underflow) becomes unit.
-  for (const std::string& value : {"1 2 3 0 0 0 2", "1 2 3 0 0 0 1e-200", "1 2 3 0 0 3e200 4e200"}) {
+  for (const std::string value : {"1 2 3 0 0 0 2", "1 2 3 0 0 0 1e-200", "1 2 3 0 0 3e200 4e200"}) {
     const std::vector<double> v = parse_srdf(humanoid_srdf(value), &m).group_states.at("half_sitting").at("root_joint").values;
     ASSERT_EQ(v.size(), 7u) << value;
     EXPECT_EQ(v[0], 1.0);

@@ -167,7 +167,7 @@ TEST(CheckTool, MeshFileNameWithAControlCharacterIsAnError) {
                                                     "'/></geometry></collision></link></robot>"),
                              "--states", states});
   ASSERT_EQ(clean.code, 0) << clean.err << " (the file itself loads)";
-  for (const std::string& suffix : {"&#0;x", "&#x0;", "&#00;", "&#9;", "&#x1F;", "&#127;", "\x01"}) {
+  for (const std::string suffix : {"&#0;x", "&#x0;", "&#00;", "&#9;", "&#x1F;", "&#127;", "\x01"}) {
     const ToolRun r = run({"--urdf", write_states("<robot name='r'><link name='base'/><link name='arm'>"
                                                   "<collision><geometry><box size='1 1 1'/></geometry></collision>"
                                                   "<collision><geometry><mesh filename='file://" + stl + suffix +

@@ -2,7 +2,7 @@
 // descriptions, meshes, SRDFs, OctoMap files and point clouds written by
 // scripts/make_loader_corpus.py, plus every input
 // `make fuzz` found). Each input must be refused by name or load into something valid (see
-// test/fuzz/loader_targets.h), none may take long, and the whole replay stays far below 1 GiB.
+// test/fuzz/loader_targets.h), none may hang, and the whole replay stays far below 1 GiB.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 
@@ -40,8 +40,9 @@ std::size_t replay(const std::string& name, Target target) {
     EXPECT_EQ(problem, "") << file.filename();
     if (seconds > slowest) slowest = seconds, slowest_file = file.filename();
   }
-  // A hang would show here: every input is small, and a few seconds is generous even sanitized.
-  EXPECT_LT(slowest, 10.0) << slowest_file;
+  // A hang would show here. A deadline, not a speed claim: the slowest input (a 16k-point cloud)
+  // takes about 2 s in Release and 10 s under the sanitizers (README, Tests); ten times that.
+  EXPECT_LT(slowest, 120.0) << slowest_file;
   std::printf("%s: %zu inputs, slowest %.3f s (%s)\n", name.c_str(), files.size(), slowest, slowest_file.c_str());
   return files.size();
 }

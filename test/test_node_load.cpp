@@ -1,6 +1,9 @@
-// Launch test: load. Four clients call check_state and check_states for ~duration seconds (20 by
-// default) while obstacle clouds stream at 10 Hz. No call may fail; latency percentiles are
-// printed (and recorded in the test's XML) for each service.
+// Launch test: load. Four clients make ~calls calls each (check_state and check_states of 50)
+// while obstacle clouds stream at 10 Hz until they are done. No call may fail, every batch
+// answers each of its states, and every cloud sent is accounted for: inserted, or superseded by
+// a newer one while the node was busy (never dropped for a missing pose or state: the robot
+// stands still). Counts, not rates: a busy machine takes longer, not fewer. Latency
+// percentiles are printed (and recorded in the test's XML); make bench measures them.
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -34,14 +37,13 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // A planner: persistent connections, random configurations, single and batched checks.
-void client(int id, const CollisionChecker& checker, double seconds, Latencies& out) {
+void client(int id, const CollisionChecker& checker, int calls, Latencies& out) {
   ros::NodeHandle nh;
   auto single = nh.serviceClient<CheckState>(node_service("check_state"), true);
   auto batch = nh.serviceClient<CheckStates>(node_service("check_states"), true);
   std::mt19937_64 rng(100 + id);
   std::vector<double> mine_state, mine_states;
-  const auto end = ros::WallTime::now() + ros::WallDuration(seconds);
-  for (int call = 0; ros::WallTime::now() < end && ros::ok(); ++call) {
+  for (int call = 0; call < calls && ros::ok(); ++call) {
     const auto start = ros::WallTime::now();
     if (call % 4 != 3) {
       CheckState srv;
@@ -66,15 +68,17 @@ void client(int id, const CollisionChecker& checker, double seconds, Latencies& 
   out.states.insert(out.states.end(), mine_states.begin(), mine_states.end());
 }
 
-// A depth camera in front of the robot: a 60 x 60 wall whose points jitter from frame to frame.
-void stream_clouds(double seconds, std::atomic<int>& published) {
+// A depth camera in front of the robot: a 60 x 60 wall whose points jitter from frame to frame,
+// at 10 Hz until `done`, at least `at_least` clouds.
+void stream_clouds(const std::atomic<bool>& done, int at_least, std::atomic<int>& published) {
   ros::NodeHandle nh;
-  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 1);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 10);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(60.0);
+  while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.05).sleep();
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> jitter(-0.01f, 0.01f);
   ros::WallRate rate(10.0);
-  const auto end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::WallTime::now() < end && ros::ok()) {
+  while ((!done || published < at_least) && ros::ok()) {
     std::vector<ScanPoint> points;
     for (int i = 0; i < 60; ++i) {
       for (int j = 0; j < 60; ++j) points.emplace_back(0.9f + jitter(rng), -0.6f + 0.02f * i, 0.02f * j);
@@ -87,36 +91,29 @@ void stream_clouds(double seconds, std::atomic<int>& published) {
   }
 }
 
-long long diagnostic(const std::string& key, double timeout) {
-  const auto msg = ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(timeout));
-  if (!msg) return -1;
-  for (const auto& s : msg->status)
-    for (const auto& kv : s.values)
-      if (kv.key == key) return std::stoll(kv.value);
-  return -1;
-}
-
 TEST(NodeLoad, FourClientsWhileCloudsStream) {
   std::string urdf;
   ASSERT_TRUE(ros::param::get("~urdf_file", urdf));
-  const double seconds = ros::param::param("~duration", 20.0);
+  const int calls = ros::param::param("~calls", 300);
   const CollisionChecker checker = library_checker(urdf);
   ASSERT_TRUE(wait_for_node());
 
   Latencies latencies;
   std::atomic<int> published{0};
-  std::thread camera(stream_clouds, seconds, std::ref(published));
+  std::atomic<bool> done{false};
+  std::thread camera(stream_clouds, std::cref(done), 20, std::ref(published));
   std::vector<std::thread> clients;
-  for (int i = 0; i < 4; ++i) clients.emplace_back(client, i, std::cref(checker), seconds, std::ref(latencies));
+  for (int i = 0; i < 4; ++i) clients.emplace_back(client, i, std::cref(checker), calls, std::ref(latencies));
   for (auto& c : clients) c.join();
+  done = true;
   camera.join();
 
   EXPECT_EQ(latencies.failures.load(), 0) << "first failure: " << latencies.first_failure;
-  EXPECT_GT(latencies.state.size(), 100u);
-  EXPECT_GT(latencies.states.size(), 30u);
-  const long long inserted = diagnostic("clouds inserted", 3.0);
-  // Clouds are queued one deep: a checker under load may skip some, but it must keep inserting.
-  EXPECT_GE(inserted, published.load() / 4) << published.load() << " clouds published";
+  EXPECT_EQ(latencies.state.size() + latencies.states.size(), 4u * calls);
+  const CloudCounts clouds = wait_for_clouds(published.load());
+  EXPECT_GT(clouds.inserted, 0u) << "the node must keep inserting under load";
+  EXPECT_EQ(clouds.inserted + clouds.superseded, static_cast<std::uint64_t>(published.load()))
+      << "a cloud is inserted, or superseded while the node was busy: no other reason applies here";
 
   const auto report = [&](const char* name, const std::vector<double>& v) {
     const double p50 = percentile(v, 0.5) * 1e3, p99 = percentile(v, 0.99) * 1e3;
@@ -127,7 +124,8 @@ TEST(NodeLoad, FourClientsWhileCloudsStream) {
   };
   report("check_state", latencies.state);
   report("check_states50", latencies.states);
-  std::printf("load: %d clouds published at 10 Hz, %lld inserted\n", published.load(), inserted);
+  std::printf("load: %d clouds published at 10 Hz, %llu inserted, %llu superseded\n", published.load(),
+              static_cast<unsigned long long>(clouds.inserted), static_cast<unsigned long long>(clouds.superseded));
   std::fflush(stdout);
 }
 

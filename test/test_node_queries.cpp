@@ -2,7 +2,10 @@
 // it) answers check_state and check_states as the library does on the same files: free and
 // self-colliding configurations, the colliding link pairs, distances and closest pairs, and
 // joints left out of a request taken from joint_states.
+#include <atomic>
+#include <mutex>
 #include <set>
+#include <thread>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/topic.h>
@@ -41,18 +44,9 @@ CollisionChecker* NodeQueries::checker_ = nullptr;
 TEST_F(NodeQueries, ProxyLevelsJoinAfterStartUp) {
   std::string expected;
   ASSERT_TRUE(ros::param::get("~expect_proxy_levels", expected)) << "the .test file must set ~expect_proxy_levels";
-  std::string ready = "(no diagnostics)";
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(90.0);
-  while (ros::WallTime::now() < deadline && ready != expected) {
-    const auto msg = ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5.0));
-    if (!msg) continue;
-    for (const auto& status : msg->status) {
-      for (const auto& kv : status.values) {
-        if (kv.key == "proxy levels ready (m)") ready = kv.value;
-      }
-    }
-  }
-  EXPECT_EQ(ready, expected);
+  // A deadline for the event: the levels take up to ~20 s to build on an idle machine (panda).
+  EXPECT_EQ(wait_for_diagnostic("proxy levels ready (m)", [&](const std::string& v) { return v == expected; }, 300.0),
+            expected);
 }
 
 TEST_F(NodeQueries, FreeAndSelfCollidingConfigurations) {
@@ -163,17 +157,31 @@ TEST_F(NodeQueries, JointsLeftOutComeFromJointStates) {
   const auto hit = find_configuration(checker(), rng, [&](const auto& q) { return library_collides(q); });
   ros::NodeHandle nh;
   ros::Publisher pub = nh.advertise<sensor_msgs::JointState>("/joint_states", 1, true);
+  // A robot publishes its state all the time (a state older than ~joint_state_timeout would be
+  // refused, not used: node_faults.test): so does this test, every 20 ms, from a thread.
+  std::mutex mutex;
   sensor_msgs::JointState msg = joint_state(checker().model().variable_names(), hit);
   msg.name.push_back("some_other_robots_joint");  // ignored, as other publishers' joints are
   msg.position.push_back(1.0);
-  pub.publish(msg);
+  std::atomic<bool> stop{false};
+  std::thread robot([&] {
+    while (!stop) {
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        msg.header.stamp = ros::Time::now();
+        pub.publish(msg);
+      }
+      ros::WallDuration(0.02).sleep();
+    }
+  });
+  const auto current_collides = [&] { return !call<CheckState>("check_state", CheckState::Request()).response.valid; };
+  const auto eventually = [](auto holds) {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(60.0);
+    while (!holds() && ros::WallTime::now() < deadline) ros::WallDuration(0.05).sleep();
+    return holds();
+  };
   // The empty request is the current state: colliding once the node has the message.
-  bool collides = false;
-  for (int i = 0; i < 50 && !collides; ++i) {
-    ros::WallDuration(0.1).sleep();
-    collides = !call<CheckState>("check_state", CheckState::Request()).response.valid;
-  }
-  EXPECT_TRUE(collides) << "the node did not take the configuration from joint_states";
+  EXPECT_TRUE(eventually(current_collides)) << "the node did not take the configuration from joint_states";
   // Naming every joint overrides the current state.
   const auto free = find_configuration(checker(), rng, [&](const auto& q) { return library_distance(q) > 0.02; });
   EXPECT_TRUE(call<CheckState>("check_state", state_request(checker(), free)).response.valid);
@@ -181,24 +189,20 @@ TEST_F(NodeQueries, JointsLeftOutComeFromJointStates) {
   // as the library on the merged configuration.
   CheckState::Request partial;
   partial.state = joint_state({checker().model().variable_names()[0]}, {free[0]});
-  // A robot publishes its state all the time; this test once, so once more now: a state older than
-  // ~joint_state_timeout (1 s) would be refused, not used (node_faults.test).
-  pub.publish(msg);
-  ros::WallDuration(0.2).sleep();
   std::vector<double> merged = hit;
   merged[0] = free[0];
   EXPECT_EQ(call<CheckState>("check_state", partial).response.valid, !library_collides(merged));
   // Back to a free current state for whoever runs next.
-  pub.publish(joint_state(checker().model().variable_names(), free));
-  ros::WallDuration(0.3).sleep();
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    msg = joint_state(checker().model().variable_names(), free);
+  }
+  EXPECT_TRUE(eventually([&] { return !current_collides(); }));
+  stop = true;
+  robot.join();
 }
 
 }  // namespace
 }  // namespace bvh_collision::test
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_queries");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return bvh_collision::test::run_node_tests(argc, argv, "test_node_queries"); }

@@ -59,8 +59,8 @@ std::string file_bytes(const std::string& path) {
 
 TEST(TwoCheckers, SameCloudsSameOctreeSameAnswers) {
   ros::NodeHandle nh, pnh("~");
-  ASSERT_TRUE(ros::service::waitForService(kA + "/check_state", ros::Duration(60)));
-  ASSERT_TRUE(ros::service::waitForService(kB + "/check_state", ros::Duration(60)));
+  ASSERT_TRUE(wait_for_node(kA));
+  ASSERT_TRUE(wait_for_node(kB));
   const CollisionChecker checker = library_checker(pnh.param<std::string>("urdf_file", ""));
   const RobotModel& model = checker.model();
 
@@ -72,21 +72,22 @@ TEST(TwoCheckers, SameCloudsSameOctreeSameAnswers) {
     joints.publish(joint_state(model.variable_names(), upright));
   });
   ros::Publisher clouds = nh.advertise<sensor_msgs::PointCloud2>("/obstacle_cloud", 3);
-  for (int i = 0; i < 100 && (clouds.getNumSubscribers() < 2); ++i) ros::WallDuration(0.1).sleep();
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(60.0);
+  while (clouds.getNumSubscribers() < 2 && ros::WallTime::now() < deadline) ros::WallDuration(0.05).sleep();
   ASSERT_EQ(clouds.getNumSubscribers(), 2u);
-  ros::WallDuration(0.5).sleep();  // joint states at the clouds' stamps
   const std::vector<ScanPoint> points = pillar_cloud();
   constexpr int kClouds = 3;
+  // Unstamped clouds (the robot stands still: its current state and pose are those at any stamp).
+  // Each is sent once both nodes have the one before: none supersedes a waiting one.
   for (int i = 0; i < kClouds; ++i) {
     sensor_msgs::PointCloud2 cloud = to_cloud_msg(points, "camera");
-    cloud.header.stamp = ros::Time::now() - ros::Duration(0.05);
     clouds.publish(cloud);
-    ros::WallDuration(0.7).sleep();  // each inserted before the next: none overwrites a waiting one
+    for (const std::string& node : {kA, kB}) wait_for_clouds(i + 1, 60.0, node);
   }
   for (const std::string& node : {kA, kB}) {
-    std::string inserted;
-    for (int i = 0; i < 20 && inserted != std::to_string(kClouds); ++i) inserted = diagnostic("clouds inserted", node);
-    ASSERT_EQ(inserted, std::to_string(kClouds)) << node;
+    const CloudCounts c = cloud_counts(node);
+    EXPECT_EQ(c.inserted, static_cast<std::uint64_t>(kClouds)) << node;
+    EXPECT_EQ(c.superseded, 0u) << node;
   }
 
   // The octrees, saved by each node.

@@ -288,7 +288,7 @@ TEST(RobotDescription, OnlyRegularFilesAreRead) {
 // "mesh.stl&#0;x" loaded mesh.stl. Refused before any file is opened, naming link and element;
 // the resolver refuses such a URI too (the service path: a ROS string may hold a NUL).
 TEST(RobotDescription, ControlCharactersInMeshFileNamesAreRefused) {
-  for (const std::string& name : {"mesh.stl&#0;x", "mesh.stl&#x00;", "me&#10;sh.stl", "mesh.stl&#X1f;", "mesh.stl&#127;",
+  for (const std::string name : {"mesh.stl&#0;x", "mesh.stl&#x00;", "me&#10;sh.stl", "mesh.stl&#X1f;", "mesh.stl&#127;",
                                   "mesh\x02.stl"}) {
     try {
       parse_robot_description("<robot name='r'><link name='arm'><collision><geometry><mesh filename='file:///tmp/" + name +

@@ -51,29 +51,39 @@ class RvizDemo(unittest.TestCase):
         deadline = time.time() + 30.0
         while time.time() < deadline and not client.check_state(ARM, LEAN, checks=ENVIRONMENT).environment_collision:
             time.sleep(0.2)
-        render = float(rospy.get_param("~render_seconds", 6.0))  # Xvfb renders in software
-        time.sleep(render)
         contacts = client.check_state(ARM, LEAN, max_contacts=5).contacts
         self.assertGreater(len(contacts), 0, "the leaning arm touches the pillar")
         shown = rospy.wait_for_message("/collision_checker/contacts", MarkerArray, timeout=10.0)
         spheres = [m for m in shown.markers if m.type == Marker.SPHERE_LIST]
         self.assertEqual(len(spheres[0].points) if spheres else 0, len(contacts), "the contacts' markers")
-        _, subscribers, _ = rosgraph.Master("/test_rviz_demo").getSystemState()
-        readers = dict((topic, nodes) for topic, nodes in subscribers)
+        # rviz subscribes once it has loaded its displays (slowly, in software, on a busy machine).
+        deadline = time.time() + 120.0
+        while True:
+            _, subscribers, _ = rosgraph.Master("/test_rviz_demo").getSystemState()
+            readers = dict((topic, nodes) for topic, nodes in subscribers)
+            if "/rviz" in readers.get("/collision_checker/contacts", []) or time.time() > deadline:
+                break
+            time.sleep(0.5)
         self.assertIn("/rviz", readers.get("/collision_checker/contacts", []), "rviz does not show the contacts")
         deadline = time.time() + 60.0
         while time.time() < deadline and not paths:
             time.sleep(0.5)
         self.assertTrue(paths, "plan_demo published no path")
         self.assertGreater(len(paths[-1].points), 10)
-        time.sleep(render)
+        # Xvfb renders in software, slowly on a busy machine: screenshots until all is drawn (the
+        # event awaited), 120 s at most.
         shot = rospy.get_param("~screenshot", "/tmp/bvh_collision_rviz.png")
-        pixels = screenshot(shot)
-        # The cloud's magenta, seen through the half-transparent voxels: red and blue well above green
-        # (no blend of voxel colours has that: their red and blue add up to one).
-        magenta = count(pixels, lambda r, g, b: r > g + 50 and b > g + 50)
-        yellow = count(pixels, lambda r, g, b: r > 200 and g > 200 and b < 60)
-        green = count(pixels, lambda r, g, b: g > r + 60 and g > b + 60)
+        deadline = time.time() + 120.0
+        while True:
+            pixels = screenshot(shot)
+            # The cloud's magenta, seen through the half-transparent voxels: red and blue well above
+            # green (no blend of voxel colours has that: their red and blue add up to one).
+            magenta = count(pixels, lambda r, g, b: r > g + 50 and b > g + 50)
+            yellow = count(pixels, lambda r, g, b: r > 200 and g > 200 and b < 60)
+            green = count(pixels, lambda r, g, b: g > r + 60 and g > b + 60)
+            if (magenta > 200 and yellow > 100 and green > 200) or time.time() > deadline:
+                break
+            time.sleep(1.0)
         report = "magenta %d, yellow %d, green %d of %d pixels (%s)" % (magenta, yellow, green, len(pixels), shot)
         rospy.loginfo(report)
         print(report)

@@ -1,6 +1,7 @@
 #include "bvh_collision/bvh/bvh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <numeric>
 #include <thread>
@@ -142,6 +143,8 @@ struct BvhBuilder {
   Order& order;
   std::vector<Vec3> scratch;
   std::vector<std::uint32_t> last_fit;  // per vertex: the fit() call that last took it
+  // Point-triangle distances taken to bound the slack (the two halves of a large tree add at once).
+  mutable std::atomic<std::uint64_t> evaluations{0};
   std::uint32_t fit_round = 0;
   Bvh<BV> out;
 
@@ -311,14 +314,17 @@ struct BvhBuilder {
   }
 
   double sampled_slack(const EnclosingBox& box, const BvhNode<BV>& node) const {
-    return lipschitz_max(box, [&](const Vec3& s, double worst) {
+    std::uint64_t evaluated = 0;
+    const double bound = lipschitz_max(box, [&](const Vec3& s, double worst) {
       double best = std::numeric_limits<double>::infinity();
-      for (int t = node.first; t < node.first + node.count && best > worst; ++t) {
+      for (int t = node.first; t < node.first + node.count && best > worst; ++t, ++evaluated) {
         const Triangle& tri = out.triangles_[t];
         best = std::min(best, (closest_point_on_triangle(s, tri[0], tri[1], tri[2]) - s).norm());
       }
       return best;  // stopping at or below `worst` cannot raise the maximum
     });
+    evaluations += evaluated;
+    return bound;
   }
 
   // A node of few triangles: the distance to one triangle is convex, so over a box it is largest
@@ -328,10 +334,11 @@ struct BvhBuilder {
   // distance to the triangle, so still a bound; a tenth of the work, for very large meshes).
   double corner_slack(const EnclosingBox& box, const BvhNode<BV>& node, bool to_vertices) const {
     double best = std::numeric_limits<double>::infinity();
+    std::uint64_t evaluated = 0;
     for (int t = node.first; t < node.first + node.count; ++t) {
       const Triangle& tri = out.triangles_[t];
       double worst = 0.0;
-      for (int c = 0; c < 8 && worst < best; ++c) {
+      for (int c = 0; c < 8 && worst < best; ++c, ++evaluated) {
         const Vec3 corner = box.center + box.axes * Vec3(c & 1 ? box.half.x() : -box.half.x(),
                                                          c & 2 ? box.half.y() : -box.half.y(),
                                                          c & 4 ? box.half.z() : -box.half.z());
@@ -342,6 +349,7 @@ struct BvhBuilder {
       }
       best = std::min(best, worst);
     }
+    evaluations += evaluated;
     return best * (1 + kPoseMargin);
   }
 
@@ -404,6 +412,7 @@ struct BvhBuilder {
   }
 
   void compute_slack() {
+    evaluations = 0;
     std::vector<double> box_slack(out.nodes_.size());
     const std::size_t right = out.nodes_.empty() || out.nodes_[0].is_leaf() ? 0 : out.nodes_[0].right;
     if (out.nodes_.size() > 2 * kParallelBuild && right > 0) {  // the root's two subtrees at once
@@ -412,6 +421,7 @@ struct BvhBuilder {
     } else {
       compute_slack(0, out.nodes_.size(), box_slack);
     }
+    out.slack_evaluations_ = evaluations;
   }
 
   // Runs `aside` on a thread of its own while this thread runs `here`. Only for the root's two

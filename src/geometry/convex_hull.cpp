@@ -54,6 +54,8 @@ class Quickhull {
  public:
   explicit Quickhull(const std::vector<Vec3>& p) : p_(p), face_of_(p.size(), -1), cone_from_(p.size(), -1), cone_to_(p.size(), -1) {}
 
+  std::uint64_t tests() const { return tests_; }
+
   std::vector<Face> run(const std::array<int, 4>& t) {
     for (int k = 0; k < 4; ++k) {  // each face oriented away from the fourth vertex
       Face f{t[k], t[(k + 1) % 4], t[(k + 2) % 4]};
@@ -98,6 +100,7 @@ class Quickhull {
 
   bool sees(int face, int point) const {
     const Face& v = faces_[face].v;
+    ++tests_;
     return detail::orient3d_filtered(p_[v[0]], p_[v[1]], p_[v[2]], p_[point]) < 0;
   }
 
@@ -185,6 +188,7 @@ class Quickhull {
   std::uint64_t step_ = 0;
   std::vector<std::pair<std::uint64_t, int>> mark_;  // per face: the step it was last met in, and how
   std::vector<int> visible_, stack_, orphans_;
+  mutable std::uint64_t tests_ = 0;  // the hull's work: O(n log n) expected, n^2 was minutes
   std::vector<HorizonEdge> horizon_;
 };
 
@@ -205,7 +209,9 @@ ConvexHull convex_hull(const std::vector<Vec3>& points) {
     hull.vertices = p;
     return hull;
   }
-  std::vector<Face> faces = Quickhull(p).run(t);
+  Quickhull quickhull(p);
+  std::vector<Face> faces = quickhull.run(t);
+  hull.orientation_tests = quickhull.tests();
   std::vector<int> index(p.size(), -1);
   for (Face& f : faces) {
     for (int& v : f) {

@@ -12,9 +12,11 @@ int main(int argc, char** argv) {
   try {
     bvh_collision::CollisionCheckerNode node(nh, private_nh);
     // Services, joint_states and timers on several threads: requests are answered side by side
-    // (clouds have a thread of their own inside the node).
-    ros::MultiThreadedSpinner spinner(static_cast<std::uint32_t>(node.parameters().service_threads));
-    spinner.spin();
+    // (clouds have a thread of their own inside the node). Ready once they are served.
+    ros::AsyncSpinner spinner(static_cast<std::uint32_t>(node.parameters().service_threads));
+    spinner.start();
+    node.mark_ready();
+    ros::waitForShutdown();
   } catch (const bvh_collision::NodeStartupError& e) {
     ROS_FATAL_STREAM("collision_checker cannot start: " << e.what());
     return 1;

@@ -201,10 +201,11 @@ int run(ros::NodeHandle& pnh) {
     throw std::runtime_error("~start and ~goal need " + std::to_string(group.size()) + " values each");
   }
   auto service = std::make_shared<ServicePlanningContext>(node, group);
-  // The node sees the obstacles once a cloud is in: wait for a non-empty octree (up to 20 s).
+  // The node sees the obstacles once a cloud is in: wait for a non-empty octree (a deadline of
+  // 120 s: a cloud comes within a second or two, on a busy machine too).
   std::shared_ptr<const Environment> env;
   const double resolution = ros::param::param(node + "/resolution", 0.02);
-  for (int i = 0; i < 40 && ros::ok(); ++i, ros::WallDuration(0.5).sleep()) {
+  for (int i = 0; i < 240 && ros::ok(); ++i, ros::WallDuration(0.5).sleep()) {
     env = node_environment(node, resolution);
     if (!env->octree().empty()) break;
   }

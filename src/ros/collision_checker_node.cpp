@@ -23,24 +23,33 @@ const char* const kServices[] = {"check_state", "check_states", "check_motion", 
 
 CollisionCheckerNode::CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(std::move(nh)), private_nh_(std::move(private_nh)), resolver_(PackageResolver::from_environment()) {
+  // A value left by an earlier run of a node of this name is not this one's.
+  private_nh_.setParam("ready", false);
   params_ = read_node_parameters(private_nh_);
   for (const char* name : kServices) latency_[name];
   load_robot();
   store_ = std::make_unique<EnvironmentStore>(initial_environment());
+  params_.resolution = store_->snapshot()->octree().resolution();  // an octree file may set it
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
-  advertise();
   ROS_INFO_STREAM("collision_checker: " << summary_.to_string() << "; world frame '" << params_.world_frame
                                         << "', octree resolution " << params_.resolution << " m, "
                                         << checker()->checked_pairs().size() << " link pairs checked");
   log_solidity();
-  publish_status();  // once these are set, the node is up
+  publish_status();  // before any service: a client that sees one sees the whole summary
+  advertise();
   if (!params_.proxy_levels.empty() && has_geometry_) proxy_builder_ = std::thread([this] { build_proxy_levels(); });
 }
 
 CollisionCheckerNode::~CollisionCheckerNode() {
+  if (ros::ok()) private_nh_.setParam("ready", false);
   stop_building_ = true;  // the build stops at its next link
   if (proxy_builder_.joinable()) proxy_builder_.join();
   if (cloud_spinner_) cloud_spinner_->stop();
+}
+
+void CollisionCheckerNode::mark_ready() {
+  private_nh_.setParam("ready", true);
+  ROS_INFO("collision_checker: ready (%zu services)", services_.size());
 }
 
 // Coarsest first: the cheapest level serves the widest range of tolerances soonest. Each level
@@ -162,8 +171,6 @@ Environment CollisionCheckerNode::initial_environment() const {
 }
 
 void CollisionCheckerNode::advertise() {
-  // Resolution may come from an octree file; keep the advertised parameter truthful.
-  params_.resolution = store_->snapshot()->octree().resolution();
   services_.push_back(private_nh_.advertiseService("check_state", &CollisionCheckerNode::check_state, this));
   services_.push_back(private_nh_.advertiseService("check_states", &CollisionCheckerNode::check_states, this));
   services_.push_back(private_nh_.advertiseService("check_motion", &CollisionCheckerNode::check_motion, this));
@@ -217,19 +224,34 @@ void CollisionCheckerNode::log_solidity() {
   ROS_INFO_STREAM(line.str());
 }
 
+namespace {
+
+XmlRpc::XmlRpcValue string_list(const std::vector<std::string>& items) {
+  XmlRpc::XmlRpcValue list;
+  list.setSize(static_cast<int>(items.size()));
+  for (std::size_t i = 0; i < items.size(); ++i) list[static_cast<int>(i)] = items[i];
+  return list;
+}
+
+}  // namespace
+
+// The robot summary as one dictionary (~robot), one call to the master: a reader sees all of it
+// or none of it (set one key at a time, a reader between two calls saw half a summary).
 void CollisionCheckerNode::publish_status() {
   private_nh_.setParam("world_frame", params_.world_frame);
   private_nh_.setParam("resolution", params_.resolution);
-  private_nh_.setParam("robot/name", summary_.name);
-  private_nh_.setParam("robot/root_link", summary_.root_link);
-  private_nh_.setParam("robot/links", static_cast<int>(summary_.links));
-  private_nh_.setParam("robot/joints", static_cast<int>(summary_.joints));
-  private_nh_.setParam("robot/collision_elements", static_cast<int>(summary_.collision_elements));
-  private_nh_.setParam("robot/variables", checker()->model().variable_names());
-  private_nh_.setParam("robot/checked_pairs", static_cast<int>(checker()->checked_pairs().size()));
-  private_nh_.setParam("robot/reach", checker()->reach());
-  private_nh_.setParam("robot/solid_links", solid_links_);
-  private_nh_.setParam("robot/open_meshes", open_meshes_);
+  XmlRpc::XmlRpcValue robot;
+  robot["name"] = summary_.name;
+  robot["root_link"] = summary_.root_link;
+  robot["links"] = static_cast<int>(summary_.links);
+  robot["joints"] = static_cast<int>(summary_.joints);
+  robot["collision_elements"] = static_cast<int>(summary_.collision_elements);
+  robot["variables"] = string_list(checker()->model().variable_names());
+  robot["checked_pairs"] = static_cast<int>(checker()->checked_pairs().size());
+  robot["reach"] = checker()->reach();
+  robot["solid_links"] = string_list(solid_links_);
+  robot["open_meshes"] = string_list(open_meshes_);
+  private_nh_.setParam("robot", robot);
 }
 
 void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPtr& msg) {
@@ -256,6 +278,7 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
   if (!ours) return;
   last_joint_state_ = ros::Time::now();
   history_->record((msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp).toSec(), state_);
+  ++joint_states_recorded_;
   history_grew_.notify_all();
 }
 

@@ -27,10 +27,23 @@ bool remove_object_shapes(Environment& env, const std::string& id) {
 
 }  // namespace
 
-void CollisionCheckerNode::on_cloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+// The subscription keeps one cloud (the newest) while the node inserts another: the ones it
+// replaces never reach this callback, nor do those a publisher's queue dropped. Both show as a
+// gap in the publisher's header.seq (roscpp and rospy number every message they send on a
+// topic), so each cloud sent to the node is counted: inserted, or dropped with its reason.
+void CollisionCheckerNode::count_superseded(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event) {
+  const std::uint32_t seq = event.getConstMessage()->header.seq;
+  const auto [last, first] = last_cloud_seq_.try_emplace(event.getPublisherName(), seq);
+  // A publisher's first cloud, or a restarted publisher (its numbers begin again): no gap known.
+  if (!first && seq > last->second) clouds_.superseded += seq - last->second - 1;
+  last->second = seq;
+}
+
+void CollisionCheckerNode::on_cloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event) {
   ++clouds_.received;
+  count_superseded(event);
   try {
-    insert_cloud(*msg);
+    insert_cloud(*event.getConstMessage());
   } catch (const LimitExceeded& e) {
     ++clouds_.over_limit;
     ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: cloud rejected: " << e.what());
@@ -109,6 +122,7 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
 
 bool CollisionCheckerNode::clear_environment(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   const auto start = std::chrono::steady_clock::now();
+  latency_.at("clear_environment").begin();
   store_->modify([](Environment& env) {
     env.octree().clear();
     env.clear_objects();

@@ -152,15 +152,25 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   // The counters before the snapshot: a cloud is counted inserted only after its octree is in the
   // store, so the snapshot then holds every cloud counted (the other order once showed one cloud
   // inserted and an empty octree).
-  const std::uint64_t received = clouds_.received.load(), inserted = clouds_.inserted.load();
+  // Each cloud's outcome is counted after it was counted received: the outcomes read first, the
+  // clouds in progress (received, no outcome yet) are never negative, and 0 means every cloud
+  // received has its outcome in these numbers.
+  const std::uint64_t inserted = clouds_.inserted.load(), no_transform = clouds_.dropped_transform.load(),
+                      no_state = clouds_.dropped_state.load(), malformed = clouds_.rejected.load(),
+                      over_limit = clouds_.over_limit.load();
+  const std::uint64_t received = clouds_.received.load(), superseded = clouds_.superseded.load();
+  const std::uint64_t in_progress = received - (inserted + no_transform + no_state + malformed + over_limit);
   const std::shared_ptr<const Environment> env = store_->snapshot();
   environment.values = {
+      kv("joint states recorded", std::to_string(joint_states_recorded_.load())),
       kv("clouds received", std::to_string(received)),
       kv("clouds inserted", std::to_string(inserted)),
-      kv("clouds dropped (no transform)", std::to_string(clouds_.dropped_transform.load())),
-      kv("clouds dropped (no joint state at the stamp)", std::to_string(clouds_.dropped_state.load())),
-      kv("clouds rejected (malformed)", std::to_string(clouds_.rejected.load())),
-      kv("clouds rejected (over ~max_cloud_points)", std::to_string(clouds_.over_limit.load())),
+      kv("clouds in progress", std::to_string(in_progress)),
+      kv("clouds superseded (a newer one came while busy)", std::to_string(superseded)),
+      kv("clouds dropped (no transform)", std::to_string(no_transform)),
+      kv("clouds dropped (no joint state at the stamp)", std::to_string(no_state)),
+      kv("clouds rejected (malformed)", std::to_string(malformed)),
+      kv("clouds rejected (over ~max_cloud_points)", std::to_string(over_limit)),
       kv("points received", std::to_string(clouds_.points.load())),
       kv("points skipped (NaN or Inf)", std::to_string(clouds_.skipped_invalid.load())),
       kv("points skipped (outside the octree)", std::to_string(clouds_.skipped_outside.load())),
@@ -184,10 +194,12 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
     levels << (levels.tellp() > 0 ? " " : "") << level.level;
   }
   queries.values.push_back(kv("proxy levels ready (m)", levels.str()));
+  queries.values.push_back(kv("states checked", std::to_string(states_checked_.load())));
   for (const auto& [service, stats] : latency_) {
     const LatencyStats::Summary s = stats.summary();
     queries.values.push_back(kv(service + " requests", std::to_string(s.requests)));
     queries.values.push_back(kv(service + " errors", std::to_string(s.errors)));
+    queries.values.push_back(kv(service + " in progress", std::to_string(s.in_progress)));
     if (s.requests == 0) continue;
     queries.values.push_back(kv(service + " p50 (ms)", ms(s.p50)));
     queries.values.push_back(kv(service + " p90 (ms)", ms(s.p90)));

@@ -66,6 +66,7 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
   if (checks.self) self_part(state.data(), req, tolerance, root, res);
   if (checks.environment) environment_part(state.data(), *store_->snapshot(), req, tolerance, root, res);
   res.valid = !res.self_collision && !res.environment_collision;
+  ++states_checked_;
   res.warning = join_warnings(warnings);
   if (!res.contacts.empty()) publish_contacts(res.contacts);
 }
@@ -192,6 +193,7 @@ bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::
       env = store_->snapshot();
     }
     const std::vector<char> colliding = checker()->check_batch(states.data(), rows, env.get(), request);
+    states_checked_ += rows;
     res.valid.resize(rows);
     for (std::size_t r = 0; r < rows; ++r) res.valid[r] = !colliding[r];
     res.warning = join_warnings(warnings, 4);
@@ -226,6 +228,7 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     res.valid = result.valid;
     res.last_valid_fraction = result.last_valid_fraction;
     res.states_checked = static_cast<std::uint32_t>(result.states_checked);
+    states_checked_ += result.states_checked;
     if (!result.message.empty()) warnings.push_back(result.message);
     res.warning = join_warnings(warnings);
   });

@@ -64,6 +64,9 @@ class Bvh {
   const std::vector<TriangleSphere>& spheres() const { return spheres_; }
   // A closed, consistently oriented mesh: the hierarchy stands for the solid it bounds.
   bool closed() const { return closed_; }
+  // The build's work bounding the slack: point-triangle distances taken (sampled for small
+  // meshes, corners for large ones); a test bounds it, so a large mesh never takes the small path.
+  std::uint64_t slack_evaluations() const { return slack_evaluations_; }
   // One vertex of each connected component (see component_representatives()).
   const std::vector<Vec3>& component_points() const { return component_points_; }
   bool empty() const { return nodes_.empty(); }
@@ -77,6 +80,7 @@ class Bvh {
   std::vector<TrianglePlane> planes_;
   std::vector<TriangleSphere> spheres_;
   std::vector<Vec3> component_points_;
+  std::uint64_t slack_evaluations_ = 0;
   bool closed_ = false;
 
   template <class T>

@@ -90,6 +90,7 @@ class RobotCollisionModel {
   const AllowedCollisionMatrix& acm() const { return acm_; }
   const KinematicsPlan& kinematics() const { return kinematics_; }  // poses of the modelled links only
   const std::vector<Bvh<Obb>>& meshes() const { return meshes_; }
+  const std::vector<ConvexHull>& hulls() const { return hulls_; }  // per mesh
   const std::vector<std::vector<LinkShape>>& shapes() const { return shapes_; }  // per link
   const std::vector<LinkBound>& bounds() const { return bounds_; }               // per link
   const std::vector<double>& paddings() const { return padding_; }               // per link

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "bvh_collision/geometry/types.h"
@@ -18,6 +19,7 @@ struct ConvexHull {
   std::vector<std::array<int, 3>> faces;     // outward (counter-clockwise seen from outside);
                                              // empty when the points are coplanar or fewer than 4
   double extent = 0.0;                       // the largest vertex norm (for rounding margins)
+  std::uint64_t orientation_tests = 0;       // the build's work: point-against-face tests
   bool empty() const { return vertices.empty(); }
 };
 

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include <ros/callback_queue.h>
+#include <ros/message_event.h>
 #include <ros/console.h>
 #include <ros/node_handle.h>
 #include <ros/spinner.h>
@@ -115,6 +116,10 @@ class CollisionCheckerNode {
   CollisionCheckerNode(const CollisionCheckerNode&) = delete;
   CollisionCheckerNode& operator=(const CollisionCheckerNode&) = delete;
 
+  // Sets ~ready (true): call once the services are served (the spinner runs). Launch tests and
+  // clients wait for it; the robot summary (~robot) is set before any service is advertised.
+  void mark_ready();
+
   const RobotSummary& robot_summary() const { return summary_; }
   const NodeParameters& parameters() const { return params_; }
 
@@ -171,7 +176,8 @@ class CollisionCheckerNode {
   bool serve(const char* name, Response& res, Handler&& handler);
 
   // The environment (environment_services.cpp).
-  void on_cloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void on_cloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event);
+  void count_superseded(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event);
   void insert_cloud(const sensor_msgs::PointCloud2& msg);
   bool clear_environment(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
   bool clear_box(ClearBox::Request& req, ClearBox::Response& res);
@@ -203,6 +209,7 @@ class CollisionCheckerNode {
   std::optional<ros::Time> last_joint_state_;  // when the last one of ours arrived
   std::unique_ptr<JointStateHistory> history_;  // every merged state_, at its message's stamp
   mutable std::condition_variable history_grew_;  // notified on each joint state recorded
+  std::atomic<std::uint64_t> joint_states_recorded_{0};  // messages that set a joint of ours
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -217,20 +224,27 @@ class CollisionCheckerNode {
   std::uint32_t cells_subscribers_ = 0;
   std::atomic<double> last_contacts_time_{0.0};
   std::uint64_t clouds_lost_reported_ = 0;  // dropped + rejected at the last diagnostics
+  std::map<std::string, std::uint32_t> last_cloud_seq_;  // by publisher; the cloud thread's alone
 
+  // Every cloud sent to the node is received or superseded; every one received is inserted,
+  // dropped (no transform, no joint state at its stamp) or rejected (malformed, over the limit).
   struct CloudCounters {
     std::atomic<std::uint64_t> received{0}, inserted{0}, dropped_transform{0}, dropped_state{0}, rejected{0};
+    std::atomic<std::uint64_t> superseded{0};  // replaced by a newer cloud before the node took it (seq gaps)
     std::atomic<std::uint64_t> over_limit{0};  // more points than ~max_cloud_points
     std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
     std::atomic<std::uint64_t> on_robot{0}, shadowed{0};
     std::atomic<double> last_insert_seconds{0.0};
   } clouds_;
   std::map<std::string, LatencyStats> latency_;  // keys fixed at start-up: lookups need no lock
+  // Robot states the queries checked (a motion's every step): a test bounds a request's work by it.
+  std::atomic<std::uint64_t> states_checked_{0};
 };
 
 template <class Response, class Handler>
 bool CollisionCheckerNode::serve(const char* name, Response& res, Handler&& handler) {
   const auto start = std::chrono::steady_clock::now();
+  latency_.at(name).begin();
   bool failed = false;
   try {
     handler();

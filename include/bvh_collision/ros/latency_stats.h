@@ -17,11 +17,19 @@ class LatencyStats {
 
   struct Summary {
     std::uint64_t requests = 0, errors = 0;
+    std::uint64_t in_progress = 0;  // begun, not yet recorded
     double p50 = 0.0, p90 = 0.0, p99 = 0.0, max = 0.0;  // seconds, over the window
   };
 
+  // A request has begun; record() ends it.
+  void begin() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++in_progress_;
+  }
+
   void record(double seconds, bool error) {
     std::lock_guard<std::mutex> lock(mutex_);
+    --in_progress_;  // after its begin()
     ring_[requests_ % kWindow] = seconds;
     ++requests_;
     if (error) ++errors_;
@@ -34,6 +42,7 @@ class LatencyStats {
       std::lock_guard<std::mutex> lock(mutex_);
       s.requests = requests_;
       s.errors = errors_;
+      s.in_progress = in_progress_;
       window.assign(ring_.begin(), ring_.begin() + std::min<std::uint64_t>(requests_, kWindow));
     }
     if (window.empty()) return s;
@@ -49,7 +58,7 @@ class LatencyStats {
  private:
   mutable std::mutex mutex_;
   std::array<double, kWindow> ring_{};
-  std::uint64_t requests_ = 0, errors_ = 0;
+  std::uint64_t requests_ = 0, errors_ = 0, in_progress_ = 0;
 };
 
 }  // namespace bvh_collision
