@@ -19,6 +19,7 @@
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/ros/readiness.h"
 
 namespace bvh_collision::test {
 
@@ -102,13 +103,7 @@ std::string wait_for_diagnostic(const std::string& key, Holds holds, double seco
 // Waits until the node is ready (~ready true: its robot summary ~robot is set and every service
 // is served), `seconds` at most.
 inline bool wait_for_node(const std::string& node = "/collision_checker", double seconds = 60.0) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
-  for (;;) {
-    bool ready = false;
-    if (ros::param::get(node + "/ready", ready) && ready) return true;
-    if (ros::WallTime::now() > deadline || !ros::ok()) return false;
-    ros::WallDuration(0.05).sleep();
-  }
+  return wait_until_ready(node, seconds);
 }
 
 // Waits until the node has recorded a joint state (a deadline of 60 s) and returns a time no

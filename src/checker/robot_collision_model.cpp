@@ -8,6 +8,7 @@
 #include <numeric>
 #include <optional>
 
+#include "bvh_collision/checker/link_proxy_cache.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
 
@@ -45,7 +46,7 @@ LinkBound bounding_sphere(const std::vector<LinkShape>& shapes, const std::vecto
 }  // namespace
 
 RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options)
-    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits) {
+    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits), proxy_cache_(options.proxy_cache) {
   const std::size_t n = robot_.links().size();
   check_limit("robot '" + robot_.name() + "' with its links", double(n), limits_.robot_links, "max_robot_links");
   if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
@@ -95,13 +96,27 @@ ProxyLevel RobotCollisionModel::build_proxy_level(double level, const std::atomi
   for (std::size_t l = 0; l < shapes_.size(); ++l) {
     if (shapes_[l].empty()) continue;
     if (cancel != nullptr && cancel->load()) throw ProxyBuildCancelled();
-    out.links[l] = LinkProxy::build(shapes_[l], meshes_, level);
+    out.links[l] = cached_or_built_proxy(l, level, out.links_from_cache);
     out.leaves += out.links[l].leaf_count();
     out.memory_bytes += out.links[l].memory_bytes();
   }
   out.batch = ProxyBatch(*this, out);
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
+}
+
+// From the cache when it holds this link's proxy at this level (its key covers every number of
+// the link's shapes), else built and stored there.
+LinkProxy RobotCollisionModel::cached_or_built_proxy(std::size_t link, double level, std::size_t& from_cache) const {
+  if (proxy_cache_.empty()) return LinkProxy::build(shapes_[link], meshes_, level);
+  const std::uint64_t key = link_proxy_key(shapes_[link], meshes_, level);
+  if (std::optional<LinkProxy> cached = read_cached_link_proxy(proxy_cache_, key)) {
+    ++from_cache;
+    return std::move(*cached);
+  }
+  LinkProxy built = LinkProxy::build(shapes_[link], meshes_, level);
+  write_cached_link_proxy(proxy_cache_, key, built);  // a cache that cannot be written only costs time
+  return built;
 }
 
 RobotCollisionModel RobotCollisionModel::with_proxy_level(double level, const std::atomic<bool>* cancel) const {

@@ -16,6 +16,7 @@
 #include "bvh_collision/RemoveCollisionObject.h"
 #include "bvh_collision/SaveOctree.h"
 #include "bvh_collision/SetCollisionObject.h"
+#include "bvh_collision/ros/readiness.h"
 
 namespace {
 
@@ -142,7 +143,7 @@ void simple(const char* service, const std::string& asked, Srv& srv) {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "demo_client");
   ros::NodeHandle nh;
-  if (!ros::service::waitForService("/collision_checker/check_state", ros::Duration(30))) return 1;
+  if (!bvh_collision::wait_until_ready("/collision_checker", 60.0)) return 1;
   const std::vector<double> reach = {0.66, 1.0};
   // The scene publisher's first cloud: wait until the pillar is in the octree.
   for (int i = 0; i < 100; ++i) {

@@ -63,8 +63,8 @@ void CollisionCheckerNode::build_proxy_levels() {
       auto next = std::make_shared<const CollisionChecker>(checker()->with_proxy_level(levels[i], &stop_building_));
       const ProxyLevel* built = next->collision_model().proxies_for(levels[i]);
       std::atomic_store(&checker_, std::shared_ptr<const CollisionChecker>(next));
-      ROS_INFO("collision_checker: proxy level %.4g m ready: %zu spheres, %.1f KiB, built in %.2f s", built->level,
-               built->leaves, built->memory_bytes / 1024.0, built->build_seconds);
+      ROS_INFO("collision_checker: proxy level %.4g m ready: %zu spheres, %.1f KiB, in %.2f s (%zu links from the cache)",
+               built->level, built->leaves, built->memory_bytes / 1024.0, built->build_seconds, built->links_from_cache);
       if (built->leaves > kProxySphereBudget && i + 1 < levels.size()) {
         ROS_INFO("collision_checker: finer proxy levels skipped: %.4g m needed %zu spheres (budget %zu)", built->level,
                  built->leaves, kProxySphereBudget);
@@ -132,6 +132,7 @@ void CollisionCheckerNode::load_robot() {
   options.padding = params_.padding;
   options.link_padding = params_.link_padding;
   options.limits = params_.limits;
+  options.proxy_cache = params_.proxy_cache;
   // The proxy levels come later, from build_proxy_levels.
   try {
     checker_ = std::make_shared<const CollisionChecker>(std::move(model), std::move(acm), options);

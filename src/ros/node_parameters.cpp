@@ -1,5 +1,6 @@
 // The node's private parameters: read, checked, and explained when wrong.
 #include <cmath>
+#include <cstdlib>
 
 #include "bvh_collision/ros/collision_checker_node.h"
 
@@ -133,6 +134,11 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   read_link_padding(nh, p);
   p.tolerance = read_number(nh, "tolerance", p.tolerance, false);
   read_proxy_levels(nh, p);
+  const char* ros_home = std::getenv("ROS_HOME");
+  const char* home = std::getenv("HOME");
+  p.proxy_cache = ros_home && *ros_home ? std::string(ros_home) : home && *home ? std::string(home) + "/.ros" : "";
+  if (!p.proxy_cache.empty()) p.proxy_cache += "/bvh_collision/proxy_cache";
+  read(nh, "proxy_cache", p.proxy_cache, "a string (a folder; empty for none)");
   read_workspace(nh, p);
   p.max_range = read_number(nh, "max_range", p.max_range, true);
   p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);

@@ -61,6 +61,8 @@ class LinkProxy {
   std::size_t memory_bytes() const { return spheres_.capacity() * sizeof(ProxySphere); }
 
  private:
+  friend struct LinkProxyFile;  // checker/link_proxy_cache.cpp: stores and restores it as built
+
   std::vector<ProxySphere> spheres_;
   double level_ = 0.0;
   double hausdorff_ = 0.0;

@@ -38,6 +38,9 @@ struct CheckerOptions {
   // 41 s at 10 mm); with_proxy_level adds one later (the node builds 5, 10 and 20 mm so, after
   // start-up). Levels of 5 mm and up pay; 2 mm was slower than the exact check on panda.
   std::vector<double> proxy_levels;
+  // A folder where link proxies are kept by content (checker/link_proxy_cache.h): a level whose
+  // links are there is read instead of built. Empty: none (the node's ~proxy_cache has one).
+  std::string proxy_cache;
   // Grids of proven clearance for the self pairs one or two variables move
   // (checker/pair_clearance.h): a boolean self check skips such a pair with one lookup when its
   // bound clears the padding. 0 cells: none built.
@@ -53,6 +56,7 @@ struct ProxyLevel {
   double level = 0.0;
   std::vector<LinkProxy> links;  // per link (empty for links without geometry)
   std::size_t leaves = 0, memory_bytes = 0;
+  std::size_t links_from_cache = 0;  // read from CheckerOptions::proxy_cache, not built
   double build_seconds = 0.0;
   ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
 };
@@ -126,6 +130,7 @@ class RobotCollisionModel {
   void compute_motion_rates();
   void build_proxies(std::vector<double> levels);
   ProxyLevel build_proxy_level(double level, const std::atomic<bool>* cancel) const;
+  LinkProxy cached_or_built_proxy(std::size_t link, double level, std::size_t& from_cache) const;
 
   RobotModel robot_;
   AllowedCollisionMatrix acm_;
@@ -141,6 +146,7 @@ class RobotCollisionModel {
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
   Limits limits_;
+  std::string proxy_cache_;  // CheckerOptions::proxy_cache
   std::vector<ProxyLevel> proxy_levels_;
   PairClearance pair_clearance_;
 };

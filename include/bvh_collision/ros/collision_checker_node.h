@@ -69,6 +69,10 @@ struct NodeParameters {
   // default: it took 47-113 s to build (demo arm, panda, ur5e) and answered panda's self checks
   // slower than the exact path (1.8 against 1.35 us).
   std::vector<double> proxy_levels = {0.005, 0.01, 0.02};
+  // Where built link proxies are kept by content (checker/link_proxy_cache.h), so that a restart
+  // reads them instead of building them again. Unset: $ROS_HOME (or ~/.ros)/bvh_collision/proxy_cache;
+  // empty: none.
+  std::string proxy_cache;
   // Build the octree's distance field after each cloud (on the cloud thread), so that boolean
   // checks and motions skip the octree for links it clears (a 2 cm map around panda: ~48 ms).
   bool distance_field = true;

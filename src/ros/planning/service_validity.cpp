@@ -7,6 +7,7 @@
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
+#include "bvh_collision/ros/readiness.h"
 
 namespace bvh_collision {
 namespace {
@@ -27,6 +28,9 @@ void call(ros::ServiceClient& client, Service& srv) {
 
 ServicePlanningContext::ServicePlanningContext(const std::string& checker, planning::JointGroup group_, double timeout)
     : group(std::move(group_)) {
+  if (!wait_until_ready(checker, timeout)) {
+    throw std::runtime_error(checker + " did not become ready (~ready) within " + std::to_string(timeout) + " s");
+  }
   ros::NodeHandle nh(checker);
   state_ = nh.serviceClient<CheckState>("check_state", true);
   states_ = nh.serviceClient<CheckStates>("check_states", true);
