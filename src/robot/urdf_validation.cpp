@@ -184,25 +184,32 @@ std::optional<std::string> control_character(const std::string& raw) {
   return std::nullopt;
 }
 
-}  // namespace
-
-void validate_mesh_file_names(const tinyxml2::XMLElement& robot_as_written) {
-  for (const tinyxml2::XMLElement* link = robot_as_written.FirstChildElement("link"); link != nullptr;
+// Calls `visit(collision, where)` for every <collision> of every <link>, `where` naming the link
+// and the element (1-based) as every message of this file does.
+template <class Visit>
+void for_each_collision(const tinyxml2::XMLElement& robot, Visit&& visit) {
+  for (const tinyxml2::XMLElement* link = robot.FirstChildElement("link"); link != nullptr;
        link = link->NextSiblingElement("link")) {
     int element = 0;
     for (const tinyxml2::XMLElement* c = link->FirstChildElement("collision"); c != nullptr;
          c = c->NextSiblingElement("collision")) {
-      ++element;
-      const tinyxml2::XMLElement* geometry = c->FirstChildElement("geometry");
-      const tinyxml2::XMLElement* mesh = geometry ? geometry->FirstChildElement("mesh") : nullptr;
-      const char* file = mesh ? mesh->Attribute("filename") : nullptr;
-      if (file == nullptr) continue;
-      if (const std::optional<std::string> found = control_character(file)) {
-        fail("link '" + name_of(*link) + "', collision element " + std::to_string(element),
-             "<mesh> attribute 'filename' holds a control character (" + *found + "): not a file name");
-      }
+      visit(*c, "link '" + name_of(*link) + "', collision element " + std::to_string(++element));
     }
   }
+}
+
+}  // namespace
+
+void validate_mesh_file_names(const tinyxml2::XMLElement& robot_as_written) {
+  for_each_collision(robot_as_written, [](const tinyxml2::XMLElement& c, const std::string& where) {
+    const tinyxml2::XMLElement* geometry = c.FirstChildElement("geometry");
+    const tinyxml2::XMLElement* mesh = geometry ? geometry->FirstChildElement("mesh") : nullptr;
+    const char* file = mesh ? mesh->Attribute("filename") : nullptr;
+    if (file == nullptr) return;
+    if (const std::optional<std::string> found = control_character(file)) {
+      fail(where, "<mesh> attribute 'filename' holds a control character (" + *found + "): not a file name");
+    }
+  });
 }
 
 std::optional<double> parse_decimal(const std::string& word) {
@@ -223,14 +230,7 @@ std::optional<double> parse_decimal(const std::string& word) {
 }
 
 void validate_robot_xml(const tinyxml2::XMLElement& robot) {
-  for (const tinyxml2::XMLElement* link = robot.FirstChildElement("link"); link != nullptr;
-       link = link->NextSiblingElement("link")) {
-    int element = 0;
-    for (const tinyxml2::XMLElement* c = link->FirstChildElement("collision"); c != nullptr;
-         c = c->NextSiblingElement("collision")) {
-      check_collision(*c, "link '" + name_of(*link) + "', collision element " + std::to_string(++element));
-    }
-  }
+  for_each_collision(robot, check_collision);
   std::map<std::string, std::string> parent_joint;  // child link -> the joint that has it
   for (const tinyxml2::XMLElement* joint = robot.FirstChildElement("joint"); joint != nullptr;
        joint = joint->NextSiblingElement("joint")) {
