@@ -134,6 +134,8 @@ class CollisionChecker {
   std::size_t built_meshes() const { return m_->meshes().size(); }
 
  private:
+  friend class SceneChecker;  // checker/scene_checker.h: the exact tests behind its proxies
+
   bool pair_collides(int a, int b, const std::vector<Transform>& poses, const SelfCollisionRequest& request,
                      SelfCollisionResult& result) const;
   double pair_distance(int a, int b, const std::vector<Transform>& poses, double best,

@@ -1,0 +1,141 @@
+// CollisionChecker bound to one environment snapshot, prepared for a planner's many questions: a
+// boolean check of one state and a certified check of one motion, with nothing per call but the
+// geometry (no batch, no pool, no allocation once warm). Same answers and the same contract as
+// check_self + check_environment and check_motion (DESIGN.md sections 2 and 4):
+//
+// - State: collision whenever some distance is at most its padding, free whenever every one
+//   exceeds padding + tolerance. Objects are found through a grid over the robot's reach (a
+//   link's centre names a cell, the cell lists the objects within reach of it), so 60 objects
+//   cost little more than 6; each link's proxy spheres are tested against an object's exact
+//   primitive before any mesh is opened: proxies apart from it prove the link apart (they contain
+//   it), and at tolerance 0 a proxy that meets it sends the link to the exact test.
+// - Motion: an interval [s0, s1] of the straight joint-space segment is certified free by one
+//   boolean check of the proxies at its midpoint, each link's grown by how far any of its points
+//   can move in half the interval (CollisionChecker::link_speed, the kinematic chain's levers
+//   times each joint's change); an interval that fails is bisected, breadth first, its midpoint
+//   state checked (a collision there ends the motion). At a tolerance t an interval whose growth
+//   and proxy error fit in t and still fails is within t of a collision (reported colliding, as
+//   the tolerance allows); at tolerance 0 one whose growth is below a few millimetres and still
+//   fails is certified by exact conservative advancement. Free means free at every instant
+//   (tolerance 0: on the exact geometry, less min_clearance) or never closer than the tolerance.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "bvh_collision/checker/collision_checker.h"
+
+namespace bvh_collision {
+
+struct SceneCheckOptions {
+  bool self = true, environment = true;
+  double tolerance = 0.0;  // DESIGN.md section 2
+  Transform root_pose;     // the root link in the environment's frame
+  // Motions: a motion that comes within this of collision counts as colliding (as
+  // MotionRequest::min_clearance), and beyond this many interval checks it is not certified.
+  double min_clearance = 1e-5;
+  std::size_t max_intervals = 200000;
+};
+
+// The collision objects of a snapshot, for sphere queries: each object's exact primitive in its
+// own frame (boxes included; meshes by their bounding sphere until the exact test), and a grid over
+// a box of the world whose cells list the objects within `reach` of them.
+class ObjectGrid {
+ public:
+  ObjectGrid() = default;
+  ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
+
+  // Calls f(object index) for every object that might lie within `radius` of `centre`: the
+  // cell's list when radius <= reach and the centre lies in the grid, else every object.
+  template <class F>
+  void for_each_near(const Vec3& centre, double radius, F&& f) const {
+    const int c = radius <= reach_ ? cell_of(centre) : -1;
+    if (c < 0) {
+      for (std::size_t o = 0; o < solids_.size(); ++o) f(static_cast<int>(o));
+      return;
+    }
+    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) f(static_cast<int>(list_[k]));
+  }
+
+  // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
+  // object, whenever the ball meets its bounding sphere.
+  bool ball_meets(int o, const Vec3& centre, double radius) const;
+  // Is the ball's test against object `o` exact (a primitive), or only its bounding sphere's?
+  bool exact_ball_test(int o) const { return solids_[o].primitive; }
+  std::size_t size() const { return solids_.size(); }
+  std::size_t cells() const { return start_.empty() ? 0 : start_.size() - 1; }
+
+ private:
+  struct Solid {
+    Transform to_local;  // world -> object frame
+    Primitive shape;     // exact when `primitive`
+    bool primitive = false;
+    Vec3 centre = Vec3::Zero();  // world bounding sphere
+    double radius = 0.0;
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // world box
+    double margin = 0.0;  // rounding of the ball test at this object's scale
+  };
+  int cell_of(const Vec3& p) const;
+
+  std::vector<Solid> solids_;
+  Vec3 origin_ = Vec3::Zero();
+  double cell_ = 1.0, reach_ = 0.0;
+  int n_[3] = {0, 0, 0};
+  std::vector<std::uint32_t> start_, list_;
+};
+
+class SceneChecker {
+ public:
+  // Throws std::invalid_argument for a null environment, a bad root pose or tolerance. Builds the
+  // object grid, and the octree's distance field when there is an octree and none is kept.
+  SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment, const SceneCheckOptions& options = {});
+
+  // Boolean: is `state` (model().variable_count() values) in collision at the tolerance?
+  bool collides(const double* state) const;
+  // The straight motion, certified as above (MotionResult::states_checked counts intervals).
+  MotionResult check_motion(const double* start, const double* goal) const;
+
+  const CollisionChecker& checker() const { return checker_; }
+  const Environment& environment() const { return *env_; }
+  const SceneCheckOptions& options() const { return options_; }
+  // The proxy levels tests go through, coarsest first (a pair or link apart at one is apart; the
+  // last decides or sends it to the exact test); empty when none is built: then only exact tests.
+  const std::vector<const ProxyLevel*>& proxies() const { return proxies_; }
+
+  // How far any point of link `l` can move over an interval of half-width `half` of the segment
+  // (fractions), exported for the test that proves it against sampled motion.
+  double link_growth(int link, const double* start, const double* goal, double half) const;
+
+ private:
+  // One state as the tests read it: the state, its link poses (root pose applied), the world
+  // centres of the links' bounding spheres, and per link a growth (null: the state itself).
+  struct Posed {
+    const double* state = nullptr;
+    std::vector<Transform> poses;
+    std::vector<Vec3> centres;
+    const double* growth = nullptr;
+    double grow(int link) const { return growth != nullptr ? growth[link] : 0.0; }
+  };
+  // kFree: free for every state whose links lie within their growth of these poses; kHit: the
+  // state itself collides (exact, or within the tolerance); kNear: an interval not certified.
+  enum class Answer { kFree, kHit, kNear };
+  Answer check_posed(const Posed& posed) const;
+  Answer self_check(const Posed& posed) const;
+  Answer objects_check(const Posed& posed) const;
+  Answer octree_check(const Posed& posed) const;
+  bool link_meets_object_exact(int link, const Transform& pose, int object) const;
+  void pose_links(const double* state, Posed& posed) const;
+
+  CollisionChecker checker_;
+  std::shared_ptr<const Environment> env_;
+  SceneCheckOptions options_;
+  std::vector<const ProxyLevel*> proxies_;  // coarsest first; the last is the finest used
+  double level_ = 0.0;                       // the finest's
+  bool proxies_decide_self_ = false;         // tolerance >= the finest level: overlap is an answer
+  bool proxies_decide_objects_ = false;      // tolerance >= half of it
+  std::shared_ptr<const OctreeDistanceField> field_;
+  ObjectGrid grid_;
+  std::vector<int> links_;  // the links with geometry
+};
+
+}  // namespace bvh_collision

@@ -1,0 +1,220 @@
+// SceneChecker (checker/scene_checker.h), the planner-facing path, against the checker's own
+// general queries as the oracle: one state at tolerance 0 answers exactly as check_self +
+// check_environment; at a tolerance every answer keeps the contract by exact distances; the
+// interval growth holds every vertex of every link over sampled motion; a certified motion
+// answered free is free at every state of a dense sweep, and one answered colliding collides (at
+// the tolerance) where it says. Scenes are the planning benchmark's (test/planning_scenes.h) on
+// panda, and an octree pillar on the demo arm.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/robot/robot_description.h"
+#include "checker_fixtures.h"
+#include "planning_scenes.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Panda as MoveIt sets it up (its SRDF's matrix), with the node's proxy levels.
+const CollisionChecker& panda() {
+  static const CollisionChecker checker = [] {
+    const std::string dir = test::robots_dir() + "/panda";
+    RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+    apply_srdf(parse_srdf(read_text(dir + "/robot.srdf"), &model), model, acm);
+    CheckerOptions options;
+    options.proxy_levels = {0.005, 0.01, 0.02};
+    return CollisionChecker(std::move(model), std::move(acm), options);
+  }();
+  return checker;
+}
+
+// The smallest distance less padding over self pairs and obstacles (<= 0: in collision), exact.
+double exact_clearance(const CollisionChecker& checker, const double* q, const Environment& env) {
+  SelfCollisionRequest self;
+  self.distance = true;
+  const SelfCollisionResult s = checker.check_self(q, self);
+  if (s.collision) return 0.0;
+  EnvironmentRequest request;
+  request.distance = true;
+  request.contacts = false;
+  const EnvironmentResult e = checker.check_environment(q, env, request);
+  if (e.collision) return 0.0;
+  return std::min(s.min_distance, e.min_distance);  // panda has no padding here
+}
+
+bool exact_collides(const CollisionChecker& checker, const double* q, const Environment& env) {
+  EnvironmentRequest request;
+  request.contacts = false;
+  return checker.check_self(q).collision || checker.check_environment(q, env, request).collision;
+}
+
+TEST(SceneChecker, StatesAnswerAsTheGeneralQueries) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  std::mt19937_64 rng(5);
+  std::size_t states = 0, colliding = 0, within = 0;
+  for (int scene = 0; scene < 4; ++scene) {
+    const auto env = std::make_shared<const Environment>(test::generate_scene(11, scene).environment());
+    const SceneChecker exact(checker, env);
+    SceneCheckOptions at_1cm;
+    at_1cm.tolerance = 0.01;
+    const SceneChecker coarse(checker, env, at_1cm);
+    for (int i = 0; i < test::sized(400); ++i, ++states) {
+      const std::vector<double> q = random_configuration(checker.model(), rng);
+      const bool truth = exact_collides(checker, q.data(), *env);
+      colliding += truth;
+      ASSERT_EQ(exact.collides(q.data()), truth) << "scene " << scene << " state " << i;
+      // At 1 cm: collision whenever it collides, free whenever clearance exceeds 1 cm.
+      const bool answer = coarse.collides(q.data());
+      if (truth) {
+        ASSERT_TRUE(answer) << "scene " << scene << " state " << i;
+      } else if (answer) {
+        const double clearance = exact_clearance(checker, q.data(), *env);
+        ASSERT_LE(clearance, 0.01 + 1e-9) << "scene " << scene << " state " << i;
+        ++within;
+      }
+    }
+  }
+  std::cout << states << " states, " << colliding << " colliding; at 1 cm " << within
+            << " free ones answered colliding, all within 1 cm\n";
+  EXPECT_GT(colliding, states / 10);  // the scenes are cluttered enough to test both answers
+  EXPECT_LT(colliding, states - states / 10);
+}
+
+// Every vertex of every link at any instant of an interval lies within the link's growth of
+// where it is at the interval's midpoint. A rigid displacement is affine in the point, so its
+// length is convex and largest at a vertex of the link's hull: vertices prove it for every point.
+TEST(SceneChecker, IntervalGrowthHoldsEveryVertex) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  const auto env = std::make_shared<const Environment>(0.05);
+  const SceneChecker scene(checker, env);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double tightest = 0.0;
+  for (int i = 0; i < test::sized(60); ++i) {
+    const std::vector<double> a = random_configuration(model, rng), b = random_configuration(model, rng);
+    const double lo = unit(rng), hi = lo + (1.0 - lo) * unit(rng), mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    auto at = [&](double s) {
+      std::vector<double> q(a.size());
+      for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
+      std::vector<Transform> poses;
+      forward_kinematics(model, q.data(), poses);
+      return poses;
+    };
+    const std::vector<Transform> centre = at(mid);
+    for (int k = 0; k <= 10; ++k) {
+      const std::vector<Transform> poses = at(lo + (hi - lo) * k / 10.0);
+      for (std::size_t l = 0; l < poses.size(); ++l) {
+        const double growth = scene.link_growth(static_cast<int>(l), a.data(), b.data(), half);
+        for (const CollisionElement& e : model.links()[l].collision) {
+          for (const Vec3& v : e.mesh->vertices) {
+            const double moved = (poses[l] * (e.origin * v) - centre[l] * (e.origin * v)).norm();
+            ASSERT_LE(moved, growth) << "link " << model.links()[l].name << " case " << i;
+            if (growth > 0) tightest = std::max(tightest, moved / growth);
+          }
+        }
+      }
+    }
+  }
+  std::cout << "largest vertex displacement / growth: " << tightest << "\n";
+  EXPECT_GT(tightest, 0.05);  // the bound is not vacuous
+}
+
+// Motions like a planner's edges between free states: free answers are free along a dense
+// sweep (exact, every 2e-3 of the way); colliding answers collide where they say (at 1 cm:
+// within 1 cm); at tolerance 0 the answers equal the checker's own certified check_motion.
+TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  std::mt19937_64 rng(13);
+  std::size_t motions = 0, free_motions = 0;
+  for (int scene = 0; scene < 2; ++scene) {
+    const auto env = std::make_shared<const Environment>(test::generate_scene(11, 10 + scene).environment());
+    for (const double tolerance : {0.0, 0.01}) {
+      SceneCheckOptions options;
+      options.tolerance = tolerance;
+      const SceneChecker fast(checker, env, options);
+      std::vector<std::vector<double>> free;
+      while (free.size() < 12) {
+        const std::vector<double> q = random_configuration(checker.model(), rng);
+        if (!exact_collides(checker, q.data(), *env)) free.push_back(q);
+      }
+      for (std::size_t i = 0; i + 1 < free.size(); ++i, ++motions) {
+        std::vector<double> b = free[i];
+        for (std::size_t j = 0; j < b.size(); ++j) b[j] += 0.4 * (free[i + 1][j] - free[i][j]);
+        const MotionResult r = fast.check_motion(free[i].data(), b.data());
+        ASSERT_TRUE(r.certified) << r.message;
+        if (tolerance == 0.0) {
+          MotionRequest request;
+          EXPECT_EQ(checker.check_motion(free[i].data(), b.data(), *env, request).valid, r.valid) << "motion " << i;
+        }
+        auto state = [&](double s) {
+          std::vector<double> q(b.size());
+          for (std::size_t j = 0; j < q.size(); ++j) q[j] = free[i][j] + s * (b[j] - free[i][j]);
+          return q;
+        };
+        if (r.valid) {
+          ++free_motions;
+          for (int k = 0; k <= 500; ++k) ASSERT_FALSE(exact_collides(checker, state(k / 500.0).data(), *env)) << "motion " << i << " at " << k;
+        } else {
+          const std::vector<double> q = state(r.colliding_fraction);
+          EXPECT_LE(exact_clearance(checker, q.data(), *env), tolerance + 1e-5 + 1e-9) << "motion " << i;
+          EXPECT_LE(r.last_valid_fraction, r.colliding_fraction);
+        }
+      }
+    }
+  }
+  std::cout << motions << " motions, " << free_motions << " free\n";
+  EXPECT_GT(free_motions, 0u);
+  EXPECT_LT(free_motions, motions);
+}
+
+// An octree obstacle: the demo arm around a pillar of voxels, exact and at 1 cm.
+TEST(SceneChecker, OctreeStatesAnswerAsTheGeneralQueries) {
+  CheckerOptions options;
+  options.proxy_levels = {0.01, 0.02};
+  const CollisionChecker checker = test::demo_arm_checker(options);
+  Environment world(0.02);
+  for (double z = 0.0; z < 1.0; z += 0.01) {
+    for (double x = 0.3; x < 0.4; x += 0.01) {
+      for (double y = -0.05; y < 0.05; y += 0.01) world.octree().update(*world.octree().grid().key(Vec3(x, y, z)), true);
+    }
+  }
+  const auto env = std::make_shared<const Environment>(world);
+  const SceneChecker exact(checker, env);
+  SceneCheckOptions at_1cm;
+  at_1cm.tolerance = 0.01;
+  const SceneChecker coarse(checker, env, at_1cm);
+  std::mt19937_64 rng(17);
+  int colliding = 0;
+  for (int i = 0; i < test::sized(400); ++i) {
+    const std::vector<double> q = random_configuration(checker.model(), rng);
+    const bool truth = exact_collides(checker, q.data(), *env);
+    colliding += truth;
+    ASSERT_EQ(exact.collides(q.data()), truth) << "state " << i;
+    if (truth) {
+      ASSERT_TRUE(coarse.collides(q.data()));
+    } else if (coarse.collides(q.data())) {
+      ASSERT_LE(exact_clearance(checker, q.data(), *env), 0.01 + 1e-9);
+    }
+  }
+  EXPECT_GT(colliding, 10);
+}
+
+}  // namespace
+}  // namespace bvh_collision
