@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
+#include <random>
 
 #include "bvh_collision/planning/ompl_validity.h"
 #include "checker_fixtures.h"
@@ -34,10 +36,14 @@ const std::vector<std::string> kArm = {"joint1", "joint2", "joint3", "joint4", "
 // Leaning forward at 1 rad, swung from +x past the pillar (at about 0.66 rad of joint1).
 const std::vector<double> kStart = {0.0, 1.0, 0.0, 0.0, 0.0, 0.0}, kGoal = {1.3, 1.0, 0.0, 0.0, 0.0, 0.0};
 
-std::shared_ptr<CheckerPlanningContext> demo_context() {
-  const CollisionChecker checker = test::demo_arm_checker();
+std::shared_ptr<CheckerPlanningContext> demo_context(double tolerance = 0.01) {
+  CheckerOptions options;
+  options.proxy_levels = {0.01, 0.02};
+  const CollisionChecker checker = test::demo_arm_checker(options);
   std::vector<double> base(checker.model().variable_count(), 0.0);
-  return std::make_shared<CheckerPlanningContext>(checker, pillar_scene(), JointGroup::of(checker.model(), kArm), base);
+  auto context = std::make_shared<CheckerPlanningContext>(checker, pillar_scene(), JointGroup::of(checker.model(), kArm), base);
+  context->tolerance = tolerance;
+  return context;
 }
 
 // Exact checks every `step` of joint motion (max norm), both ends included: a brute-force sweep.
@@ -96,7 +102,7 @@ TEST(OmplValidity, RrtConnectPlansAroundThePillarAndEverySegmentIsFree) {
 }
 
 TEST(OmplValidity, ValidatorsAgreeWithTheCheckersOwnQueries) {
-  const auto context = demo_context();
+  const auto context = demo_context(0.0);
   auto si = std::make_shared<ob::SpaceInformation>(context->group.make_space());
   CheckerStateValidityChecker states(si, context);
   CheckerMotionValidator motions(si, context);
@@ -111,8 +117,11 @@ TEST(OmplValidity, ValidatorsAgreeWithTheCheckersOwnQueries) {
     EXPECT_EQ(states.isValid(s.get()), !colliding) << i;
     (colliding ? invalid : valid)++;
     const double clearance = states.clearance(s.get());
-    if (colliding) EXPECT_EQ(clearance, 0.0);
-    if (!colliding) EXPECT_GT(clearance, 0.0);
+    if (colliding) {
+      EXPECT_EQ(clearance, 0.0);
+    } else {
+      EXPECT_GT(clearance, 0.0);
+    }
   }
   EXPECT_GT(valid, 0);
   EXPECT_GT(invalid, 0);
@@ -128,6 +137,37 @@ TEST(OmplValidity, ValidatorsAgreeWithTheCheckersOwnQueries) {
   EXPECT_EQ(motions.getCheckedMotionCount(), 1u);
   EXPECT_EQ(motions.getInvalidMotionCount(), 1u);
   si->freeState(last);
+}
+
+// At the default tolerance (1 cm): a state answered valid is free on the exact geometry, one
+// answered invalid is within 1 cm of a collision.
+TEST(OmplValidity, AtTheDefaultToleranceValidIsFree) {
+  const auto context = demo_context();
+  EXPECT_EQ(CheckerPlanningContext(context->checker, context->environment, context->group, context->base_state).tolerance, 0.01);
+  auto si = std::make_shared<ob::SpaceInformation>(context->group.make_space());
+  CheckerStateValidityChecker states(si, context);
+  ob::ScopedState<> s(si->getStateSpace());
+  int valid = 0, near = 0;
+  for (int i = 0; i < test::sized(300); ++i) {
+    s.random();
+    const std::vector<double> q = context->full_state(s.get());
+    SelfCollisionRequest self;
+    self.distance = true;
+    EnvironmentRequest env;
+    env.distance = true;
+    const SelfCollisionResult rs = context->checker.check_self(q.data(), self);
+    const EnvironmentResult re = context->checker.check_environment(q.data(), *context->environment, env);
+    const double clearance = rs.collision || re.collision ? 0.0 : std::min(rs.min_distance, re.min_distance);
+    if (states.isValid(s.get())) {
+      ++valid;
+      EXPECT_GT(clearance, 0.0) << i;
+    } else {
+      EXPECT_LE(clearance, 0.01 + 1e-9) << i;
+      near += clearance > 0.0;
+    }
+  }
+  EXPECT_GT(valid, 0);
+  std::cout << valid << " valid; " << near << " free states within 1 cm answered invalid\n";
 }
 
 TEST(OmplValidity, BadGroupsAndStatesAreNamed) {

@@ -7,6 +7,7 @@
 // panda, and an octree pillar on the demo arm.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -71,12 +72,15 @@ TEST(SceneChecker, StatesAnswerAsTheGeneralQueries) {
     const SceneChecker exact(checker, env);
     SceneCheckOptions at_1cm;
     at_1cm.tolerance = 0.01;
+    const SceneChecker planner(checker, env, at_1cm);  // states exact (the default)
+    at_1cm.states_at_tolerance = true;
     const SceneChecker coarse(checker, env, at_1cm);
     for (int i = 0; i < test::sized(400); ++i, ++states) {
       const std::vector<double> q = random_configuration(checker.model(), rng);
       const bool truth = exact_collides(checker, q.data(), *env);
       colliding += truth;
       ASSERT_EQ(exact.collides(q.data()), truth) << "scene " << scene << " state " << i;
+      ASSERT_EQ(planner.collides(q.data()), truth) << "scene " << scene << " state " << i;
       // At 1 cm: collision whenever it collides, free whenever clearance exceeds 1 cm.
       const bool answer = coarse.collides(q.data());
       if (truth) {
@@ -133,6 +137,78 @@ TEST(SceneChecker, IntervalGrowthHoldsEveryVertex) {
   }
   std::cout << "largest vertex displacement / growth: " << tightest << "\n";
   EXPECT_GT(tightest, 0.05);  // the bound is not vacuous
+}
+
+// The links above `link`, itself first, up to the root.
+std::vector<int> chain_of(const RobotModel& model, int link) {
+  std::vector<int> out{link};
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (const RobotJoint& j : model.joints()) {
+      if (j.child_link == out.back()) {
+        out.push_back(j.parent_link);
+        moved = true;
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+// The same for a self pair in the frame of the two links' deepest common ancestor, where the
+// joints above it move neither: the largest displacement of a vertex of each link there, summed,
+// bounds how far their distance can fall, and stays within the pair's growth, though only the
+// joints between the two links count.
+TEST(SceneChecker, PairGrowthHoldsEveryVertexInTheCommonAncestorsFrame) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  const SceneChecker scene(checker, std::make_shared<const Environment>(0.05));
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double tightest = 0.0, saved = 0.0;
+  for (int i = 0; i < test::sized(60); ++i) {
+    const std::vector<double> a = random_configuration(model, rng), b = random_configuration(model, rng);
+    const double lo = unit(rng), hi = lo + (1.0 - lo) * unit(rng), half = 0.5 * (hi - lo);
+    auto at = [&](double s) {
+      std::vector<double> q(a.size());
+      for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
+      std::vector<Transform> poses;
+      forward_kinematics(model, q.data(), poses);
+      return poses;
+    };
+    const std::vector<Transform> centre = at(0.5 * (lo + hi));
+    std::vector<std::vector<Transform>> samples;
+    for (int k = 0; k <= 10; ++k) samples.push_back(at(lo + (hi - lo) * k / 10.0));
+    for (std::size_t p = 0; p < checker.checked_pairs().size(); ++p) {
+      const auto [la, lb] = checker.checked_pairs()[p];
+      const std::vector<int> up_a = chain_of(model, la), up_b = chain_of(model, lb);
+      const int common = *std::find_if(up_a.begin(), up_a.end(), [&](int l) { return std::count(up_b.begin(), up_b.end(), l) > 0; });
+      const double growth = scene.pair_growth(p, a.data(), b.data(), half);
+      const double own = scene.link_growth(la, a.data(), b.data(), half) + scene.link_growth(lb, a.data(), b.data(), half);
+      saved = std::max(saved, own / std::max(growth, 1e-12));
+      for (const std::vector<Transform>& poses : samples) {
+        double moved = 0.0;
+        for (const int link : {la, lb}) {
+          double farthest = 0.0;
+          for (const CollisionElement& e : model.links()[link].collision) {
+            for (const Vec3& v : e.mesh->vertices) {
+              const Vec3 now = poses[common].inverse() * (poses[link] * (e.origin * v));
+              const Vec3 then = centre[common].inverse() * (centre[link] * (e.origin * v));
+              farthest = std::max(farthest, (now - then).norm());
+            }
+          }
+          moved += farthest;
+        }
+        ASSERT_LE(moved, growth) << "pair " << p << " case " << i;
+        if (growth > 0) tightest = std::max(tightest, moved / growth);
+      }
+    }
+  }
+  std::cout << "largest relative displacement / pair growth: " << tightest << "; the links' own growths sum to up to "
+            << saved << " times as much\n";
+  EXPECT_GT(tightest, 0.05);
+  EXPECT_GT(saved, 2.0);  // the relative bound is much tighter for some pair
 }
 
 // Motions like a planner's edges between free states: free answers are free along a dense
@@ -199,6 +275,7 @@ TEST(SceneChecker, OctreeStatesAnswerAsTheGeneralQueries) {
   const SceneChecker exact(checker, env);
   SceneCheckOptions at_1cm;
   at_1cm.tolerance = 0.01;
+  at_1cm.states_at_tolerance = true;
   const SceneChecker coarse(checker, env, at_1cm);
   std::mt19937_64 rng(17);
   int colliding = 0;

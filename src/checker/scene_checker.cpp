@@ -98,11 +98,8 @@ bool ObjectGrid::ball_meets(int o, const Vec3& centre, double radius) const {
 
 namespace {
 
-// Growth below which an interval that still fails at tolerance 0 goes to exact advancement.
-constexpr double kExactGrowth = 2e-3;
-
 struct Scratch {
-  std::vector<double> growth, state, speed;
+  std::vector<double> growth, state, speed, pair_speed, pair_growth;
 };
 
 Scratch& scratch() {
@@ -143,6 +140,7 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     links_.push_back(static_cast<int>(l));
     reach = std::max(reach, m.bounds()[l].radius + m.paddings()[l]);
   }
+  relative_pair_rates();
   if (options.environment && !env_->objects().empty()) {
     // Cells of 10 cm over the reach around the root; queries up to the largest link ball plus
     // 5 cm of growth use the cell's list.
@@ -153,6 +151,63 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     field_ = checker_.kept_distance_field(*env_, options.root_pose);
     if (!field_) field_ = checker_.prepare_distance_field(*env_, options.root_pose);
   }
+}
+
+// Per checked pair, how fast the distance between its links can change per unit of each state
+// variable: only the joints on the path between the two links change their relative pose (the
+// deepest common ancestor's frame sees the joints above it move both alike, and a distance is the
+// same in any frame), each at the rate of the link it moves (RobotCollisionModel::motion_rates:
+// the farthest that link's geometry gets from the joint's axis). A pair with a prismatic joint
+// on a chain (whose rate assumes its travel) or a joint that is no state variable keeps the sum
+// of its links' own bounds.
+void SceneChecker::relative_pair_rates() {
+  const RobotModel& robot = checker_.model();
+  const RobotCollisionModel& m = checker_.collision_model();
+  std::vector<std::vector<int>> above(robot.links().size());  // joints from the root, per link
+  for (const int j : robot.joint_order()) {
+    const RobotJoint& joint = robot.joints()[j];
+    above[joint.child_link] = above[joint.parent_link];
+    if (joint.type != JointType::kFixed) above[joint.child_link].push_back(j);
+  }
+  auto variable_of = [&](int j) {
+    const RobotJoint& joint = robot.joints()[j];
+    return joint.mimic >= 0 ? robot.joints()[joint.mimic].variable : joint.variable;
+  };
+  for (const auto& [a, b] : m.checked_pairs()) {
+    PairRates rates;
+    rates.relative = m.motion_slides()[a].empty() && m.motion_slides()[b].empty();
+    std::vector<double> w(robot.variable_count(), 0.0);
+    for (const auto& [link, other] : {std::pair<int, int>{a, b}, std::pair<int, int>{b, a}}) {
+      std::vector<char> moves(robot.variable_count(), 0);  // a joint of this side only has the variable
+      for (const int j : above[link]) {
+        if (std::find(above[other].begin(), above[other].end(), j) != above[other].end()) continue;  // moves both alike
+        const int v = variable_of(j);
+        if (v < 0) {
+          rates.relative = false;
+          continue;
+        }
+        moves[v] = 1;
+      }
+      // The link's rate for a variable covers every joint of its chain that the variable drives.
+      for (std::size_t v = 0; v < w.size(); ++v) w[v] += moves[v] ? m.motion_rates()[link][v] : 0.0;
+    }
+    for (std::size_t v = 0; v < w.size(); ++v) {
+      if (w[v] > 0.0) rates.weights.emplace_back(static_cast<int>(v), w[v]);
+    }
+    pair_rates_.push_back(std::move(rates));
+  }
+}
+
+double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double half) const {
+  const auto [a, b] = checker_.collision_model().checked_pairs()[pair];
+  double speed = 0.0;
+  if (!pair_rates_[pair].relative) {
+    speed = checker_.link_speed(a, start, goal) + checker_.link_speed(b, start, goal);
+  } else {
+    for (const auto& [v, w] : pair_rates_[pair].weights) speed += w * std::abs(goal[v] - start[v]);
+  }
+  const double g = speed * half;
+  return g * (1.0 + 1e-9) + pose_margin(g);
 }
 
 void SceneChecker::pose_links(const double* state, Posed& posed) const {
@@ -178,37 +233,59 @@ SceneChecker::Answer SceneChecker::self_check(const Posed& s) const {
   const auto& bounds = m.bounds();
   for (std::size_t p = 0; p < m.checked_pairs().size(); ++p) {
     const auto [a, b] = m.checked_pairs()[p];
-    const double pads = m.paddings()[a] + m.paddings()[b] + s.grow(a) + s.grow(b);
+    const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
+    const double pads = m.paddings()[a] + m.paddings()[b] + grow;
     const Vec3& ca = s.centres[a];
     const Vec3& cb = s.centres[b];
-    const double reach = bounds[a].radius + bounds[b].radius + pads +
-                         pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
+    const double margin = pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
+    const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
     if ((ca - cb).squaredNorm() > reach * reach) continue;
     if (m.pair_clearance().lower_bound(p, s.state) > pads) continue;
     const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
       return !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
     });
     if (apart) continue;
-    if (s.growth != nullptr) return Answer::kNear;
-    if (proxies_decide_self_) return Answer::kHit;
+    if (s.growth != nullptr) {
+      // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
+      if (grow > level_ && !proxies_.empty()) return Answer::kNear;
+      const double limit = grown_radius(pads) + margin;
+      SelfCollisionResult r;
+      if (checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r) > limit) continue;
+      return Answer::kNear;
+    }
+    if (s.tolerant && proxies_decide_self_) return Answer::kHit;
     SelfCollisionResult r;
-    if (checker_.pair_collides(a, b, s.poses, SelfCollisionRequest{options_.tolerance}, r)) return Answer::kHit;
+    if (checker_.pair_collides(a, b, s.poses, SelfCollisionRequest{s.tolerant ? options_.tolerance : 0.0}, r)) return Answer::kHit;
   }
   return Answer::kFree;
 }
 
-bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int object) const {
+bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
   const detail::ShapeRef obstacle{o.mesh.get(), o.hull.get(), o.primitive};
   detail::PairRequest r;
   r.padding = m.paddings()[link];
-  r.tolerance = options_.tolerance;
+  r.tolerance = tolerance;
   QueryStats stats;
   for (const LinkShape& shape : m.shapes()[link]) {
     if (detail::shapes_collide(m.ref(shape), pose * shape.origin, obstacle, o.pose, r, nullptr, stats)) return true;
   }
   return false;
+}
+
+bool SceneChecker::link_farther_from_object(int link, const Transform& pose, int object, double limit) const {
+  const RobotCollisionModel& m = checker_.collision_model();
+  const CollisionObject& o = env_->objects()[object];
+  const detail::ShapeRef obstacle{o.mesh.get(), o.hull.get(), o.primitive};
+  QueryStats stats;
+  for (const LinkShape& shape : m.shapes()[link]) {
+    Vec3 wa, wb;
+    const double d = detail::shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, limit * (1 + 1e-9) + 1e-12,
+                                             true, wa, wb, stats);
+    if (!(d > limit)) return false;
+  }
+  return true;
 }
 
 SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
@@ -227,8 +304,12 @@ SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
       });
       if (apart) return;
       if (s.growth != nullptr) {
-        answer = Answer::kNear;
-      } else if ((proxies_decide_objects_ && grid_.exact_ball_test(o)) || link_meets_object_exact(l, s.poses[l], o)) {
+        // Within the proxies' level: the exact distance at the midpoint decides.
+        const bool exact = s.grow(l) <= level_ || proxies_.empty();
+        const double limit = grown_radius(pad) + pose_margin(c.norm() + r);
+        if (!exact || !link_farther_from_object(l, s.poses[l], o, limit)) answer = Answer::kNear;
+      } else if ((s.tolerant && proxies_decide_objects_ && grid_.exact_ball_test(o)) ||
+                 link_meets_object_exact(l, s.poses[l], o, s.tolerant ? options_.tolerance : 0.0)) {
         answer = Answer::kHit;
       }
     });
@@ -256,12 +337,17 @@ SceneChecker::Answer SceneChecker::octree_check(const Posed& s) const {
       });
     });
     if (apart) continue;
-    if (s.growth != nullptr) return Answer::kNear;
-    if (proxies_decide_objects_) return Answer::kHit;
-    EnvironmentRequest request;
-    request.tolerance = options_.tolerance;
-    request.contacts = false;
     EnvironmentResult result;
+    if (s.growth != nullptr) {
+      if (s.grow(l) > level_ && !proxies_.empty()) return Answer::kNear;
+      const double limit = grown_radius(pad) + pose_margin(c.norm() + m.bounds()[l].radius);
+      if (checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result) > limit) continue;
+      return Answer::kNear;
+    }
+    if (s.tolerant && proxies_decide_objects_) return Answer::kHit;
+    EnvironmentRequest request;
+    request.tolerance = s.tolerant ? options_.tolerance : 0.0;
+    request.contacts = false;
     if (checker_.link_meets_octree(l, s.poses[l], tree, request, result)) return Answer::kHit;
   }
   return Answer::kFree;
@@ -276,10 +362,21 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   return octree_check(s);
 }
 
+bool SceneChecker::end_clear_at_tolerance(const double* state) const {
+  thread_local Posed posed;
+  pose_links(state, posed);
+  posed.growth = nullptr;
+  posed.pair_growth = nullptr;
+  posed.tolerant = true;
+  return check_posed(posed) == Answer::kFree;
+}
+
 bool SceneChecker::collides(const double* state) const {
   thread_local Posed posed;
   pose_links(state, posed);
   posed.growth = nullptr;
+  posed.pair_growth = nullptr;
+  posed.tolerant = options_.states_at_tolerance;
   return check_posed(posed) != Answer::kFree;
 }
 
@@ -304,7 +401,39 @@ double certified_prefix(std::vector<Interval> done) {
 
 }  // namespace
 
-MotionResult SceneChecker::check_motion(const double* start, const double* goal) const {
+template <class At>
+SceneChecker::Step SceneChecker::check_interval(double lo, double hi, At&& at, bool tolerant) const {
+  thread_local Posed posed;
+  Scratch& s = scratch();
+  const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  double largest = 0.0;
+  for (const int l : links_) {
+    const double g = s.speed[l] * half;
+    s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g);
+    largest = std::max(largest, s.growth[l]);
+  }
+  for (std::size_t p = 0; p < s.pair_speed.size(); ++p) {
+    const double g = s.pair_speed[p] * half;
+    s.pair_growth[p] = g * (1.0 + 1e-9) + pose_margin(g);
+  }
+  pose_links(at(mid), posed);
+  posed.growth = s.growth.data();
+  posed.pair_growth = s.pair_growth.data();
+  if (check_posed(posed) == Answer::kFree) return {Step::kCertified};
+  posed.growth = nullptr;
+  posed.pair_growth = nullptr;
+  posed.tolerant = tolerant;
+  if (check_posed(posed) != Answer::kFree) return {Step::kCollides, mid};
+  // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
+  // link within level + 2 largest (a self pair) of a collision at its midpoint.
+  if (tolerant && level_ + 2.0 * largest <= options_.tolerance) return {Step::kCollides, mid};
+  // Growth below the level is tested by exact distances: a failure within min_clearance is a
+  // pair within padding + min_clearance at the midpoint (counted as colliding, as advancement does).
+  if (2.0 * largest <= options_.min_clearance && (largest <= level_ || proxies_.empty())) return {Step::kCollides, mid};
+  return {Step::kSplit};
+}
+
+MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
   const std::size_t n = checker_.model().variable_count();
   for (std::size_t j = 0; j < n; ++j) {
     if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) {
@@ -313,87 +442,76 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal)
   }
   MotionResult result;
   Scratch& s = scratch();
-  thread_local Posed posed;
   s.state.resize(n);
   auto at = [&](double f) {
     for (std::size_t j = 0; j < n; ++j) s.state[j] = f >= 1.0 ? goal[j] : start[j] + f * (goal[j] - start[j]);
     return s.state.data();
   };
-  auto collide_at = [&](double f) {
-    result.colliding_fraction = f;
+  // The ends first (a planner's goal state is often the colliding one); the start's collision is
+  // the earliest there is.
+  result.states_checked = 2;
+  if (collides(at(0.0))) {
+    result.colliding_fraction = 0.0;
     result.certified = true;
     return result;
-  };
-  // The ends first: a planner's goal state is often the colliding one.
-  for (const double f : {1.0, 0.0}) {
-    ++result.states_checked;
-    if (collides(at(f))) return collide_at(f);
   }
+  double found = collides(at(1.0)) ? 1.0 : -1.0;  // the earliest collision known
+  if (found >= 0.0 && !earliest) {
+    result.colliding_fraction = found;
+    result.certified = true;
+    return result;
+  }
+  // At a tolerance, a motion may count as colliding where it comes within the tolerance, unless
+  // one of its ends already does: a planner must be able to leave a state it accepted.
+  const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && end_clear_at_tolerance(start) &&
+                        end_clear_at_tolerance(goal);
   const RobotCollisionModel& m = checker_.collision_model();
   s.speed.assign(m.shapes().size(), 0.0);
   for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
   s.growth.assign(m.shapes().size(), 0.0);
+  s.pair_speed.assign(pair_rates_.size(), 0.0);
+  s.pair_growth.assign(pair_rates_.size(), 0.0);
+  for (std::size_t p = 0; p < pair_rates_.size(); ++p) {
+    const auto [a, b] = m.checked_pairs()[p];
+    if (!pair_rates_[p].relative) {
+      s.pair_speed[p] = s.speed[a] + s.speed[b];
+      continue;
+    }
+    for (const auto& [v, w] : pair_rates_[p].weights) s.pair_speed[p] += w * std::abs(goal[v] - start[v]);
+  }
   std::vector<Interval> done;
   std::deque<Interval> todo{{0.0, 1.0}};
   while (!todo.empty()) {
-    const Interval i = todo.front();
-    todo.pop_front();
+    const Interval i = earliest ? todo.back() : todo.front();
+    earliest ? todo.pop_back() : todo.pop_front();
+    if (found >= 0.0 && i.lo >= found) continue;  // beyond a collision already found
     if (++result.states_checked > options_.max_intervals) {
       result.message = "not certified after " + std::to_string(options_.max_intervals) + " intervals";
       result.last_valid_fraction = certified_prefix(done);
       return result;
     }
-    const double mid = 0.5 * (i.lo + i.hi), half = 0.5 * (i.hi - i.lo);
-    double largest = 0.0;
-    for (const int l : links_) {
-      const double g = s.speed[l] * half;
-      s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g);
-      largest = std::max(largest, s.growth[l]);
-    }
-    pose_links(at(mid), posed);
-    posed.growth = s.growth.data();
-    if (check_posed(posed) == Answer::kFree) {
+    const Step step = check_interval(i.lo, i.hi, at, tolerant);
+    if (step.outcome == Step::kCertified) {
       done.push_back(i);
-      continue;
+    } else if (step.outcome == Step::kCollides) {
+      found = found < 0.0 ? step.at : std::min(found, step.at);
+      if (!earliest) break;
+      if (step.at > i.lo) todo.push_back({i.lo, step.at});
+    } else if (earliest) {
+      todo.push_back({0.5 * (i.lo + i.hi), i.hi});
+      todo.push_back({i.lo, 0.5 * (i.lo + i.hi)});
+    } else {
+      todo.push_back({i.lo, 0.5 * (i.lo + i.hi)});
+      todo.push_back({0.5 * (i.lo + i.hi), i.hi});
     }
-    posed.growth = nullptr;
-    if (check_posed(posed) != Answer::kFree) {
-      result.last_valid_fraction = certified_prefix(done);
-      return collide_at(mid);
-    }
-    // Proxies within the level of the links, grown by at most `largest`: a failed interval
-    // puts a link within level + 2 largest (a self pair) of a collision at its midpoint.
-    if (!proxies_.empty() && options_.tolerance > 0.0 && level_ + 2.0 * largest <= options_.tolerance) {
-      result.last_valid_fraction = certified_prefix(done);
-      return collide_at(mid);
-    }
-    if (largest <= kExactGrowth) {
-      // Ambiguous at this size: exact conservative advancement over the interval.
-      std::vector<double> a(start, start + n), b(n);
-      std::copy(at(i.lo), at(i.lo) + n, a.begin());
-      std::copy(at(i.hi), at(i.hi) + n, b.begin());
-      MotionRequest request;
-      request.self = options_.self;
-      request.environment = options_.environment;
-      request.tolerance = options_.tolerance;
-      request.root_pose = options_.root_pose;
-      request.min_clearance = options_.min_clearance;
-      const MotionResult sub = checker_.check_motion(a.data(), b.data(), *env_, request);
-      result.states_checked += sub.states_checked;
-      if (!sub.valid) {
-        done.push_back({i.lo, i.lo + sub.last_valid_fraction * (i.hi - i.lo)});
-        result.last_valid_fraction = certified_prefix(done);
-        result.message = sub.message;
-        if (sub.colliding_fraction >= 0.0) return collide_at(i.lo + sub.colliding_fraction * (i.hi - i.lo));
-        return result;
-      }
-      done.push_back(i);
-      continue;
-    }
-    todo.push_back({i.lo, mid});
-    todo.push_back({mid, i.hi});
   }
-  result.valid = result.certified = true;
+  result.certified = true;
+  if (found >= 0.0) {
+    result.colliding_fraction = found;
+    result.last_valid_fraction = certified_prefix(done);
+    return result;
+  }
+  result.valid = true;
   result.last_valid_fraction = 1.0;
   return result;
 }

@@ -72,10 +72,27 @@ CheckerPlanningContext::CheckerPlanningContext(CollisionChecker checker_, std::s
 }
 
 std::vector<double> CheckerPlanningContext::full_state(const ompl::base::State* state) const {
-  std::vector<double> full = base_state;
+  std::vector<double> full;
+  full_state(state, full);
+  return full;
+}
+
+void CheckerPlanningContext::full_state(const ompl::base::State* state, std::vector<double>& full) const {
+  full.assign(base_state.begin(), base_state.end());
   const double* v = values(state);
   for (std::size_t i = 0; i < variables_.size(); ++i) full[variables_[i]] = v[i];
-  return full;
+}
+
+const SceneChecker& CheckerPlanningContext::scene() const {
+  std::call_once(scene_once_, [&] {
+    SceneCheckOptions options;
+    options.self = self;
+    options.environment = obstacles;
+    options.tolerance = tolerance;
+    options.root_pose = root_pose;
+    scene_ = std::make_unique<const SceneChecker>(checker, environment, options);
+  });
+  return *scene_;
 }
 
 CheckerStateValidityChecker::CheckerStateValidityChecker(const ompl::base::SpaceInformationPtr& si,
@@ -88,13 +105,9 @@ bool CheckerStateValidityChecker::isValid(const ompl::base::State* state) const 
   const CheckerPlanningContext& c = *context_;
   ++c.counters->states;
   ValidityTimer timer(c.counters.get());
-  const std::vector<double> q = c.full_state(state);
-  BatchRequest request;
-  request.self = c.self;
-  request.environment = c.obstacles;
-  request.tolerance = c.tolerance;
-  request.root_pose = c.root_pose;
-  return c.checker.check_batch(q.data(), 1, c.environment.get(), request).front() == 0;
+  thread_local std::vector<double> q;
+  c.full_state(state, q);
+  return !c.scene().collides(q.data());
 }
 
 double CheckerStateValidityChecker::clearance(const ompl::base::State* state) const {
@@ -125,28 +138,25 @@ CheckerMotionValidator::CheckerMotionValidator(const ompl::base::SpaceInformatio
                                                std::shared_ptr<const CheckerPlanningContext> context)
     : ompl::base::MotionValidator(si), context_(std::move(context)) {}
 
-MotionResult CheckerMotionValidator::check(const ompl::base::State* s1, const ompl::base::State* s2) const {
+MotionResult CheckerMotionValidator::check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const {
   const CheckerPlanningContext& c = *context_;
   ++c.counters->motions;
   ValidityTimer timer(c.counters.get());
-  const std::vector<double> a = c.full_state(s1), b = c.full_state(s2);
-  MotionRequest request;
-  request.self = c.self;
-  request.environment = c.obstacles;
-  request.tolerance = c.tolerance;
-  request.root_pose = c.root_pose;
-  return c.checker.check_motion(a.data(), b.data(), *c.environment, request);
+  thread_local std::vector<double> a, b;
+  c.full_state(s1, a);
+  c.full_state(s2, b);
+  return c.scene().check_motion(a.data(), b.data(), earliest);
 }
 
 bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const {
-  const bool free = check(s1, s2).valid;
+  const bool free = check(s1, s2, false).valid;
   ++(free ? valid_ : invalid_);
   return free;
 }
 
 bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
                                          std::pair<ompl::base::State*, double>& last_valid) const {
-  const MotionResult r = check(s1, s2);
+  const MotionResult r = check(s1, s2, true);
   if (!r.valid) {
     last_valid.second = r.last_valid_fraction;
     if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, r.last_valid_fraction, last_valid.first);

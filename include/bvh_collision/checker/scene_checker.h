@@ -35,6 +35,10 @@ struct SceneCheckOptions {
   // MotionRequest::min_clearance), and beyond this many interval checks it is not certified.
   double min_clearance = 1e-5;
   std::size_t max_intervals = 200000;
+  // False (the default): state checks are exact whatever the tolerance (the proxies prove a
+  // state free, an exact test confirms a hit), so that a planner can accept a goal a millimetre
+  // from a table; true: a state within the tolerance may count as colliding (cheaper hits).
+  bool states_at_tolerance = false;
 };
 
 // The collision objects of a snapshot, for sphere queries: each object's exact primitive in its
@@ -93,7 +97,10 @@ class SceneChecker {
   // Boolean: is `state` (model().variable_count() values) in collision at the tolerance?
   bool collides(const double* state) const;
   // The straight motion, certified as above (MotionResult::states_checked counts intervals).
-  MotionResult check_motion(const double* start, const double* goal) const;
+  // `earliest`: find the first collision, so that last_valid_fraction is where a planner can go
+  // (intervals depth first, left first, each collision found narrowing the search to before
+  // it); otherwise intervals breadth first, stopping at any collision (a boolean answer).
+  MotionResult check_motion(const double* start, const double* goal, bool earliest = false) const;
 
   const CollisionChecker& checker() const { return checker_; }
   const Environment& environment() const { return *env_; }
@@ -105,6 +112,9 @@ class SceneChecker {
   // How far any point of link `l` can move over an interval of half-width `half` of the segment
   // (fractions), exported for the test that proves it against sampled motion.
   double link_growth(int link, const double* start, const double* goal, double half) const;
+  // How far the distance between the links of checked pair `pair` can fall over such an
+  // interval: only the joints on the path between the two links count (proven by a test the same way).
+  double pair_growth(std::size_t pair, const double* start, const double* goal, double half) const;
 
  private:
   // One state as the tests read it: the state, its link poses (root pose applied), the world
@@ -114,6 +124,8 @@ class SceneChecker {
     std::vector<Transform> poses;
     std::vector<Vec3> centres;
     const double* growth = nullptr;
+    const double* pair_growth = nullptr;  // per checked pair: how far its links' distance can fall
+    bool tolerant = false;  // the state itself (no growth): a hit within the tolerance may count
     double grow(int link) const { return growth != nullptr ? growth[link] : 0.0; }
   };
   // kFree: free for every state whose links lie within their growth of these poses; kHit: the
@@ -123,8 +135,20 @@ class SceneChecker {
   Answer self_check(const Posed& posed) const;
   Answer objects_check(const Posed& posed) const;
   Answer octree_check(const Posed& posed) const;
-  bool link_meets_object_exact(int link, const Transform& pose, int object) const;
+  bool link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const;
+  // Is the link's exact distance to the object above `limit`?
+  bool link_farther_from_object(int link, const Transform& pose, int object, double limit) const;
+  // One interval of a motion: certified, a collision at `at`, or to be split.
+  struct Step {
+    enum Outcome { kCertified, kCollides, kSplit } outcome;
+    double at = -1.0;
+  };
+  template <class At>
+  Step check_interval(double lo, double hi, At&& at, bool tolerant) const;
+  // Is the state farther than the tolerance from every collision (by the proxies)?
+  bool end_clear_at_tolerance(const double* state) const;
   void pose_links(const double* state, Posed& posed) const;
+  void relative_pair_rates();
 
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;
@@ -136,6 +160,11 @@ class SceneChecker {
   std::shared_ptr<const OctreeDistanceField> field_;
   ObjectGrid grid_;
   std::vector<int> links_;  // the links with geometry
+  struct PairRates {
+    bool relative = true;  // false: the sum of the two links' own bounds
+    std::vector<std::pair<int, double>> weights;  // (state variable, rate)
+  };
+  std::vector<PairRates> pair_rates_;  // per checked pair
 };
 
 }  // namespace bvh_collision

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +21,7 @@
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/scene_checker.h"
 
 namespace bvh_collision::planning {
 
@@ -65,7 +67,11 @@ struct CheckerPlanningContext {
   JointGroup group;
   std::vector<double> base_state;  // every variable of the model (variable_names() order)
   bool self = true, obstacles = true;
-  double tolerance = 0.0;           // DESIGN.md section 2; 0: exact
+  // DESIGN.md section 2. A free answer is free at any tolerance (every distance exceeds its
+  // padding); the tolerance only lets a state or motion within it of a collision count as
+  // colliding, which lets the proxy levels answer: 1 cm by default (with levels of 5 mm or
+  // coarser built: CheckerOptions::proxy_levels); 0 asks for exact answers.
+  double tolerance = 0.01;
   Transform root_pose;              // the root link in the environment's frame
   std::shared_ptr<ValidityCounters> counters = std::make_shared<ValidityCounters>();
 
@@ -74,9 +80,16 @@ struct CheckerPlanningContext {
                          std::vector<double> base_state);
   // The full robot state for a planner state (the group's values written into the base state).
   std::vector<double> full_state(const ompl::base::State* state) const;
+  // The same into `full` (resized): no allocation once it has the size.
+  void full_state(const ompl::base::State* state, std::vector<double>& full) const;
+  // The checker the validators ask (checker/scene_checker.h), built on first use from the
+  // fields above as they are then (set them before planning); shared by both validators.
+  const SceneChecker& scene() const;
 
  private:
   std::vector<int> variables_;  // the group's entries in the full state
+  mutable std::once_flag scene_once_;
+  mutable std::unique_ptr<const SceneChecker> scene_;
 };
 
 class CheckerStateValidityChecker : public ompl::base::StateValidityChecker {
@@ -94,14 +107,15 @@ class CheckerStateValidityChecker : public ompl::base::StateValidityChecker {
 class CheckerMotionValidator : public ompl::base::MotionValidator {
  public:
   CheckerMotionValidator(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const CheckerPlanningContext> context);
-  // The straight motion in joint space, certified (MotionRequest::resolution 0).
+  // The straight motion in joint space, certified (SceneChecker::check_motion).
   bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const override;
   // The same; when it collides, `last_valid` gets the last state found free and its fraction.
   bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
                    std::pair<ompl::base::State*, double>& last_valid) const override;
 
  private:
-  MotionResult check(const ompl::base::State* s1, const ompl::base::State* s2) const;
+  // `earliest`: the first collision (for last_valid), else any.
+  MotionResult check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const;
   std::shared_ptr<const CheckerPlanningContext> context_;
 };
 
