@@ -64,14 +64,24 @@ CollisionChecker load_panda(const std::string& cache, double& build_seconds) {
 
 // ---- FCL as MoveIt uses it -------------------------------------------------------------------
 
+// The links' OBBRSS models, built once for every scene.
+using FclLinkModels = std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>>;
+FclLinkModels fcl_link_models(const RobotModel& model) {
+  FclLinkModels out;
+  for (const RobotLink& link : model.links()) {
+    for (const CollisionElement& e : link.collision) out.push_back(test::fcl_model<fcl::OBBRSSd>(*e.mesh));
+  }
+  return out;
+}
+
 class FclPanda {
  public:
-  FclPanda(const CollisionChecker& checker, const test::PlanningScene& scene) : checker_(checker) {
+  FclPanda(const CollisionChecker& checker, const FclLinkModels& models, const test::PlanningScene& scene) : checker_(checker) {
     const RobotModel& model = checker.model();
+    std::size_t k = 0;
     for (std::size_t l = 0; l < model.links().size(); ++l) {
       for (const CollisionElement& e : model.links()[l].collision) {
-        links_.push_back({static_cast<int>(l), e.origin,
-                          std::make_unique<fcl::CollisionObjectd>(test::fcl_model<fcl::OBBRSSd>(*e.mesh))});
+        links_.push_back({static_cast<int>(l), e.origin, std::make_unique<fcl::CollisionObjectd>(models[k++])});
       }
     }
     for (const test::SceneObject& o : scene.objects) {
@@ -320,8 +330,11 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
     double in_states = 0, in_motions = 0;
     for (std::size_t i = states0; i < tally.calls.states.size(); ++i) in_states += tally.calls.states[i];
     for (std::size_t i = motions0; i < tally.calls.motions.size(); ++i) in_motions += tally.calls.motions[i];
-    std::printf("  %s: %s in %.1f ms; %zu states (%.1f ms), %zu motions (%.1f ms)\n", tally.name.c_str(), run.solved ? "solved" : "failed",
-                1e3 * run.seconds, tally.calls.states.size() - states0, in_states / 1e3, tally.calls.motions.size() - motions0, in_motions / 1e3);
+    const std::vector<double> motions(tally.calls.motions.begin() + static_cast<std::ptrdiff_t>(motions0), tally.calls.motions.end());
+    std::printf("  %s: %s in %.1f ms; %zu states (%.1f ms), %zu motions (%.1f ms; us median %.0f, p90 %.0f, max %.0f)\n",
+                tally.name.c_str(), run.solved ? "solved" : "failed", 1e3 * run.seconds, tally.calls.states.size() - states0,
+                in_states / 1e3, motions.size(), in_motions / 1e3, bench::median(motions), bench::percentile(motions, 0.9),
+                motions.empty() ? 0.0 : *std::max_element(motions.begin(), motions.end()));
   }
   tally.seconds.push_back(run.solved ? run.seconds : limit);
   if (!run.solved) return;
@@ -396,7 +409,7 @@ int main(int argc, char** argv) {
   using namespace bvh_collision;
   const std::string out_dir = bench::output_dir(argc, argv);
   const bool quick = bench::quick_mode(argc, argv);
-  const int count = quick ? 4 : 100;
+  const int count = quick ? 3 : 100;
   const double limit = quick ? 2.0 : 10.0;
   const std::uint64_t seed = 2026;
   ompl::msg::setLogLevel(ompl::msg::LOG_ERROR);
@@ -410,6 +423,7 @@ int main(int argc, char** argv) {
     arm.push_back(static_cast<int>(std::find(all.begin(), all.end(), name) - all.begin()));
   }
   std::vector<double> base(checker.model().variable_count(), 0.02);  // the fingers half open
+  const FclLinkModels fcl_models = fcl_link_models(checker.model());
   std::mt19937_64 rng(seed);
   std::vector<Problem> problems;
   std::vector<Tally> tallies(3);
@@ -417,6 +431,9 @@ int main(int argc, char** argv) {
   tallies[1].name = "ours, 10 mm";
   tallies[2].name = "FCL + discrete motions at 1 %";
   std::size_t near = 0;
+  // BENCH_PLANNING_CHECKERS=01 (say): only those rows (0 ours exact, 1 ours 10 mm, 2 FCL), to profile one.
+  const char* only = std::getenv("BENCH_PLANNING_CHECKERS");
+  const auto runs = [&](char row) { return only == nullptr || std::string(only).find(row) != std::string::npos; };
   for (int k = 0; k < count; ++k) {
     const test::PlanningScene scene = test::generate_scene(seed, k);
     const auto env = std::make_shared<const Environment>(scene.environment());
@@ -424,10 +441,10 @@ int main(int argc, char** argv) {
     const Problem p = make_problem(exact, k, rng, group, arm, base);
     problems.push_back(p);
     near += p.near;
-    FclPanda fcl(checker, scene);
-    plan_ours(tallies[0], checker, env, group, p, 0.0, limit, fcl);
-    plan_ours(tallies[1], checker, env, group, p, 0.01, limit, fcl);
-    plan_fcl(tallies[2], checker, env, group, p, limit, fcl);
+    FclPanda fcl(checker, fcl_models, scene);
+    if (runs('0')) plan_ours(tallies[0], checker, env, group, p, 0.0, limit, fcl);
+    if (runs('1')) plan_ours(tallies[1], checker, env, group, p, 0.01, limit, fcl);
+    if (runs('2')) plan_fcl(tallies[2], checker, env, group, p, limit, fcl);
     std::printf("problem %d (%zu shapes%s): solved %d/%d/%d so far\n", k, scene.shape_count(), p.near ? ", goal near" : "",
                 tallies[0].solved, tallies[1].solved, tallies[2].solved);
     std::fflush(stdout);

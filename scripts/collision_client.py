@@ -20,7 +20,7 @@ import sys
 import time
 
 import rospy
-from bvh_collision.srv import (CastRay, CheckMotion, CheckState, CheckStateRequest, CheckStates, ClearBox,
+from bvh_collision.srv import (CastRay, CheckMotion, CheckMotions, CheckState, CheckStateRequest, CheckStates, ClearBox,
                                RemoveCollisionObject, SaveOctree, SetCollisionObject)
 from geometry_msgs.msg import Point, Pose, Vector3
 from sensor_msgs.msg import JointState
@@ -45,6 +45,7 @@ def pose(position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1.0)):
 
 class CollisionClient:
     SERVICES = {"check_state": CheckState, "check_states": CheckStates, "check_motion": CheckMotion,
+                "check_motions": CheckMotions,
                 "cast_ray": CastRay, "clear_box": ClearBox, "set_collision_object": SetCollisionObject,
                 "remove_collision_object": RemoveCollisionObject, "save_octree": SaveOctree,
                 "clear_environment": Empty}
@@ -84,6 +85,13 @@ class CollisionClient:
         """The straight motion; resolution 0 is certified (no collision between the states checked)."""
         return self._call("check_motion", joint_names=list(names), start=list(start), goal=list(goal), checks=checks,
                           resolution=resolution)
+
+    def check_motions(self, names, motions, checks=BOTH):
+        """Many certified motions [(start, goal), ...] in one call; returns [(valid, last_valid_fraction), ...]."""
+        starts = [float(v) for start, _ in motions for v in start]
+        goals = [float(v) for _, goal in motions for v in goal]
+        r = self._call("check_motions", joint_names=list(names), starts=starts, goals=goals, checks=checks)
+        return list(zip(r.valid, r.last_valid_fraction))
 
     def cast_ray(self, origin, direction, max_range=0.0):
         return self._call("cast_ray", origin=Point(*origin), direction=Vector3(*direction), max_range=max_range)

@@ -478,6 +478,11 @@ def check_motion(joints=ARM, start=(0, 0, 0, 0, 0, 0), goal=(1, 0.5, 0, 0, 0, 0)
     return bytes([2]) + names(joints[:5]) + nums(start[:5]) + nums(goal[:5]) + bytes([checks]) + num(resolution)
 
 
+def check_motions(starts=(0, 0, 0, 0, 0, 1, 0.5, 0, 0, 0), goals=(1, 0.5, 0, 0, 0, 0, 0, 0, 0, 0), checks=3, joints=ARM):
+    """check_motion's request, then bytes left: check_motions with the same joint names (rows of five)."""
+    return check_motion(joints=joints) + nums(starts) + nums(goals) + bytes([checks])
+
+
 def cast_ray(origin=(0.5, 0, 2), direction=(0, 0, -1), max_range=5.0):
     return bytes([3]) + point(origin) + point(direction) + num(max_range)
 
@@ -530,6 +535,10 @@ def service_cases():
         ("motion", check_motion()), ("motion_step", check_motion(resolution=0.02)), ("motion_tiny_step", check_motion(resolution=1e-300)),
         ("motion_nan", check_motion(goal=("nan", 0, 0, 0, 0))), ("motion_negative_step", check_motion(resolution=-1.0)),
         ("motion_inf_goal", check_motion(goal=("inf", 0, 0, 0, 0))), ("motion_mismatch", bytes([2]) + names(ARM[:2]) + nums((0,)) + nums((1, 1)) + bytes([3]) + num(0.0)),
+        ("motions", check_motions()), ("motions_ragged", check_motions(starts=(0,) * 7, goals=(0,) * 7)),
+        ("motions_unequal", check_motions(goals=(0,) * 5)), ("motions_nan", check_motions(goals=("nan",) + (0,) * 9)),
+        ("motions_none", check_motions(starts=(), goals=())), ("motions_no_names", check_motions(joints=[])),
+        ("motions_self", check_motions(checks=1)), ("motions_checks_9", check_motions(checks=9)),
         ("ray", cast_ray()), ("ray_zero_direction", cast_ray(direction=(0, 0, 0))), ("ray_nan", cast_ray(origin=("nan", 0, 0))),
         ("ray_huge_range", cast_ray(max_range=1e300)), ("ray_inf_range", cast_ray(max_range="inf")), ("ray_negative_range", cast_ray(max_range=-1.0)),
         ("clear_environment", bytes([4])), ("clear_box", clear_box()), ("clear_box_inverted", clear_box((1, 1, 1), (-1, -1, -1))),

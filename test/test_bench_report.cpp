@@ -1,6 +1,6 @@
 // The report generator on small inputs, so that `make bench`'s report cannot silently rot: every
 // benchmark with --quick, the service benchmark on a private master, then scripts/bench_report.py.
-// The report must have its seven sections and every plot it links; and the generator must refuse
+// The report must have its eight sections and every plot it links; and the generator must refuse
 // figures that break DESIGN.md section 2 (a false negative, a distance beyond its allowed error, a
 // restriction of the checked pairs that changes an answer).
 #include <gtest/gtest.h>
@@ -46,7 +46,7 @@ class BenchReport : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("bvh_collision_report_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY}) {
+    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY, BENCH_PLANNING}) {
       const std::string log = (dir_ / (fs::path(bench).filename().string() + ".md")).string();
       statuses_.push_back(run(std::string(bench) + " " + dir_.string() + " --quick > " + log + " 2>&1"));
     }
@@ -68,8 +68,8 @@ int BenchReport::report_status_ = -1;
 
 TEST_F(BenchReport, EveryBenchmarkRunsOnSmallInputs) {
   BVH_REQUIRE_ROBOTS();
-  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "node"};
-  ASSERT_EQ(statuses_.size(), 5u);
+  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "node"};
+  ASSERT_EQ(statuses_.size(), 6u);
   for (std::size_t i = 0; i < statuses_.size(); ++i) EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
 }
 
@@ -80,7 +80,8 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
   EXPECT_NE(report.find("Measured "), std::string::npos);
   EXPECT_LT(report.find(" cores, g++ "), report.find("## 1.")) << "the machine's description is on top";
   for (const char* section : {"## 1. Self-collision", "## 2. Distance", "## 3. Volume types", "## 4. Environment",
-                              "## 5. Model only what the scene needs", "## 6. Service", "## 7. Numerical stability"}) {
+                              "## 5. Model only what the scene needs", "## 6. Service", "## 7. Planning",
+                              "## 8. Numerical stability"}) {
     EXPECT_NE(report.find(section), std::string::npos) << section;
   }
   for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) {
@@ -131,6 +132,7 @@ TEST_F(BenchReport, GeneratorRefusesFiguresThatBreakTheSemantics) {
   expect_refused(dir_, "scene_model_pr2", "wrong answers", 1, "only moved pairs", 4);
   expect_refused(dir_, "speed_error", "false_negatives", 1, "speed_error: a false negative", 9);
   expect_refused(dir_, "proxy_proof", "beyond the tolerance", 1, "proxy_proof: a proxy level broke", 1);
+  expect_refused(dir_, "planning", "paths colliding (FCL every 1e-3 rad)", 1, "planning: a path planned through our checker", 1);
 }
 
 }  // namespace

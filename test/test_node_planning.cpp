@@ -15,6 +15,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include "bvh_collision/ros/conversions.h"
+#include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/ros/service_validity.h"
 #include "node_test_client.h"
 
@@ -134,7 +135,32 @@ TEST(NodePlanning, RrtConnectThroughTheServicesAroundAnObstacleSeenOnlyAsACloud)
     EXPECT_TRUE(service->motion_valid(v, next)) << "segment " << w << " is certified free";
   }
   for (const bool free : service->states_valid(waypoints.data(), path.getStateCount())) EXPECT_TRUE(free);
+
+  // check_motions: every segment and the straight motion in one call, each answered as
+  // check_motion answers it (free segments; the straight motion colliding, free up to the same
+  // fraction on the same octree: the clouds stop first).
   publisher.stop();
+  std::vector<double> starts(waypoints.begin(), waypoints.end() - static_cast<std::ptrdiff_t>(arm.size()));
+  std::vector<double> goals(waypoints.begin() + static_cast<std::ptrdiff_t>(arm.size()), waypoints.end());
+  starts.insert(starts.end(), kStart.begin(), kStart.end());
+  goals.insert(goals.end(), kGoal.begin(), kGoal.end());
+  const std::size_t motions = path.getStateCount();
+  std::vector<double> fractions;
+  const std::vector<bool> free = service->motions_valid(starts.data(), goals.data(), motions, &fractions);
+  ASSERT_EQ(free.size(), motions);
+  for (std::size_t w = 0; w + 1 < motions; ++w) EXPECT_TRUE(free[w]) << "segment " << w;
+  EXPECT_FALSE(free.back());
+  double single = -1.0;
+  EXPECT_FALSE(service->motion_valid(kStart.data(), kGoal.data(), &single));
+  EXPECT_EQ(fractions.back(), single);
+  // A request whose rows do not fit its joint names is refused by name, nothing answered.
+  CheckMotions bad;
+  bad.request.joint_names = arm.names;
+  bad.request.starts.assign(arm.size() + 1, 0.0);
+  bad.request.goals.assign(arm.size() + 1, 0.0);
+  ASSERT_TRUE(ros::service::call("/collision_checker/check_motions", bad));
+  EXPECT_NE(bad.response.error.find("whole number of rows"), std::string::npos) << bad.response.error;
+  EXPECT_TRUE(bad.response.valid.empty());
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 namespace bvh_collision::test {
 namespace {
 
-const char* const kServices[] = {"check_state", "check_states", "check_motion", "cast_ray", "clear_environment",
+const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree"};
 
 bool node_is_registered(const std::string& name) {

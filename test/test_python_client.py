@@ -48,6 +48,9 @@ class PythonClient(unittest.TestCase):
         away = self.client.check_motion(ARM, HOME, [-1.0, 0.5])
         self.assertTrue(away.valid)
         self.assertEqual(away.last_valid_fraction, 1.0)
+        both = self.client.check_motions(ARM, [(HOME, LEAN), (HOME, [-1.0, 0.5])])
+        self.assertEqual([valid for valid, _ in both], [False, True])
+        self.assertEqual(both[0][1], into.last_valid_fraction)
 
     def test_ray(self):
         ray = self.client.cast_ray((1.0, 0.35, 0.4), (-1.0, 0.0, 0.0))

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <stdexcept>
 
 #include "bvh_collision/geometry/safety_margin.h"
@@ -198,6 +199,11 @@ void SceneChecker::relative_pair_rates() {
   }
 }
 
+double SceneChecker::link_growth(int link, const double* start, const double* goal, double half) const {
+  const double g = checker_.link_speed(link, start, goal) * half;
+  return g * (1.0 + 1e-9) + pose_margin(g);
+}
+
 double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double half) const {
   const auto [a, b] = checker_.collision_model().checked_pairs()[pair];
   double speed = 0.0;
@@ -215,18 +221,28 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
   posed.state = state;
   m.kinematics().compute(state, posed.poses);
   posed.centres.resize(posed.poses.size());
-  for (const int l : links_) {
-    posed.poses[l] = options_.root_pose * posed.poses[l];
-    posed.centres[l] = posed.poses[l] * m.bounds()[l].center;
-  }
-}
-
-double SceneChecker::link_growth(int link, const double* start, const double* goal, double half) const {
-  const double g = checker_.link_speed(link, start, goal) * half;
-  return g * (1.0 + 1e-9) + pose_margin(g);
+  for (std::size_t l = 0; l < posed.poses.size(); ++l) posed.poses[l] = options_.root_pose * posed.poses[l];
+  for (const int l : links_) posed.centres[l] = posed.poses[l] * m.bounds()[l].center;
 }
 
 // ---- SceneChecker: one posed state ----------------------------------------------------------------
+
+// An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
+// (some 10-30 us against 1-3 for a proxy test)? Not at a tolerance, where a failed interval is
+// bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
+// proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
+// where halving the interval no longer helps them; always without proxies.
+// Is a finer level worth walking after the coarser ones failed, for this growth? Not when the
+// growth exceeds its level: its spheres' error (half the level) is then small against the growth
+// and it fails where they did, at the cost of a deeper walk. The coarsest always is.
+bool SceneChecker::worth(const ProxyLevel* level, double growth) const {
+  return level == proxies_.front() || level->level >= growth;
+}
+
+bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double error) const {
+  if (proxies_.empty()) return true;
+  return !s.tolerant && growth <= error;
+}
 
 SceneChecker::Answer SceneChecker::self_check(const Posed& s) const {
   const RobotCollisionModel& m = checker_.collision_model();
@@ -242,12 +258,12 @@ SceneChecker::Answer SceneChecker::self_check(const Posed& s) const {
     if ((ca - cb).squaredNorm() > reach * reach) continue;
     if (m.pair_clearance().lower_bound(p, s.state) > pads) continue;
     const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-      return !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
+      return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
     });
     if (apart) continue;
     if (s.growth != nullptr) {
       // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
-      if (grow > level_ && !proxies_.empty()) return Answer::kNear;
+      if (!exact_distance_pays(s, grow, level_)) return Answer::kNear;
       const double limit = grown_radius(pads) + margin;
       SelfCollisionResult r;
       if (checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r) > limit) continue;
@@ -299,13 +315,13 @@ SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
     grid_.for_each_near(c, r, [&](int o) {
       if (answer != Answer::kFree || !grid_.ball_meets(o, c, r)) return;
       const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-        return !proxy_meets_obstacle(level->links[l], s.poses[l], pad,
+        return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad,
                                      [&](const Vec3& pc, double pr, bool) { return grid_.ball_meets(o, pc, pr); });
       });
       if (apart) return;
       if (s.growth != nullptr) {
         // Within the proxies' level: the exact distance at the midpoint decides.
-        const bool exact = s.grow(l) <= level_ || proxies_.empty();
+        const bool exact = exact_distance_pays(s, s.grow(l), level_ / 2);
         const double limit = grown_radius(pad) + pose_margin(c.norm() + r);
         if (!exact || !link_farther_from_object(l, s.poses[l], o, limit)) answer = Answer::kNear;
       } else if ((s.tolerant && proxies_decide_objects_ && grid_.exact_ball_test(o)) ||
@@ -327,7 +343,7 @@ SceneChecker::Answer SceneChecker::octree_check(const Posed& s) const {
     const Vec3& c = s.centres[l];
     if (field_ && field_->lower_bound(c) > grown_radius(m.bounds()[l].radius + pad) + pose_margin(c.norm() + m.bounds()[l].radius)) continue;
     const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-      return !proxy_meets_obstacle(level->links[l], s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
+      return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
         if (field_ && field_->lower_bound(pc) > grown_radius(pr)) return false;
         if (!leaf) return true;
         if (field_) {
@@ -339,7 +355,7 @@ SceneChecker::Answer SceneChecker::octree_check(const Posed& s) const {
     if (apart) continue;
     EnvironmentResult result;
     if (s.growth != nullptr) {
-      if (s.grow(l) > level_ && !proxies_.empty()) return Answer::kNear;
+      if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return Answer::kNear;
       const double limit = grown_radius(pad) + pose_margin(c.norm() + m.bounds()[l].radius);
       if (checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result) > limit) continue;
       return Answer::kNear;
@@ -406,19 +422,21 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, At&& at, b
   thread_local Posed posed;
   Scratch& s = scratch();
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  pose_links(at(mid), posed);
   double largest = 0.0;
   for (const int l : links_) {
     const double g = s.speed[l] * half;
-    s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g);
-    largest = std::max(largest, s.growth[l]);
+    // min_clearance on top: a certified interval stays that far from every collision.
+    s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
+    largest = std::max(largest, g);
   }
   for (std::size_t p = 0; p < s.pair_speed.size(); ++p) {
     const double g = s.pair_speed[p] * half;
-    s.pair_growth[p] = g * (1.0 + 1e-9) + pose_margin(g);
+    s.pair_growth[p] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
   }
-  pose_links(at(mid), posed);
   posed.growth = s.growth.data();
   posed.pair_growth = s.pair_growth.data();
+  posed.tolerant = tolerant;
   if (check_posed(posed) == Answer::kFree) return {Step::kCertified};
   posed.growth = nullptr;
   posed.pair_growth = nullptr;
@@ -426,11 +444,31 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, At&& at, b
   if (check_posed(posed) != Answer::kFree) return {Step::kCollides, mid};
   // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
   // link within level + 2 largest (a self pair) of a collision at its midpoint.
-  if (tolerant && level_ + 2.0 * largest <= options_.tolerance) return {Step::kCollides, mid};
-  // Growth below the level is tested by exact distances: a failure within min_clearance is a
-  // pair within padding + min_clearance at the midpoint (counted as colliding, as advancement does).
+  if (tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) return {Step::kCollides, mid};
+  // Growth below the level is tested by exact distances: a failure with the motion's own growth
+  // within min_clearance puts a pair within padding + 2 min_clearance at the midpoint (counted as
+  // colliding, as advancement counts one within min_clearance).
   if (2.0 * largest <= options_.min_clearance && (largest <= level_ || proxies_.empty())) return {Step::kCollides, mid};
   return {Step::kSplit};
+}
+
+// Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
+void SceneChecker::motion_speeds(const double* start, const double* goal) const {
+  Scratch& s = scratch();
+  const RobotCollisionModel& m = checker_.collision_model();
+  s.speed.assign(m.shapes().size(), 0.0);
+  for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
+  s.growth.assign(m.shapes().size(), 0.0);
+  s.pair_speed.assign(pair_rates_.size(), 0.0);
+  s.pair_growth.assign(pair_rates_.size(), 0.0);
+  for (std::size_t p = 0; p < pair_rates_.size(); ++p) {
+    const auto [a, b] = m.checked_pairs()[p];
+    if (!pair_rates_[p].relative) {
+      s.pair_speed[p] = s.speed[a] + s.speed[b];
+      continue;
+    }
+    for (const auto& [v, w] : pair_rates_[p].weights) s.pair_speed[p] += w * std::abs(goal[v] - start[v]);
+  }
 }
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
@@ -465,20 +503,7 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   // one of its ends already does: a planner must be able to leave a state it accepted.
   const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && end_clear_at_tolerance(start) &&
                         end_clear_at_tolerance(goal);
-  const RobotCollisionModel& m = checker_.collision_model();
-  s.speed.assign(m.shapes().size(), 0.0);
-  for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
-  s.growth.assign(m.shapes().size(), 0.0);
-  s.pair_speed.assign(pair_rates_.size(), 0.0);
-  s.pair_growth.assign(pair_rates_.size(), 0.0);
-  for (std::size_t p = 0; p < pair_rates_.size(); ++p) {
-    const auto [a, b] = m.checked_pairs()[p];
-    if (!pair_rates_[p].relative) {
-      s.pair_speed[p] = s.speed[a] + s.speed[b];
-      continue;
-    }
-    for (const auto& [v, w] : pair_rates_[p].weights) s.pair_speed[p] += w * std::abs(goal[v] - start[v]);
-  }
+  motion_speeds(start, goal);
   std::vector<Interval> done;
   std::deque<Interval> todo{{0.0, 1.0}};
   while (!todo.empty()) {

@@ -31,6 +31,7 @@
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
+#include "bvh_collision/ros/collision_checker_node.h"
 #include "bvh_collision/ros/conversions.h"
 #include "bvh_collision/ros/service_validity.h"
 
@@ -45,6 +46,7 @@ struct PlanRun {
   bool solved = false;
   double planning_seconds = 0.0, validity_seconds = 0.0;
   std::uint64_t state_checks = 0, motion_checks = 0;
+  double us_per_state = 0.0, us_per_motion = 0.0;
   std::vector<std::vector<double>> waypoints;  // group values
 };
 
@@ -61,7 +63,8 @@ std::vector<std::vector<double>> waypoints_of(const og::PathGeometric& path, std
 // checked by the same motion validator).
 PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::ValidityCounters& counters,
              const std::vector<double>& start, const std::vector<double>& goal, double seconds) {
-  PlanRun run{name};
+  PlanRun run;
+  run.name = name;
   ob::ScopedState<> a(setup.getStateSpace()), b(setup.getStateSpace());
   for (std::size_t i = 0; i < start.size(); ++i) a[i] = start[i], b[i] = goal[i];
   setup.setStartAndGoalStates(a, b);
@@ -75,6 +78,8 @@ PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::Validity
   run.validity_seconds = counters.seconds();
   run.state_checks = counters.states;
   run.motion_checks = counters.motions;
+  run.us_per_state = counters.us_per_state();
+  run.us_per_motion = counters.us_per_motion();
   if (run.solved) run.waypoints = waypoints_of(setup.getSolutionPath(), start.size());
   return run;
 }
@@ -93,25 +98,34 @@ std::shared_ptr<const Environment> node_environment(const std::string& checker, 
   return env;
 }
 
-CollisionChecker checker_from_parameters() {
+// The robot as the node models it, with the node's proxy levels (read from the node's proxy
+// cache when it has built them: the planner's fast path, planning/ompl_validity.h).
+CollisionChecker checker_from_parameters(const std::string& node) {
   std::string urdf, srdf;
   if (!ros::param::get("robot_description", urdf)) throw std::runtime_error("no robot_description parameter");
   RobotModel model = RobotModel::from_urdf(*parse_robot_description(urdf), PackageResolver::from_environment());
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   if (ros::param::get("robot_description_semantic", srdf) && !srdf.empty()) apply_srdf(parse_srdf(srdf, &model), model, acm);
-  return CollisionChecker(std::move(model), std::move(acm));
+  const NodeParameters node_parameters = read_node_parameters(ros::NodeHandle(node));
+  CheckerOptions options;
+  options.proxy_levels = node_parameters.proxy_levels;
+  options.proxy_cache = node_parameters.proxy_cache;
+  options.padding = node_parameters.padding;
+  options.link_padding = node_parameters.link_padding;
+  return CollisionChecker(std::move(model), std::move(acm), options);
 }
 
 void print_header() {
-  std::printf("  %-22s %-7s %10s %8s %8s %22s %9s\n", "variant", "result", "planning", "states", "motions",
-              "time in the checks", "waypoints");
+  std::printf("  %-22s %-7s %10s %8s %8s %22s %12s %12s %9s\n", "variant", "result", "planning", "states", "motions",
+              "time in the checks", "us a state", "us a motion", "waypoints");
 }
 
 void print_run(const PlanRun& r) {
-  std::printf("  %-22s %-7s %8.3f s %8llu %8llu %11.3f s (%3.0f%%) %9zu\n", r.name.c_str(), r.solved ? "solved" : "FAILED",
+  std::printf("  %-22s %-7s %8.3f s %8llu %8llu %11.3f s (%3.0f%%) %12.1f %12.1f %9zu\n", r.name.c_str(), r.solved ? "solved" : "FAILED",
               r.planning_seconds, static_cast<unsigned long long>(r.state_checks),
               static_cast<unsigned long long>(r.motion_checks), r.validity_seconds,
-              r.planning_seconds > 0 ? 100.0 * r.validity_seconds / r.planning_seconds : 0.0, r.waypoints.size());
+              r.planning_seconds > 0 ? 100.0 * r.validity_seconds / r.planning_seconds : 0.0, r.us_per_state, r.us_per_motion,
+              r.waypoints.size());
 }
 
 }  // namespace
@@ -177,16 +191,22 @@ visualization_msgs::Marker path_marker(const planning::CheckerPlanningContext& c
   return m;
 }
 
-// Each segment of the path through the node's certified check_motion; prints the result.
+// Every segment of the path through the node's certified check_motions (one call); prints the result.
 bool certify(const ServicePlanningContext& service, const PlanRun& run) {
-  bool all = run.solved;
+  std::vector<double> starts, goals;
   for (std::size_t w = 0; w + 1 < run.waypoints.size(); ++w) {
-    const bool free = service.motion_valid(run.waypoints[w].data(), run.waypoints[w + 1].data());
-    all = all && free;
-    if (!free) std::printf("    segment %zu of the %s path: COLLIDING\n", w, run.name.c_str());
+    starts.insert(starts.end(), run.waypoints[w].begin(), run.waypoints[w].end());
+    goals.insert(goals.end(), run.waypoints[w + 1].begin(), run.waypoints[w + 1].end());
   }
-  std::printf("  %-22s %zu segments, each certified free by check_motion: %s\n", run.name.c_str(),
-              run.waypoints.empty() ? 0 : run.waypoints.size() - 1, all ? "yes" : "NO");
+  const std::size_t segments = run.waypoints.empty() ? 0 : run.waypoints.size() - 1;
+  const std::vector<bool> free = service.motions_valid(starts.data(), goals.data(), segments);
+  bool all = run.solved;
+  for (std::size_t w = 0; w < free.size(); ++w) {
+    all = all && free[w];
+    if (!free[w]) std::printf("    segment %zu of the %s path: COLLIDING\n", w, run.name.c_str());
+  }
+  std::printf("  %-22s %zu segments, each certified free by check_motions: %s\n", run.name.c_str(), segments,
+              all ? "yes" : "NO");
   return all;
 }
 
@@ -196,7 +216,7 @@ int run(ros::NodeHandle& pnh) {
   std::vector<std::string> names;
   pnh.getParam("group", names);
   const std::vector<double> start = param_list(pnh, "start"), goal = param_list(pnh, "goal");
-  const CollisionChecker checker = checker_from_parameters();
+  const CollisionChecker checker = checker_from_parameters(node);
   const planning::JointGroup group = planning::JointGroup::of(checker.model(), names);
   if (start.size() != group.size() || goal.size() != group.size()) {
     throw std::runtime_error("~start and ~goal need " + std::to_string(group.size()) + " values each");
@@ -215,6 +235,11 @@ int run(ros::NodeHandle& pnh) {
   const RobotModel& model = checker.model();
   auto context = std::make_shared<planning::CheckerPlanningContext>(checker, env, group, current_state(model));
   context->root_pose = root_pose(world, model.links()[model.root_link()].name);
+  // The snapshot prepared for planning (the octree's distance field, the object grid) before the
+  // clock starts, as the node prepares its own after each map change.
+  const auto prepare_start = ros::WallTime::now();
+  context->scene();
+  const double prepare_seconds = (ros::WallTime::now() - prepare_start).toSec();
 
   auto space = group.make_space();
   og::SimpleSetup in_process(space);
@@ -226,8 +251,10 @@ int run(ros::NodeHandle& pnh) {
   through_node.getSpaceInformation()->setMotionValidator(
       std::make_shared<ServiceMotionValidator>(through_node.getSpaceInformation(), service));
 
-  std::printf("plan_demo: RRTConnect for %zu joints in the node's octree (%zu nodes), up to %.0f s per run\n",
-              group.size(), env->octree().node_count(), seconds);
+  std::printf("plan_demo: RRTConnect for %zu joints in the node's octree (%zu nodes), up to %.0f s per run; in-process: "
+              "tolerance %g m, proxy levels of %zu sizes, the snapshot prepared in %.0f ms\n",
+              group.size(), env->octree().node_count(), seconds, context->tolerance,
+              checker.collision_model().proxy_levels().size(), 1e3 * prepare_seconds);
   double straight = 0.0;
   const bool straight_free = service->motion_valid(start.data(), goal.data(), &straight);
   std::printf("  the straight motion from start to goal: %s\n",

@@ -48,7 +48,10 @@ std::shared_ptr<ompl::base::RealVectorStateSpace> JointGroup::make_space() const
 
 ValidityTimer::~ValidityTimer() {
   const auto spent = std::chrono::steady_clock::now() - start_;
-  counters_->nanoseconds += static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(spent).count());
+  const auto ns = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(spent).count());
+  counters_->nanoseconds += ns;
+  if (kind_ == CheckKind::kState) counters_->state_nanoseconds += ns;
+  if (kind_ == CheckKind::kMotion) counters_->motion_nanoseconds += ns;
 }
 
 CheckerPlanningContext::CheckerPlanningContext(CollisionChecker checker_, std::shared_ptr<const Environment> environment_,
@@ -104,7 +107,7 @@ CheckerStateValidityChecker::CheckerStateValidityChecker(const ompl::base::Space
 bool CheckerStateValidityChecker::isValid(const ompl::base::State* state) const {
   const CheckerPlanningContext& c = *context_;
   ++c.counters->states;
-  ValidityTimer timer(c.counters.get());
+  ValidityTimer timer(c.counters.get(), CheckKind::kState);
   thread_local std::vector<double> q;
   c.full_state(state, q);
   return !c.scene().collides(q.data());
@@ -141,7 +144,7 @@ CheckerMotionValidator::CheckerMotionValidator(const ompl::base::SpaceInformatio
 MotionResult CheckerMotionValidator::check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const {
   const CheckerPlanningContext& c = *context_;
   ++c.counters->motions;
-  ValidityTimer timer(c.counters.get());
+  ValidityTimer timer(c.counters.get(), CheckKind::kMotion);
   thread_local std::vector<double> a, b;
   c.full_state(s1, a);
   c.full_state(s2, b);

@@ -16,7 +16,7 @@ namespace bvh_collision {
 
 namespace {
 
-const char* const kServices[] = {"check_state", "check_states", "check_motion", "cast_ray", "clear_environment",
+const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree"};
 
 }  // namespace
@@ -175,6 +175,7 @@ void CollisionCheckerNode::advertise() {
   services_.push_back(private_nh_.advertiseService("check_state", &CollisionCheckerNode::check_state, this));
   services_.push_back(private_nh_.advertiseService("check_states", &CollisionCheckerNode::check_states, this));
   services_.push_back(private_nh_.advertiseService("check_motion", &CollisionCheckerNode::check_motion, this));
+  services_.push_back(private_nh_.advertiseService("check_motions", &CollisionCheckerNode::check_motions, this));
   services_.push_back(private_nh_.advertiseService("cast_ray", &CollisionCheckerNode::cast_ray, this));
   services_.push_back(
       private_nh_.advertiseService("clear_environment", &CollisionCheckerNode::clear_environment, this));

@@ -224,13 +224,74 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     request.resolution = req.resolution;
     request.tolerance = params_.tolerance;
     if (checks.environment) request.root_pose = root_pose(ros::Time(0));
-    const MotionResult result = checker()->check_motion(start.data(), goal.data(), *store_->snapshot(), request);
+    const std::shared_ptr<const Environment> env = store_->snapshot();
+    const MotionResult result = req.resolution > 0.0
+        ? checker()->check_motion(start.data(), goal.data(), *env, request)
+        : scene_checker(env, checks.self, checks.environment, request.root_pose)->check_motion(start.data(), goal.data(), true);
     res.valid = result.valid;
     res.last_valid_fraction = result.last_valid_fraction;
     res.states_checked = static_cast<std::uint32_t>(result.states_checked);
     states_checked_ += result.states_checked;
     if (!result.message.empty()) warnings.push_back(result.message);
     res.warning = join_warnings(warnings);
+  });
+}
+
+std::shared_ptr<const SceneChecker> CollisionCheckerNode::scene_checker(const std::shared_ptr<const Environment>& env, bool self,
+                                                                         bool environment, const Transform& root) const {
+  const std::shared_ptr<const CollisionChecker> now = checker();
+  std::lock_guard<std::mutex> lock(scene_mutex_);
+  const auto same = [&](const SceneChecker& s) {
+    const SceneCheckOptions& o = s.options();
+    return &s.environment() == env.get() && &s.checker().collision_model() == &now->collision_model() && o.self == self &&
+           o.environment == environment && o.root_pose.R == root.R && o.root_pose.t == root.t;
+  };
+  if (!scene_ || !same(*scene_)) {
+    SceneCheckOptions options;
+    options.self = self;
+    options.environment = environment;
+    options.tolerance = params_.tolerance;
+    options.root_pose = root;
+    scene_ = std::make_shared<const SceneChecker>(*now, env, options);
+  }
+  return scene_;
+}
+
+bool CollisionCheckerNode::check_motions(CheckMotions::Request& req, CheckMotions::Response& res) {
+  return serve("check_motions", res, [&] {
+    require_geometry();
+    const Checks checks = read_checks(req.checks);
+    const std::size_t n = req.joint_names.size();
+    if (n == 0) throw RequestError("joint_names is empty");
+    if (req.starts.size() != req.goals.size() || req.starts.size() % n != 0) {
+      throw RequestError("starts has " + std::to_string(req.starts.size()) + " values and goals " +
+                         std::to_string(req.goals.size()) + ": each needs the same whole number of rows of " +
+                         std::to_string(n) + " (one per joint name)");
+    }
+    const std::size_t rows = req.starts.size() / n;
+    check_limit("a check_motions request with its motions", static_cast<double>(rows),
+                checker()->collision_model().limits().batch_states, "max_batch_states");
+    std::vector<std::string> warnings;
+    const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
+    const std::vector<double> base = current_state_for(columns);
+    const Transform root = checks.environment ? root_pose(ros::Time(0)) : Transform::Identity();
+    const std::shared_ptr<const SceneChecker> scene = scene_checker(store_->snapshot(), checks.self, checks.environment, root);
+    std::vector<double> start = base, goal = base;
+    res.valid.resize(rows);
+    res.last_valid_fraction.resize(rows);
+    std::size_t checked = 0;
+    for (std::size_t r = 0; r < rows; ++r) {
+      joint_map_->write(columns, req.starts.data() + r * n, req.joint_names, start, warnings);
+      joint_map_->write(columns, req.goals.data() + r * n, req.joint_names, goal, warnings);
+      const MotionResult result = scene->check_motion(start.data(), goal.data(), true);
+      res.valid[r] = result.valid;
+      res.last_valid_fraction[r] = result.last_valid_fraction;
+      checked += result.states_checked;
+      if (!result.message.empty()) warnings.push_back("motion " + std::to_string(r) + ": " + result.message);
+    }
+    res.states_checked = static_cast<std::uint32_t>(std::min<std::size_t>(checked, UINT32_MAX));
+    states_checked_ += checked;
+    res.warning = join_warnings(warnings, 4);
   });
 }
 

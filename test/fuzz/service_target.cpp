@@ -24,6 +24,7 @@ struct NodeFuzzAccess {
     if constexpr (std::is_same_v<Request, CheckState::Request>) return n.check_state(req, res);
     if constexpr (std::is_same_v<Request, CheckStates::Request>) return n.check_states(req, res);
     if constexpr (std::is_same_v<Request, CheckMotion::Request>) return n.check_motion(req, res);
+    if constexpr (std::is_same_v<Request, CheckMotions::Request>) return n.check_motions(req, res);
     if constexpr (std::is_same_v<Request, CastRay::Request>) return n.cast_ray(req, res);
     if constexpr (std::is_same_v<Request, std_srvs::Empty::Request>) return n.clear_environment(req, res);
     if constexpr (std::is_same_v<Request, ClearBox::Request>) return n.clear_box(req, res);
@@ -170,7 +171,25 @@ std::string answer(ByteReader& in) {
       if (res.error.empty() && !(res.last_valid_fraction >= 0.0 && res.last_valid_fraction <= 1.0)) {
         return "check_motion answered a last valid fraction outside [0, 1]";
       }
-      return error_problem(res);
+      if (std::string problem = error_problem(res); !problem.empty() || in.remaining() == 0) return problem;
+      // Bytes left: check_motions with the same names, rows of starts and goals from the rest.
+      CheckMotions::Request many;
+      many.joint_names = req.joint_names;
+      many.starts = in.numbers(12);
+      many.goals = in.numbers(12);
+      many.checks = in.byte();
+      CheckMotions::Response answers;
+      NodeFuzzAccess::call(many, answers);
+      if (answers.error.empty()) {
+        if (answers.valid.size() != answers.last_valid_fraction.size() ||
+            (!many.joint_names.empty() && answers.valid.size() != many.starts.size() / many.joint_names.size())) {
+          return "check_motions answered another number of motions than it was given";
+        }
+        for (const double f : answers.last_valid_fraction) {
+          if (!(f >= 0.0 && f <= 1.0)) return "check_motions answered a last valid fraction outside [0, 1]";
+        }
+      }
+      return error_problem(answers);
     }
     case 3: {
       CastRay::Request req;

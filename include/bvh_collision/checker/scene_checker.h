@@ -3,21 +3,24 @@
 // geometry (no batch, no pool, no allocation once warm). Same answers and the same contract as
 // check_self + check_environment and check_motion (DESIGN.md sections 2 and 4):
 //
-// - State: collision whenever some distance is at most its padding, free whenever every one
-//   exceeds padding + tolerance. Objects are found through a grid over the robot's reach (a
-//   link's centre names a cell, the cell lists the objects within reach of it), so 60 objects
-//   cost little more than 6; each link's proxy spheres are tested against an object's exact
-//   primitive before any mesh is opened: proxies apart from it prove the link apart (they contain
-//   it), and at tolerance 0 a proxy that meets it sends the link to the exact test.
+// - State: exact by default (with SceneCheckOptions::states_at_tolerance, collision whenever
+//   some distance is at most its padding, free whenever every one exceeds padding + tolerance).
+//   Objects are found through a grid over the robot's reach (a link's centre names a cell, the
+//   cell lists the objects within reach of it), so 60 objects cost little more than 6; each
+//   link's proxy spheres are tested against an object's exact primitive before any mesh is
+//   opened: proxies apart from it prove the link apart (they contain it), and a proxy that meets
+//   it sends the link to the exact test (or, at a tolerance the level fits, is the answer).
 // - Motion: an interval [s0, s1] of the straight joint-space segment is certified free by one
 //   boolean check of the proxies at its midpoint, each link's grown by how far any of its points
 //   can move in half the interval (CollisionChecker::link_speed, the kinematic chain's levers
-//   times each joint's change); an interval that fails is bisected, breadth first, its midpoint
-//   state checked (a collision there ends the motion). At a tolerance t an interval whose growth
-//   and proxy error fit in t and still fails is within t of a collision (reported colliding, as
-//   the tolerance allows); at tolerance 0 one whose growth is below a few millimetres and still
-//   fails is certified by exact conservative advancement. Free means free at every instant
-//   (tolerance 0: on the exact geometry, less min_clearance) or never closer than the tolerance.
+//   times each joint's change) and each self pair's by how far its links can close (the joints
+//   between the two links only); an interval that fails is bisected, breadth first, its midpoint
+//   state checked (a collision there ends the motion). Once the growth is below the proxies' own
+//   error, an exact distance at the midpoint settles a link or pair (farther than its growth:
+//   free over the interval). At a tolerance t, for a motion whose ends are both clear of it, an
+//   interval whose growth and proxy error fit in t and still fails is within t of a collision
+//   (reported colliding, as the tolerance allows). Free means free at every instant, farther
+//   than min_clearance from every collision, at any tolerance.
 #pragma once
 
 #include <memory>
@@ -31,8 +34,9 @@ struct SceneCheckOptions {
   bool self = true, environment = true;
   double tolerance = 0.0;  // DESIGN.md section 2
   Transform root_pose;     // the root link in the environment's frame
-  // Motions: a motion that comes within this of collision counts as colliding (as
-  // MotionRequest::min_clearance), and beyond this many interval checks it is not certified.
+  // Motions: one answered free stays farther than this from every collision; one that comes
+  // within it may count as colliding (as MotionRequest::min_clearance; this one within twice
+  // times it), and beyond max_intervals interval checks a motion is not certified.
   double min_clearance = 1e-5;
   std::size_t max_intervals = 200000;
   // False (the default): state checks are exact whatever the tolerance (the proxies prove a
@@ -125,13 +129,17 @@ class SceneChecker {
     std::vector<Vec3> centres;
     const double* growth = nullptr;
     const double* pair_growth = nullptr;  // per checked pair: how far its links' distance can fall
-    bool tolerant = false;  // the state itself (no growth): a hit within the tolerance may count
+    // A hit within the tolerance may count (the state itself), or an interval is not to be
+    // settled by exact distances (growth: the tolerance will settle it).
+    bool tolerant = false;
     double grow(int link) const { return growth != nullptr ? growth[link] : 0.0; }
   };
   // kFree: free for every state whose links lie within their growth of these poses; kHit: the
   // state itself collides (exact, or within the tolerance); kNear: an interval not certified.
   enum class Answer { kFree, kHit, kNear };
   Answer check_posed(const Posed& posed) const;
+  bool exact_distance_pays(const Posed& s, double growth, double error) const;
+  bool worth(const ProxyLevel* level, double growth) const;
   Answer self_check(const Posed& posed) const;
   Answer objects_check(const Posed& posed) const;
   Answer octree_check(const Posed& posed) const;
@@ -149,6 +157,8 @@ class SceneChecker {
   bool end_clear_at_tolerance(const double* state) const;
   void pose_links(const double* state, Posed& posed) const;
   void relative_pair_rates();
+  void motion_speeds(const double* start, const double* goal) const;
+
 
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;

@@ -33,7 +33,9 @@
 #include <tf2_ros/transform_listener.h>
 
 #include "bvh_collision/CastRay.h"
+#include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
 #include "bvh_collision/ClearBox.h"
@@ -167,6 +169,11 @@ class CollisionCheckerNode {
   bool check_state(CheckState::Request& req, CheckState::Response& res);
   bool check_states(CheckStates::Request& req, CheckStates::Response& res);
   bool check_motion(CheckMotion::Request& req, CheckMotion::Response& res);
+  bool check_motions(CheckMotions::Request& req, CheckMotions::Response& res);
+  // The checker certified motions go through (checker/scene_checker.h) for this snapshot, these
+  // checks and this root pose: the one kept since the last such request when nothing changed.
+  std::shared_ptr<const SceneChecker> scene_checker(const std::shared_ptr<const Environment>& env, bool self,
+                                                    bool environment, const Transform& root) const;
   bool cast_ray(CastRay::Request& req, CastRay::Response& res);
   void answer_check_state(const CheckState::Request& req, CheckState::Response& res);
   void self_part(const double* state, const CheckState::Request& req, double tolerance, const Transform& root,
@@ -207,6 +214,8 @@ class CollisionCheckerNode {
   std::string root_link_;
   bool has_geometry_ = false;
   std::unique_ptr<EnvironmentStore> store_;
+  mutable std::mutex scene_mutex_;
+  mutable std::shared_ptr<const SceneChecker> scene_;  // the last scene_checker(), kept for the next
 
   mutable std::mutex state_mutex_;
   std::vector<double> state_;  // from joint_states; neutral_state() until the first message

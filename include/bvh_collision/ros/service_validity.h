@@ -1,6 +1,6 @@
 // OMPL through the node: a StateValidityChecker and a MotionValidator that ask a running
-// collision_checker over its services (check_state, certified check_motion), and a batch check of
-// many states in one check_states call. The twins of planning/ompl_validity.h for a planner in
+// collision_checker over its services (check_state, certified check_motion), a batch check of
+// many states in one check_states call, and of many motions in one check_motions call. The twins of planning/ompl_validity.h for a planner in
 // another process or on another machine; persistent connections (a new connection per call costs
 // more than the check). Joints outside the group take the node's current joint_states.
 #pragma once
@@ -33,10 +33,14 @@ struct ServicePlanningContext {
   bool motion_valid(const double* start, const double* goal, double* last_valid_fraction = nullptr) const;
   // `count` states of group.size() values each, row by row: one call.
   std::vector<bool> states_valid(const double* values, std::size_t count) const;
+  // `count` motions (starts and goals row by row, group.size() values each), each certified:
+  // one check_motions call; `last_valid_fractions` may be null.
+  std::vector<bool> motions_valid(const double* starts, const double* goals, std::size_t count,
+                                  std::vector<double>* last_valid_fractions = nullptr) const;
 
  private:
   mutable std::mutex mutex_;  // one call at a time per connection
-  mutable ros::ServiceClient state_, states_, motion_;
+  mutable ros::ServiceClient state_, states_, motion_, motions_;
 };
 
 class ServiceStateValidityChecker : public ompl::base::StateValidityChecker {
@@ -54,6 +58,9 @@ class ServiceMotionValidator : public ompl::base::MotionValidator {
   bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const override;
   bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
                    std::pair<ompl::base::State*, double>& last_valid) const override;
+  // Several motions in one call (check_motions), for a caller that has them at once: a lazy
+  // planner's candidate path, a path's segments to certify.
+  std::vector<bool> checkMotions(const std::vector<std::pair<const ompl::base::State*, const ompl::base::State*>>& motions) const;
 
  private:
   std::shared_ptr<const ServicePlanningContext> context_;

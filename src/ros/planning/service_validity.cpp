@@ -5,6 +5,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
 #include "bvh_collision/ros/readiness.h"
@@ -35,7 +36,8 @@ ServicePlanningContext::ServicePlanningContext(const std::string& checker, plann
   state_ = nh.serviceClient<CheckState>("check_state", true);
   states_ = nh.serviceClient<CheckStates>("check_states", true);
   motion_ = nh.serviceClient<CheckMotion>("check_motion", true);
-  for (ros::ServiceClient* c : {&state_, &states_, &motion_}) {
+  motions_ = nh.serviceClient<CheckMotions>("check_motions", true);
+  for (ros::ServiceClient* c : {&state_, &states_, &motion_, &motions_}) {
     if (!c->waitForExistence(ros::Duration(timeout))) {
       throw std::runtime_error("no service " + c->getService() + " within " + std::to_string(timeout) + " s");
     }
@@ -66,6 +68,22 @@ bool ServicePlanningContext::motion_valid(const double* start, const double* goa
   return srv.response.valid;
 }
 
+std::vector<bool> ServicePlanningContext::motions_valid(const double* starts, const double* goals, std::size_t count,
+                                                       std::vector<double>* last_valid_fractions) const {
+  CheckMotions srv;
+  srv.request.joint_names = group.names;
+  srv.request.starts.assign(starts, starts + count * group.size());
+  srv.request.goals.assign(goals, goals + count * group.size());
+  srv.request.checks = checks;
+  std::lock_guard<std::mutex> lock(mutex_);
+  call(motions_, srv);
+  if (srv.response.valid.size() != count || srv.response.last_valid_fraction.size() != count) {
+    throw std::runtime_error("check_motions answered for a different count");
+  }
+  if (last_valid_fractions) *last_valid_fractions = srv.response.last_valid_fraction;
+  return std::vector<bool>(srv.response.valid.begin(), srv.response.valid.end());
+}
+
 std::vector<bool> ServicePlanningContext::states_valid(const double* v, std::size_t count) const {
   CheckStates srv;
   srv.request.joint_names = group.names;
@@ -84,7 +102,7 @@ ServiceStateValidityChecker::ServiceStateValidityChecker(const ompl::base::Space
 
 bool ServiceStateValidityChecker::isValid(const ompl::base::State* state) const {
   ++context_->counters->states;
-  planning::ValidityTimer timer(context_->counters.get());
+  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kState);
   return context_->state_valid(values(state));
 }
 
@@ -94,16 +112,32 @@ ServiceMotionValidator::ServiceMotionValidator(const ompl::base::SpaceInformatio
 
 bool ServiceMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const {
   ++context_->counters->motions;
-  planning::ValidityTimer timer(context_->counters.get());
+  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
   const bool free = context_->motion_valid(values(s1), values(s2));
   ++(free ? valid_ : invalid_);
+  return free;
+}
+
+std::vector<bool> ServiceMotionValidator::checkMotions(
+    const std::vector<std::pair<const ompl::base::State*, const ompl::base::State*>>& motions) const {
+  if (motions.empty()) return {};
+  context_->counters->motions += motions.size();
+  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
+  const std::size_t n = context_->group.size();
+  std::vector<double> starts, goals;
+  for (const auto& [a, b] : motions) {
+    starts.insert(starts.end(), values(a), values(a) + n);
+    goals.insert(goals.end(), values(b), values(b) + n);
+  }
+  const std::vector<bool> free = context_->motions_valid(starts.data(), goals.data(), motions.size());
+  for (const bool f : free) ++(f ? valid_ : invalid_);
   return free;
 }
 
 bool ServiceMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
                                          std::pair<ompl::base::State*, double>& last_valid) const {
   ++context_->counters->motions;
-  planning::ValidityTimer timer(context_->counters.get());
+  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
   double fraction = 0.0;
   const bool free = context_->motion_valid(values(s1), values(s2), &fraction);
   if (!free) {
