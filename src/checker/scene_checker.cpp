@@ -86,6 +86,30 @@ int ObjectGrid::cell_of(const Vec3& p) const {
   return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
 }
 
+// How deep p (object frame) lies inside the primitive: the radius of the largest ball around p
+// inside it (0 or less outside). Convex solids: the smallest distance to a bounding surface.
+// Cones are not bounded this way here (-infinity: no proof from them).
+double inscribed_depth(const Primitive& prim, const Vec3& p) {
+  switch (prim.kind) {
+    case Primitive::Kind::kSphere: return prim.radius - p.norm();
+    case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
+    case Primitive::Kind::kCylinder: return std::min(prim.radius - std::hypot(p.x(), p.y()), prim.half_length - std::abs(p.z()));
+    case Primitive::Kind::kCapsule: {
+      const Vec3 axis_point(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
+      return prim.radius - (p - axis_point).norm();
+    }
+    case Primitive::Kind::kCone: break;
+  }
+  return -std::numeric_limits<double>::infinity();
+}
+
+double ObjectGrid::depth(int o, const Vec3& centre) const {
+  const Solid& s = solids_[o];
+  if (!s.primitive) return -std::numeric_limits<double>::infinity();
+  // Less the rounding of the transform and of the depth at this scale.
+  return inscribed_depth(s.shape, s.to_local * centre) - 2.0 * (s.margin + pose_margin(centre.norm()));
+}
+
 bool ObjectGrid::ball_meets(int o, const Vec3& centre, double radius) const {
   const Solid& s = solids_[o];
   const double reach = radius + s.margin + pose_margin(centre.norm());
@@ -314,11 +338,24 @@ SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
     Answer answer = Answer::kFree;
     grid_.for_each_near(c, r, [&](int o) {
       if (answer != Answer::kFree || !grid_.ball_meets(o, c, r)) return;
+      // A leaf whose centre lies deeper inside the object than the leaf's proven distance from
+      // the link (its level's Hausdorff bound) proves a point of the link inside: a hit with no
+      // exact test (the state itself only).
+      bool proven = false;
       const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-        return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad,
-                                     [&](const Vec3& pc, double pr, bool) { return grid_.ball_meets(o, pc, pr); });
+        const LinkProxy& proxy = level->links[l];
+        const double slack = proxy.hausdorff_bound() + proxy_pose_margin(proxy, s.poses[l]);
+        return worth(level, s.grow(l)) && !proxy_meets_obstacle(proxy, s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
+          if (!grid_.ball_meets(o, pc, pr)) return false;
+          if (leaf && s.growth == nullptr && !proven) proven = grid_.depth(o, pc) > slack;
+          return true;
+        });
       });
       if (apart) return;
+      if (proven) {
+        answer = Answer::kHit;
+        return;
+      }
       if (s.growth != nullptr) {
         // Within the proxies' level: the exact distance at the midpoint decides.
         const bool exact = exact_distance_pays(s, s.grow(l), level_ / 2);
@@ -501,8 +538,10 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   }
   // At a tolerance, a motion may count as colliding where it comes within the tolerance, unless
   // one of its ends already does: a planner must be able to leave a state it accepted.
-  const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && end_clear_at_tolerance(start) &&
-                        end_clear_at_tolerance(goal);
+  // (And only with a level of at most half the tolerance: the rest of it is the room an
+  // interval's growth needs before the tolerance can take the interval as colliding.)
+  const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2 &&
+                        end_clear_at_tolerance(start) && end_clear_at_tolerance(goal);
   motion_speeds(start, goal);
   std::vector<Interval> done;
   std::deque<Interval> todo{{0.0, 1.0}};

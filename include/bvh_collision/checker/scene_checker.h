@@ -30,6 +30,10 @@
 
 namespace bvh_collision {
 
+// How deep p (the primitive's frame) lies inside it: the radius of the largest ball around p inside
+// the solid (<= 0 outside); -infinity for a cone (not bounded here).
+double inscribed_depth(const Primitive& prim, const Vec3& p);
+
 struct SceneCheckOptions {
   bool self = true, environment = true;
   double tolerance = 0.0;  // DESIGN.md section 2
@@ -68,6 +72,9 @@ class ObjectGrid {
   // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
   // object, whenever the ball meets its bounding sphere.
   bool ball_meets(int o, const Vec3& centre, double radius) const;
+  // A lower bound on how deep `centre` lies inside object `o` (the radius of a ball around it
+  // inside the object; <= 0 outside); -infinity for a mesh object or a cone (no bound given).
+  double depth(int o, const Vec3& centre) const;
   // Is the ball's test against object `o` exact (a primitive), or only its bounding sphere's?
   bool exact_ball_test(int o) const { return solids_[o].primitive; }
   std::size_t size() const { return solids_.size(); }
