@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "bvh_collision/checker/collision_checker.h"
@@ -81,6 +82,44 @@ TEST_P(PairClearanceOnRobot, BoundsNeverExceedTheExactDistance) {
   }
   EXPECT_GT(bounded, 0u);
   RecordProperty("bounded", static_cast<int>(bounded));
+}
+
+// The bound over a segment (certified motions use it for a whole interval): at every one of 40
+// states along short random segments, no bound over the segment exceeds the exact distance; a
+// segment whose box of grid cells is too large, or leaves the grid, gets none.
+TEST_P(PairClearanceOnRobot, BoundsOverASegmentNeverExceedTheExactDistance) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::load_checker(GetParam());
+  const RobotCollisionModel& m = c.collision_model();
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> step(-0.15, 0.15);
+  std::size_t bounded = 0;
+  for (int i = 0; i < test::sized(150); ++i) {
+    const std::vector<double> a = random_configuration(c.model(), rng);
+    std::vector<double> b = a;
+    for (double& v : b) v += step(rng);
+    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+      const double bound = m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data());
+      if (!std::isfinite(bound)) continue;
+      ++bounded;
+      const auto [la, lb] = m.checked_pairs()[g.pair];
+      for (int k = 0; k <= 40; ++k) {
+        std::vector<double> q(a.size());
+        for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + (b[j] - a[j]) * k / 40.0;
+        ASSERT_LE(bound, exact_distance(m, la, lb, q.data(), bound + 1e-6)) << m.robot().links()[la].name << "-" << m.robot().links()[lb].name;
+      }
+    }
+  }
+  EXPECT_GT(bounded, 0u);
+  const PairClearanceGrid& g = m.pair_clearance().grids().front();
+  std::vector<double> a(c.model().variable_count(), 0.0), b = a;
+  a[g.variable[0]] = g.lower[0];
+  b[g.variable[0]] = g.lower[0] + g.cell[0] * g.cells[0];  // every cell of the first variable
+  if (g.cells[0] > 64 && !g.periodic[0]) {
+    EXPECT_EQ(m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
+  }
+  b[g.variable[0]] = g.lower[0] - 1.0;  // outside the grid
+  EXPECT_EQ(m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
 }
 
 // A skipped pair is free by the exact check of that pair alone, and whole boolean self checks

@@ -226,6 +226,32 @@ double PairClearance::grid_bound(const PairClearanceGrid& g, const double* state
   return g.bound[index];
 }
 
+double PairClearance::lower_bound_over(std::size_t pair, const double* a, const double* b, std::size_t max_cells) const {
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  const int id = grid_of_.empty() ? -1 : grid_of_[pair];
+  if (id < 0) return kNone;
+  const PairClearanceGrid& g = grids_[id];
+  std::array<int, 2> first{0, 0}, last{0, 0};
+  std::size_t cells = 1;
+  for (int k = 0; k < g.dims; ++k) {
+    if (g.periodic[k]) return kNone;
+    const double lo = std::min(a[g.variable[k]], b[g.variable[k]]) - g.lower[k];
+    const double hi = std::max(a[g.variable[k]], b[g.variable[k]]) - g.lower[k];
+    if (!(lo >= 0.0 && hi <= g.cell[k] * g.cells[k])) return kNone;
+    first[k] = std::min(static_cast<int>(lo / g.cell[k]), g.cells[k] - 1);
+    last[k] = std::min(static_cast<int>(hi / g.cell[k]), g.cells[k] - 1);
+    cells *= static_cast<std::size_t>(last[k] - first[k] + 1);
+  }
+  if (cells > max_cells) return kNone;
+  double bound = std::numeric_limits<double>::infinity();
+  for (int j = first[1]; j <= last[1]; ++j) {
+    for (int i = first[0]; i <= last[0]; ++i) {
+      bound = std::min(bound, static_cast<double>(g.bound[static_cast<std::size_t>(j) * g.cells[0] + i]));
+    }
+  }
+  return bound;
+}
+
 std::size_t PairClearance::memory_bytes() const {
   std::size_t bytes = grid_of_.capacity() * sizeof(int);
   for (const PairClearanceGrid& g : grids_) bytes += sizeof(g) + g.bound.capacity() * sizeof(float);

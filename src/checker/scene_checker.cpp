@@ -124,7 +124,8 @@ bool ObjectGrid::ball_meets(int o, const Vec3& centre, double radius) const {
 namespace {
 
 struct Scratch {
-  std::vector<double> growth, state, speed, pair_speed, pair_growth;
+  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to;
+  std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
 };
 
 Scratch& scratch() {
@@ -166,6 +167,12 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     reach = std::max(reach, m.bounds()[l].radius + m.paddings()[l]);
   }
   relative_pair_rates();
+  root_at_origin_ = options.root_pose.R == Mat3::Identity() && options.root_pose.t == Vec3::Zero();
+  // Self pairs first (a state's self collisions are the likelier), then each link's environment.
+  for (std::size_t p = 0; p < pair_rates_.size() && options.self; ++p) components_.push_back(static_cast<int>(p));
+  for (const int l : links_) {
+    if (options.environment) components_.push_back(static_cast<int>(pair_rates_.size()) + l);
+  }
   if (options.environment && !env_->objects().empty()) {
     // Cells of 10 cm over the reach around the root; queries up to the largest link ball plus
     // 5 cm of growth use the cell's list.
@@ -245,11 +252,28 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
   posed.state = state;
   m.kinematics().compute(state, posed.poses);
   posed.centres.resize(posed.poses.size());
-  for (std::size_t l = 0; l < posed.poses.size(); ++l) posed.poses[l] = options_.root_pose * posed.poses[l];
-  for (const int l : links_) posed.centres[l] = posed.poses[l] * m.bounds()[l].center;
+  const bool moved = !root_at_origin_;
+  for (const int l : links_) {
+    if (moved) posed.poses[l] = options_.root_pose * posed.poses[l];
+    const Transform& pose = posed.poses[l];
+    const Vec3& c = m.bounds()[l].center;
+    for (int i = 0; i < 3; ++i) posed.centres[l][i] = pose.R(i, 0) * c[0] + pose.R(i, 1) * c[1] + pose.R(i, 2) * c[2] + pose.t[i];
+  }
 }
 
 // ---- SceneChecker: one posed state ----------------------------------------------------------------
+
+namespace {
+
+// An object as the exact tests take it: a box as the exact primitive it is (the environment
+// keeps it as 12 triangles too, which the general queries use; mesh against box primitive measured
+// faster here), everything else as the environment keeps it.
+detail::ShapeRef object_shape(const CollisionObject& o) {
+  if (o.shape.kind == ObjectShape::Kind::kBox) return {nullptr, nullptr, Primitive::box(o.shape.size)};
+  return {o.mesh.get(), o.hull.get(), o.primitive};
+}
+
+}  // namespace
 
 // An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
 // (some 10-30 us against 1-3 for a proxy test)? Not at a tolerance, where a failed interval is
@@ -268,42 +292,46 @@ bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double err
   return !s.tolerant && growth <= error;
 }
 
-SceneChecker::Answer SceneChecker::self_check(const Posed& s) const {
+SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const auto& bounds = m.bounds();
-  for (std::size_t p = 0; p < m.checked_pairs().size(); ++p) {
-    const auto [a, b] = m.checked_pairs()[p];
-    const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
-    const double pads = m.paddings()[a] + m.paddings()[b] + grow;
-    const Vec3& ca = s.centres[a];
-    const Vec3& cb = s.centres[b];
-    const double margin = pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
-    const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
-    if ((ca - cb).squaredNorm() > reach * reach) continue;
-    if (m.pair_clearance().lower_bound(p, s.state) > pads) continue;
-    const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-      return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
-    });
-    if (apart) continue;
-    if (s.growth != nullptr) {
-      // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
-      if (!exact_distance_pays(s, grow, level_)) return Answer::kNear;
-      const double limit = grown_radius(pads) + margin;
-      SelfCollisionResult r;
-      if (checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r) > limit) continue;
-      return Answer::kNear;
-    }
-    if (s.tolerant && proxies_decide_self_) return Answer::kHit;
-    SelfCollisionResult r;
-    if (checker_.pair_collides(a, b, s.poses, SelfCollisionRequest{s.tolerant ? options_.tolerance : 0.0}, r)) return Answer::kHit;
+  const auto [a, b] = m.checked_pairs()[p];
+  // Over an interval, the pair's proven clearance over the whole of it (a grid over the one or
+  // two variables that move it) settles it with no growth at all.
+  if (s.from != nullptr &&
+      m.pair_clearance().lower_bound_over(p, s.from, s.to) > m.paddings()[a] + m.paddings()[b] + options_.min_clearance) {
+    return Answer::kFree;
   }
-  return Answer::kFree;
+  const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
+  const double pads = m.paddings()[a] + m.paddings()[b] + grow;
+  const Vec3& ca = s.centres[a];
+  const Vec3& cb = s.centres[b];
+  const double margin = pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
+  const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
+  if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
+  if (m.pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
+  const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
+    return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
+  });
+  if (apart) return Answer::kFree;
+  if (s.growth != nullptr) {
+    // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
+    if (!exact_distance_pays(s, grow, level_)) return Answer::kNear;
+    const double limit = grown_radius(pads) + margin;
+    SelfCollisionResult r;
+    if (checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r) > limit) return Answer::kFree;
+    return Answer::kNear;
+  }
+  if (s.tolerant && proxies_decide_self_) return Answer::kHit;
+  SelfCollisionResult r;
+  const SelfCollisionRequest request{s.tolerant ? options_.tolerance : 0.0};
+  return checker_.pair_collides(a, b, s.poses, request, r) ? Answer::kHit : Answer::kFree;
 }
 
 bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
-  const detail::ShapeRef obstacle{o.mesh.get(), o.hull.get(), o.primitive};
+  const detail::ShapeRef obstacle = object_shape(o);
   detail::PairRequest r;
   r.padding = m.paddings()[link];
   r.tolerance = tolerance;
@@ -317,7 +345,7 @@ bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int 
 bool SceneChecker::link_farther_from_object(int link, const Transform& pose, int object, double limit) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
-  const detail::ShapeRef obstacle{o.mesh.get(), o.hull.get(), o.primitive};
+  const detail::ShapeRef obstacle = object_shape(o);
   QueryStats stats;
   for (const LinkShape& shape : m.shapes()[link]) {
     Vec3 wa, wb;
@@ -328,10 +356,10 @@ bool SceneChecker::link_farther_from_object(int link, const Transform& pose, int
   return true;
 }
 
-SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
+SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) const {
   if (grid_.size() == 0) return Answer::kFree;
   const RobotCollisionModel& m = checker_.collision_model();
-  for (const int l : links_) {
+  {
     const double pad = m.paddings()[l] + s.grow(l);
     const Vec3& c = s.centres[l];
     const double r = m.bounds()[l].radius + pad;
@@ -366,53 +394,59 @@ SceneChecker::Answer SceneChecker::objects_check(const Posed& s) const {
         answer = Answer::kHit;
       }
     });
-    if (answer != Answer::kFree) return answer;
+    return answer;
   }
-  return Answer::kFree;
 }
 
-SceneChecker::Answer SceneChecker::octree_check(const Posed& s) const {
+SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) const {
   const Octree& tree = env_->octree();
   if (tree.empty()) return Answer::kFree;
   const RobotCollisionModel& m = checker_.collision_model();
-  for (const int l : links_) {
-    const double pad = m.paddings()[l] + s.grow(l);
-    const Vec3& c = s.centres[l];
-    if (field_ && field_->lower_bound(c) > grown_radius(m.bounds()[l].radius + pad) + pose_margin(c.norm() + m.bounds()[l].radius)) continue;
-    const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-      return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
-        if (field_ && field_->lower_bound(pc) > grown_radius(pr)) return false;
-        if (!leaf) return true;
-        if (field_) {
-          if (const std::optional<bool> known = field_->ball_meets_occupied(pc, pr)) return *known;
-        }
-        return !tree.occupied_in_sphere(pc, pr, true).empty();
-      });
-    });
-    if (apart) continue;
-    EnvironmentResult result;
-    if (s.growth != nullptr) {
-      if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return Answer::kNear;
-      const double limit = grown_radius(pad) + pose_margin(c.norm() + m.bounds()[l].radius);
-      if (checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result) > limit) continue;
-      return Answer::kNear;
-    }
-    if (s.tolerant && proxies_decide_objects_) return Answer::kHit;
-    EnvironmentRequest request;
-    request.tolerance = s.tolerant ? options_.tolerance : 0.0;
-    request.contacts = false;
-    if (checker_.link_meets_octree(l, s.poses[l], tree, request, result)) return Answer::kHit;
+  const double pad = m.paddings()[l] + s.grow(l);
+  const Vec3& c = s.centres[l];
+  if (field_ && field_->lower_bound(c) > grown_radius(m.bounds()[l].radius + pad) + pose_margin(c.norm() + m.bounds()[l].radius)) {
+    return Answer::kFree;
   }
-  return Answer::kFree;
+  const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
+    return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
+      if (field_ && field_->lower_bound(pc) > grown_radius(pr)) return false;
+      if (!leaf) return true;
+      if (field_) {
+        if (const std::optional<bool> known = field_->ball_meets_occupied(pc, pr)) return *known;
+      }
+      return !tree.occupied_in_sphere(pc, pr, true).empty();
+    });
+  });
+  if (apart) return Answer::kFree;
+  EnvironmentResult result;
+  if (s.growth != nullptr) {
+    if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return Answer::kNear;
+    const double limit = grown_radius(pad) + pose_margin(c.norm() + m.bounds()[l].radius);
+    return checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result) > limit ? Answer::kFree
+                                                                                                                 : Answer::kNear;
+  }
+  if (s.tolerant && proxies_decide_objects_) return Answer::kHit;
+  EnvironmentRequest request;
+  request.tolerance = s.tolerant ? options_.tolerance : 0.0;
+  request.contacts = false;
+  return checker_.link_meets_octree(l, s.poses[l], tree, request, result) ? Answer::kHit : Answer::kFree;
+}
+
+// Component k: a checked self pair (k below the pair count), else the environment of one link.
+SceneChecker::Answer SceneChecker::component_check(int k, const Posed& s) const {
+  const int pairs = static_cast<int>(pair_rates_.size());
+  if (k < pairs) return options_.self ? pair_check(static_cast<std::size_t>(k), s) : Answer::kFree;
+  if (!options_.environment) return Answer::kFree;
+  const int link = k - pairs;
+  const Answer objects = link_objects_check(link, s);
+  return objects != Answer::kFree ? objects : link_octree_check(link, s);
 }
 
 SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
-  if (options_.self) {
-    if (const Answer a = self_check(s); a != Answer::kFree) return a;
+  for (const int k : components_) {
+    if (const Answer a = component_check(k, s); a != Answer::kFree) return a;
   }
-  if (!options_.environment) return Answer::kFree;
-  if (const Answer a = objects_check(s); a != Answer::kFree) return a;
-  return octree_check(s);
+  return Answer::kFree;
 }
 
 bool SceneChecker::end_clear_at_tolerance(const double* state) const {
@@ -437,8 +471,11 @@ bool SceneChecker::collides(const double* state) const {
 
 namespace {
 
+// An interval of the motion and the components still pending over it (arena[first, first +
+// count)): those its parent could not certify; the others are free over the parent, so over it.
 struct Interval {
   double lo, hi;
+  std::size_t first, count;
 };
 
 // The end of the certified intervals' run from 0 (they may overlap only at their ends).
@@ -455,17 +492,18 @@ double certified_prefix(std::vector<Interval> done) {
 }  // namespace
 
 template <class At>
-SceneChecker::Step SceneChecker::check_interval(double lo, double hi, At&& at, bool tolerant) const {
+SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
+                                                bool tolerant) const {
   thread_local Posed posed;
   Scratch& s = scratch();
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  s.from.assign(at(lo), at(lo) + s.state.size());
+  s.to.assign(at(hi), at(hi) + s.state.size());
   pose_links(at(mid), posed);
-  double largest = 0.0;
   for (const int l : links_) {
     const double g = s.speed[l] * half;
     // min_clearance on top: a certified interval stays that far from every collision.
     s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
-    largest = std::max(largest, g);
   }
   for (std::size_t p = 0; p < s.pair_speed.size(); ++p) {
     const double g = s.pair_speed[p] * half;
@@ -473,20 +511,40 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, At&& at, b
   }
   posed.growth = s.growth.data();
   posed.pair_growth = s.pair_growth.data();
+  posed.from = s.from.data();
+  posed.to = s.to.data();
   posed.tolerant = tolerant;
-  if (check_posed(posed) == Answer::kFree) return {Step::kCertified};
+  // The pending components this interval cannot certify, appended to the arena for its halves;
+  // `largest`: the most any of them can move (or close) over half the interval.
+  std::vector<int>& arena = s.pending;
+  const std::size_t failing = arena.size();
+  double largest = 0.0;
+  const int pairs = static_cast<int>(pair_rates_.size());
+  for (std::size_t j = first; j < first + count; ++j) {
+    const int k = arena[j];
+    if (component_check(k, posed) == Answer::kFree) continue;
+    arena.push_back(k);
+    largest = std::max(largest, (k < pairs ? s.pair_speed[k] : s.speed[k - pairs]) * half);
+  }
+  const std::size_t left = arena.size() - failing;
+  if (left == 0) return {Step::kCertified};
+  // The state at the midpoint: only those components can collide there.
   posed.growth = nullptr;
   posed.pair_growth = nullptr;
-  posed.tolerant = tolerant;
-  if (check_posed(posed) != Answer::kFree) return {Step::kCollides, mid};
+  posed.from = posed.to = nullptr;
+  for (std::size_t j = failing; j < failing + left; ++j) {
+    if (component_check(arena[j], posed) != Answer::kFree) return {Step::kCollides, mid, failing, left};
+  }
   // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
   // link within level + 2 largest (a self pair) of a collision at its midpoint.
-  if (tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) return {Step::kCollides, mid};
+  if (tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) return {Step::kCollides, mid, failing, left};
   // Growth below the level is tested by exact distances: a failure with the motion's own growth
   // within min_clearance puts a pair within padding + 2 min_clearance at the midpoint (counted as
   // colliding, as advancement counts one within min_clearance).
-  if (2.0 * largest <= options_.min_clearance && (largest <= level_ || proxies_.empty())) return {Step::kCollides, mid};
-  return {Step::kSplit};
+  if (2.0 * largest <= options_.min_clearance && (largest <= level_ / 2 || proxies_.empty())) {
+    return {Step::kCollides, mid, failing, left};
+  }
+  return {Step::kSplit, -1.0, failing, left};
 }
 
 // Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
@@ -543,8 +601,10 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2 &&
                         end_clear_at_tolerance(start) && end_clear_at_tolerance(goal);
   motion_speeds(start, goal);
+  std::vector<int>& arena = s.pending;
+  arena.assign(components_.begin(), components_.end());
   std::vector<Interval> done;
-  std::deque<Interval> todo{{0.0, 1.0}};
+  std::deque<Interval> todo{{0.0, 1.0, 0, components_.size()}};
   while (!todo.empty()) {
     const Interval i = earliest ? todo.back() : todo.front();
     earliest ? todo.pop_back() : todo.pop_front();
@@ -554,19 +614,20 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
       result.last_valid_fraction = certified_prefix(done);
       return result;
     }
-    const Step step = check_interval(i.lo, i.hi, at, tolerant);
+    const Step step = check_interval(i.lo, i.hi, i.first, i.count, at, tolerant);
+    const double mid = 0.5 * (i.lo + i.hi);
     if (step.outcome == Step::kCertified) {
       done.push_back(i);
     } else if (step.outcome == Step::kCollides) {
       found = found < 0.0 ? step.at : std::min(found, step.at);
       if (!earliest) break;
-      if (step.at > i.lo) todo.push_back({i.lo, step.at});
+      if (step.at > i.lo) todo.push_back({i.lo, step.at, step.first, step.count});
     } else if (earliest) {
-      todo.push_back({0.5 * (i.lo + i.hi), i.hi});
-      todo.push_back({i.lo, 0.5 * (i.lo + i.hi)});
+      todo.push_back({mid, i.hi, step.first, step.count});
+      todo.push_back({i.lo, mid, step.first, step.count});
     } else {
-      todo.push_back({i.lo, 0.5 * (i.lo + i.hi)});
-      todo.push_back({0.5 * (i.lo + i.hi), i.hi});
+      todo.push_back({i.lo, mid, step.first, step.count});
+      todo.push_back({mid, i.hi, step.first, step.count});
     }
   }
   result.certified = true;

@@ -47,6 +47,11 @@ class PairClearance {
     const int g = grid_of_.empty() ? -1 : grid_of_[pair];
     return g < 0 ? -std::numeric_limits<double>::infinity() : grid_bound(grids_[g], state);
   }
+  // A lower bound on the distance of checked pair `pair` at every state of the straight segment
+  // from `a` to `b`: the smallest cell bound over the box the segment's values of the grid's
+  // variables span (the segment lies in it). -infinity without a grid, a value outside it, a
+  // periodic variable, or a box of more than `max_cells` cells (then cheaper tests serve).
+  double lower_bound_over(std::size_t pair, const double* a, const double* b, std::size_t max_cells = 64) const;
   bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
   const std::vector<PairClearanceGrid>& grids() const { return grids_; }
   std::size_t memory_bytes() const;

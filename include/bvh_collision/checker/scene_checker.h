@@ -136,6 +136,8 @@ class SceneChecker {
     std::vector<Vec3> centres;
     const double* growth = nullptr;
     const double* pair_growth = nullptr;  // per checked pair: how far its links' distance can fall
+    const double* from = nullptr;         // the interval's end states (with growth)
+    const double* to = nullptr;
     // A hit within the tolerance may count (the state itself), or an interval is not to be
     // settled by exact distances (growth: the tolerance will settle it).
     bool tolerant = false;
@@ -145,21 +147,25 @@ class SceneChecker {
   // state itself collides (exact, or within the tolerance); kNear: an interval not certified.
   enum class Answer { kFree, kHit, kNear };
   Answer check_posed(const Posed& posed) const;
+  // One component: a checked self pair or one link against the environment (components_).
+  Answer component_check(int k, const Posed& posed) const;
   bool exact_distance_pays(const Posed& s, double growth, double error) const;
   bool worth(const ProxyLevel* level, double growth) const;
-  Answer self_check(const Posed& posed) const;
-  Answer objects_check(const Posed& posed) const;
-  Answer octree_check(const Posed& posed) const;
+  Answer pair_check(std::size_t pair, const Posed& posed) const;
+  Answer link_objects_check(int link, const Posed& posed) const;
+  Answer link_octree_check(int link, const Posed& posed) const;
   bool link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const;
   // Is the link's exact distance to the object above `limit`?
   bool link_farther_from_object(int link, const Transform& pose, int object, double limit) const;
-  // One interval of a motion: certified, a collision at `at`, or to be split.
+  // One interval of a motion, for the components pending over it: certified, a collision at
+  // `at`, or to be split; the components it could not certify for what follows (first, count).
   struct Step {
     enum Outcome { kCertified, kCollides, kSplit } outcome;
     double at = -1.0;
+    std::size_t first = 0, count = 0;
   };
   template <class At>
-  Step check_interval(double lo, double hi, At&& at, bool tolerant) const;
+  Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at, bool tolerant) const;
   // Is the state farther than the tolerance from every collision (by the proxies)?
   bool end_clear_at_tolerance(const double* state) const;
   void pose_links(const double* state, Posed& posed) const;
@@ -177,6 +183,10 @@ class SceneChecker {
   std::shared_ptr<const OctreeDistanceField> field_;
   ObjectGrid grid_;
   std::vector<int> links_;  // the links with geometry
+  // What one check covers, in checking order: checked self pairs (their indices), then each
+  // link's environment (the pair count plus the link).
+  std::vector<int> components_;
+  bool root_at_origin_ = true;  // the root pose is the identity: link poses need no product
   struct PairRates {
     bool relative = true;  // false: the sum of the two links' own bounds
     std::vector<std::pair<int, double>> weights;  // (state variable, rate)
