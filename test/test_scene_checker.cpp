@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <map>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -41,6 +42,22 @@ const CollisionChecker& panda() {
     return CollisionChecker(std::move(model), std::move(acm), options);
   }();
   return checker;
+}
+
+// Panda as above with every link padded by `padding`, no proxy levels (exact booleans only).
+const CollisionChecker& padded(double padding) {
+  static std::map<double, CollisionChecker> checkers;
+  auto it = checkers.find(padding);
+  if (it == checkers.end()) {
+    const std::string dir = test::robots_dir() + "/panda";
+    RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+    apply_srdf(parse_srdf(read_text(dir + "/robot.srdf"), &model), model, acm);
+    CheckerOptions options;
+    options.padding = padding;  // (a self pair then by twice that: both links)
+    it = checkers.emplace(padding, CollisionChecker(std::move(model), std::move(acm), options)).first;
+  }
+  return it->second;
 }
 
 // The smallest distance less padding over self pairs and obstacles (<= 0: in collision), exact.
@@ -219,7 +236,9 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker& checker = panda();
   std::mt19937_64 rng(13);
-  std::size_t motions = 0, free_motions = 0;
+  std::size_t motions = 0, free_motions = 0, earliest = 0;
+  double earliest_reach = 0.0;  // last valid / colliding fraction, summed
+  std::size_t earliest_intervals = 0;
   for (int scene = 0; scene < 2; ++scene) {
     const auto env = std::make_shared<const Environment>(test::generate_scene(11, 10 + scene).environment());
     for (const double tolerance : {0.0, 0.01}) {
@@ -250,13 +269,31 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
           for (int k = 0; k <= 500; ++k) ASSERT_FALSE(exact_collides(checker, state(k / 500.0).data(), *env)) << "motion " << i << " at " << k;
         } else {
           const std::vector<double> q = state(r.colliding_fraction);
-          EXPECT_LE(exact_clearance(checker, q.data(), *env), tolerance + 1e-5 + 1e-9) << "motion " << i;
+          EXPECT_LE(exact_clearance(checker, q.data(), *env), tolerance + 2e-5 + 1e-9) << "motion " << i;  // within twice min_clearance
           EXPECT_LE(r.last_valid_fraction, r.colliding_fraction);
+          // Looking for the earliest collision (what a planner's last valid state needs): the same
+          // answer, a collision where it says, and free all the way up to the last valid fraction.
+          const MotionResult e = fast.check_motion(free[i].data(), b.data(), true);
+          ASSERT_FALSE(e.valid);
+          // (Exact booleans with the links padded by that much: a distance query this close to a
+          // contact takes most of a second.)
+          EXPECT_TRUE(exact_collides(padded(tolerance + 2e-5 + 1e-9), state(e.colliding_fraction).data(), *env)) << "motion " << i;
+          EXPECT_LE(e.last_valid_fraction, e.colliding_fraction);
+          EXPECT_GE(e.last_valid_fraction, e.colliding_fraction - 1e-3);
+          earliest_intervals += e.states_checked;
+          for (int k = 0; k <= 200; ++k) {
+            ASSERT_FALSE(exact_collides(checker, state(e.last_valid_fraction * k / 200.0).data(), *env)) << "motion " << i;
+          }
+          earliest_reach += e.last_valid_fraction / std::max(e.colliding_fraction, 1e-12);
+          ++earliest;
         }
       }
     }
   }
-  std::cout << motions << " motions, " << free_motions << " free\n";
+  std::cout << motions << " motions, " << free_motions << " free; the earliest collision's last valid fraction reaches "
+            << earliest_reach / std::max<std::size_t>(earliest, 1) << " of the way to it on average, in "
+            << earliest_intervals << " intervals for " << earliest << " motions\n";
+  EXPECT_GT(earliest_reach / std::max<std::size_t>(earliest, 1), 0.5);
   EXPECT_GT(free_motions, 0u);
   EXPECT_LT(free_motions, motions);
 }
