@@ -298,6 +298,52 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
   EXPECT_LT(free_motions, motions);
 }
 
+// A motion that starts within the tolerance of an obstacle (a planner's goal a few millimetres
+// from a shelf) must be answered as at tolerance 0: the tolerance may not take its first
+// interval as colliding, or the planner could never leave the goal. (The ends' clearance was
+// judged by the tolerant state check, whose "free" only means beyond the padding: motions
+// leaving a goal 2.6 mm from an object were refused at 1 cm and found free at 0.)
+TEST(SceneChecker, MotionsFromAStateWithinTheToleranceAnswerAsExact) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const auto env = std::make_shared<const Environment>(test::generate_scene(11, 3).environment());
+  const SceneChecker exact(checker, env);
+  SceneCheckOptions at_1cm;
+  at_1cm.tolerance = 0.01;
+  const SceneChecker coarse(checker, env, at_1cm);
+  std::mt19937_64 rng(37);
+  int near = 0, compared = 0, free = 0;
+  while (near < 4) {
+    // A free state moved towards a colliding one until it lies within 1 cm of the collision.
+    std::vector<double> lo = random_configuration(checker.model(), rng), hi = random_configuration(checker.model(), rng);
+    if (exact.collides(lo.data()) || !exact.collides(hi.data())) continue;
+    double clearance = exact_clearance(checker, lo.data(), *env);
+    for (int k = 0; k < 40 && clearance > 0.008; ++k) {
+      std::vector<double> mid(lo.size());
+      for (std::size_t j = 0; j < mid.size(); ++j) mid[j] = 0.5 * (lo[j] + hi[j]);
+      if (exact.collides(mid.data())) {
+        hi = mid;
+      } else {
+        lo = mid;
+        clearance = exact_clearance(checker, lo.data(), *env);
+      }
+    }
+    if (clearance > 0.008 || clearance < 0.001) continue;
+    ++near;
+    for (int i = 0; i < 30; ++i) {
+      std::vector<double> b = random_configuration(checker.model(), rng);
+      for (std::size_t j = 0; j < b.size(); ++j) b[j] = lo[j] + 0.03 * (b[j] - lo[j]);
+      if (exact.collides(b.data())) continue;
+      ++compared;
+      const bool truth = exact.check_motion(lo.data(), b.data()).valid;
+      free += truth;
+      EXPECT_EQ(coarse.check_motion(lo.data(), b.data()).valid, truth) << "near state " << near << " motion " << i;
+    }
+  }
+  std::cout << compared << " motions from 4 states 1 to 8 mm from a collision, " << free << " free\n";
+  EXPECT_GT(free, 0);
+}
+
 // A proxy level coarser than half the tolerance leaves an interval's growth no room within the
 // tolerance: such motions are settled by exact distances, not bisected down to min_clearance
 // (they were: 36 ms a motion on panda with a 20 mm level at 10 mm).

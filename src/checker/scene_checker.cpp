@@ -449,12 +449,18 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   return Answer::kFree;
 }
 
+// Every link and self pair grown by the tolerance and proven apart by the proxies: every distance
+// exceeds padding + tolerance. (Not the tolerant state check: its "free" only says beyond padding.)
 bool SceneChecker::end_clear_at_tolerance(const double* state) const {
   thread_local Posed posed;
+  thread_local std::vector<double> growth, pair_growth;
+  growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
+  pair_growth.assign(pair_rates_.size(), options_.tolerance);
   pose_links(state, posed);
-  posed.growth = nullptr;
-  posed.pair_growth = nullptr;
-  posed.tolerant = true;
+  posed.growth = growth.data();
+  posed.pair_growth = pair_growth.data();
+  posed.from = posed.to = nullptr;
+  posed.tolerant = true;  // no exact distances: the proxies decide or it is not clear
   return check_posed(posed) == Answer::kFree;
 }
 
