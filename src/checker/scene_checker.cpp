@@ -2,6 +2,7 @@
 #include "bvh_collision/checker/scene_checker.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -316,10 +317,12 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   if (apart) return Answer::kFree;
   if (s.growth != nullptr) {
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
-    if (!exact_distance_pays(s, grow, level_)) return Answer::kNear;
+    if (!exact_distance_pays(s, grow, level_)) return s.no_free_radius();
     const double limit = grown_radius(pads) + margin;
     SelfCollisionResult r;
-    if (checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r) > limit) return Answer::kFree;
+    const double d = checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r);
+    if (d > limit) return Answer::kFree;
+    s.note_free_radius(d - margin - (pads - grow) - options_.min_clearance, grow);
     return Answer::kNear;
   }
   if (s.tolerant && proxies_decide_self_) return Answer::kHit;
@@ -342,18 +345,17 @@ bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int 
   return false;
 }
 
-bool SceneChecker::link_farther_from_object(int link, const Transform& pose, int object, double limit) const {
+double SceneChecker::link_object_distance(int link, const Transform& pose, int object, double limit) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
   const detail::ShapeRef obstacle = object_shape(o);
   QueryStats stats;
+  double best = limit * (1 + 1e-9) + 1e-12;
   for (const LinkShape& shape : m.shapes()[link]) {
     Vec3 wa, wb;
-    const double d = detail::shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, limit * (1 + 1e-9) + 1e-12,
-                                             true, wa, wb, stats);
-    if (!(d > limit)) return false;
+    best = std::min(best, detail::shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, best, true, wa, wb, stats));
   }
-  return true;
+  return best;
 }
 
 SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) const {
@@ -386,9 +388,16 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
       }
       if (s.growth != nullptr) {
         // Within the proxies' level: the exact distance at the midpoint decides.
-        const bool exact = exact_distance_pays(s, s.grow(l), level_ / 2);
-        const double limit = grown_radius(pad) + pose_margin(c.norm() + r);
-        if (!exact || !link_farther_from_object(l, s.poses[l], o, limit)) answer = Answer::kNear;
+        if (!exact_distance_pays(s, s.grow(l), level_ / 2)) {
+          answer = s.no_free_radius();
+          return;
+        }
+        const double margin = pose_margin(c.norm() + r);
+        const double limit = grown_radius(pad) + margin;
+        const double d = link_object_distance(l, s.poses[l], o, limit);
+        if (d > limit) return;
+        s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
+        answer = Answer::kNear;
       } else if ((s.tolerant && proxies_decide_objects_ && grid_.exact_ball_test(o)) ||
                  link_meets_object_exact(l, s.poses[l], o, s.tolerant ? options_.tolerance : 0.0)) {
         answer = Answer::kHit;
@@ -420,10 +429,13 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
   if (apart) return Answer::kFree;
   EnvironmentResult result;
   if (s.growth != nullptr) {
-    if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return Answer::kNear;
-    const double limit = grown_radius(pad) + pose_margin(c.norm() + m.bounds()[l].radius);
-    return checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result) > limit ? Answer::kFree
-                                                                                                                 : Answer::kNear;
+    if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return s.no_free_radius();
+    const double margin = pose_margin(c.norm() + m.bounds()[l].radius);
+    const double limit = grown_radius(pad) + margin;
+    const double d = checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result);
+    if (d > limit) return Answer::kFree;
+    s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
+    return Answer::kNear;
   }
   if (s.tolerant && proxies_decide_objects_) return Answer::kHit;
   EnvironmentRequest request;
@@ -526,6 +538,8 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   posed.tolerant = tolerant;
   // The pending components this interval cannot certify, appended to the arena for its halves;
   // `largest`: the most any of them can move (or close) over half the interval.
+  posed.half = half;
+  posed.free_radius = std::numeric_limits<double>::infinity();
   std::vector<int>& arena = s.pending;
   const std::size_t failing = arena.size();
   double largest = 0.0;
@@ -556,7 +570,14 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   if (2.0 * largest <= options_.min_clearance && (largest <= level_ / 2 || proxies_.empty())) {
     return {Step::kCollides, mid, failing, left};
   }
-  return {Step::kSplit, -1.0, failing, left};
+  // Every component that failed did so on an exact distance at the midpoint: each is free for
+  // as long as it cannot have closed that gap, the smallest of which frees a middle stretch.
+  Step split{Step::kSplit, -1.0, failing, left};
+  if (std::isfinite(posed.free_radius) && posed.free_radius > 0.0) {
+    split.free_lo = std::max(lo, mid - posed.free_radius);
+    split.free_hi = std::min(hi, mid + posed.free_radius);
+  }
+  return split;
 }
 
 // Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
@@ -629,19 +650,22 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
       return result;
     }
     const Step step = check_interval(i.lo, i.hi, i.first, i.count, at, tolerant);
-    const double mid = 0.5 * (i.lo + i.hi);
     if (step.outcome == Step::kCertified) {
       done.push_back(i);
     } else if (step.outcome == Step::kCollides) {
       found = found < 0.0 ? step.at : std::min(found, step.at);
       if (!earliest) break;
       if (step.at > i.lo) todo.push_back({i.lo, step.at, step.first, step.count});
-    } else if (earliest) {
-      todo.push_back({mid, i.hi, step.first, step.count});
-      todo.push_back({i.lo, mid, step.first, step.count});
     } else {
-      todo.push_back({i.lo, mid, step.first, step.count});
-      todo.push_back({mid, i.hi, step.first, step.count});
+      // The halves, less a middle stretch the exact distances freed (free_lo, free_hi).
+      const double mid = 0.5 * (i.lo + i.hi);
+      const double cut_lo = step.free_hi > step.free_lo ? step.free_lo : mid;
+      const double cut_hi = step.free_hi > step.free_lo ? step.free_hi : mid;
+      if (cut_hi > cut_lo) done.push_back({cut_lo, cut_hi, 0, 0});
+      const Interval left{i.lo, cut_lo, step.first, step.count}, right{cut_hi, i.hi, step.first, step.count};
+      for (const Interval& half : earliest ? std::array<Interval, 2>{right, left} : std::array<Interval, 2>{left, right}) {
+        if (half.hi > half.lo) todo.push_back(half);
+      }
     }
   }
   result.certified = true;

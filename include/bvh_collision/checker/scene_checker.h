@@ -128,6 +128,9 @@ class SceneChecker {
   double pair_growth(std::size_t pair, const double* start, const double* goal, double half) const;
 
  private:
+  // kFree: free for every state whose links lie within their growth of these poses; kHit: the
+  // state itself collides (exact, or within the tolerance); kNear: an interval not certified.
+  enum class Answer { kFree, kHit, kNear };
   // One state as the tests read it: the state, its link poses (root pose applied), the world
   // centres of the links' bounding spheres, and per link a growth (null: the state itself).
   struct Posed {
@@ -142,10 +145,21 @@ class SceneChecker {
     // settled by exact distances (growth: the tolerance will settle it).
     bool tolerant = false;
     double grow(int link) const { return growth != nullptr ? growth[link] : 0.0; }
+    // An interval's half-width, and the stretch around its midpoint (fractions) over which every
+    // component that failed on an exact distance stays free: a gap `gap` beyond padding and a
+    // growth `growth` over the half-width free half * gap / growth. One that failed otherwise
+    // frees nothing (0).
+    double half = 0.0;
+    mutable double free_radius = 0.0;
+    void note_free_radius(double gap, double growth_now) const {
+      free_radius = std::min(free_radius, gap > 0.0 && growth_now > 0.0 ? half * gap / growth_now : 0.0);
+    }
+    Answer no_free_radius() const {
+      free_radius = 0.0;
+      return Answer::kNear;
+    }
   };
-  // kFree: free for every state whose links lie within their growth of these poses; kHit: the
-  // state itself collides (exact, or within the tolerance); kNear: an interval not certified.
-  enum class Answer { kFree, kHit, kNear };
+
   Answer check_posed(const Posed& posed) const;
   // One component: a checked self pair or one link against the environment (components_).
   Answer component_check(int k, const Posed& posed) const;
@@ -155,14 +169,15 @@ class SceneChecker {
   Answer link_objects_check(int link, const Posed& posed) const;
   Answer link_octree_check(int link, const Posed& posed) const;
   bool link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const;
-  // Is the link's exact distance to the object above `limit`?
-  bool link_farther_from_object(int link, const Transform& pose, int object, double limit) const;
+  // The link's exact distance to the object when below `limit` (else `limit` or a little more).
+  double link_object_distance(int link, const Transform& pose, int object, double limit) const;
   // One interval of a motion, for the components pending over it: certified, a collision at
   // `at`, or to be split; the components it could not certify for what follows (first, count).
   struct Step {
     enum Outcome { kCertified, kCollides, kSplit } outcome;
     double at = -1.0;
     std::size_t first = 0, count = 0;
+    double free_lo = 0.0, free_hi = 0.0;  // kSplit: a middle stretch already free (when free_hi > free_lo)
   };
   template <class At>
   Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at, bool tolerant) const;
