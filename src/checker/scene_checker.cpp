@@ -432,7 +432,18 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return s.no_free_radius();
     const double margin = pose_margin(c.norm() + m.bounds()[l].radius);
     const double limit = grown_radius(pad) + margin;
-    const double d = checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result);
+    // The distance field's bound from each leaf of the finest proxies first (the leaves hold the
+    // link; within half the level and a voxel of the exact distance): the exact walk of the
+    // octree only where that cannot clear the limit.
+    double d = -1.0;
+    if (field_ && !proxies_.empty()) {
+      const LinkProxy& proxy = proxies_.back()->links[l];
+      d = proxy_obstacle_distance(proxy, s.poses[l], limit * (1 + 1e-9) + 1e-12, [&](const Vec3& pc, double pr, double) {
+        return std::max(0.0, field_->lower_bound(pc) - grown_radius(pr));
+      });
+      if (d > limit) return Answer::kFree;
+    }
+    d = std::max(d, checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result));
     if (d > limit) return Answer::kFree;
     s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
     return Answer::kNear;
