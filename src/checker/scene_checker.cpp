@@ -127,6 +127,7 @@ namespace {
 struct Scratch {
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
+  std::vector<char> tolerant, near;  // per component: may the tolerance's shortcut take it?
 };
 
 Scratch& scratch() {
@@ -420,9 +421,14 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     return worth(level, s.grow(l)) && !proxy_meets_obstacle(level->links[l], s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
       if (field_ && field_->lower_bound(pc) > grown_radius(pr)) return false;
       if (!leaf) return true;
+      // A grown ball (an interval) larger than a few voxels, or beyond the field's grid, counts as
+      // meeting, to be split: the grid's scan of a ball grows with its volume (a 10 cm ball: a
+      // thousand cells, 98 % of the demo arm's motion time), and the octree's walk too.
+      if (s.growth != nullptr && (!field_ || pr > 4.0 * tree.resolution())) return true;
       if (field_) {
         if (const std::optional<bool> known = field_->ball_meets_occupied(pc, pr)) return *known;
       }
+      if (s.growth != nullptr) return true;
       return !tree.occupied_in_sphere(pc, pr, true).empty();
     });
   });
@@ -472,9 +478,10 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   return Answer::kFree;
 }
 
-// Every link and self pair grown by the tolerance and proven apart by the proxies: every distance
-// exceeds padding + tolerance. (Not the tolerant state check: its "free" only says beyond padding.)
-bool SceneChecker::end_clear_at_tolerance(const double* state) const {
+// Marks (near[k] = 1) the components of `state` that the proxies cannot prove farther than the
+// tolerance beyond their padding: each grown by the tolerance, a component apart is clear of it.
+// (Not the tolerant state check: its "free" only says beyond padding.)
+void SceneChecker::mark_within_tolerance(const double* state, std::vector<char>& near) const {
   thread_local Posed posed;
   thread_local std::vector<double> growth, pair_growth;
   growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
@@ -484,7 +491,10 @@ bool SceneChecker::end_clear_at_tolerance(const double* state) const {
   posed.pair_growth = pair_growth.data();
   posed.from = posed.to = nullptr;
   posed.tolerant = true;  // no exact distances: the proxies decide or it is not clear
-  return check_posed(posed) == Answer::kFree;
+  posed.half = 0.0;
+  for (const int k : components_) {
+    if (component_check(k, posed) != Answer::kFree) near[k] = 1;
+  }
 }
 
 bool SceneChecker::collides(const double* state) const {
@@ -526,7 +536,7 @@ double certified_prefix(std::vector<Interval> done) {
 
 template <class At>
 SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
-                                                bool tolerant) const {
+                                                const std::vector<char>& tolerant) const {
   thread_local Posed posed;
   Scratch& s = scratch();
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
@@ -546,7 +556,6 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   posed.pair_growth = s.pair_growth.data();
   posed.from = s.from.data();
   posed.to = s.to.data();
-  posed.tolerant = tolerant;
   // The pending components this interval cannot certify, appended to the arena for its halves;
   // `largest`: the most any of them can move (or close) over half the interval.
   posed.half = half;
@@ -554,9 +563,11 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   std::vector<int>& arena = s.pending;
   const std::size_t failing = arena.size();
   double largest = 0.0;
+  bool all_tolerant = true;  // every failing component may take the tolerance's shortcut
   const int pairs = static_cast<int>(pair_rates_.size());
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
+    posed.tolerant = tolerant[k] != 0;
     if (component_check(k, posed) == Answer::kFree) continue;
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
     // collide, and mostly where the intervals first fail: that ends the motion at once.)
@@ -568,13 +579,16 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     // (What follows it inherits the whole pending list: the rest was not looked at.)
     if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
     arena.push_back(k);
+    all_tolerant = all_tolerant && tolerant[k] != 0;
     largest = std::max(largest, (k < pairs ? s.pair_speed[k] : s.speed[k - pairs]) * half);
   }
   const std::size_t left = arena.size() - failing;
   if (left == 0) return {Step::kCertified};
   // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
   // link within level + 2 largest (a self pair) of a collision at its midpoint.
-  if (tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) return {Step::kCollides, mid, failing, left};
+  if (all_tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) {
+    return {Step::kCollides, mid, failing, left};
+  }
   // Growth below the level is tested by exact distances: a failure with the motion's own growth
   // within min_clearance puts a pair within padding + 2 min_clearance at the midpoint (counted as
   // colliding, as advancement counts one within min_clearance).
@@ -638,12 +652,20 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
     result.certified = true;
     return result;
   }
-  // At a tolerance, a motion may count as colliding where it comes within the tolerance, unless
-  // one of its ends already does: a planner must be able to leave a state it accepted.
-  // (And only with a level of at most half the tolerance: the rest of it is the room an
-  // interval's growth needs before the tolerance can take the interval as colliding.)
-  const bool tolerant = options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2 &&
-                        end_clear_at_tolerance(start) && end_clear_at_tolerance(goal);
+  // At a tolerance, a motion may count as colliding where a component (a self pair, a link against
+  // the environment) comes within the tolerance, unless that component already is at one of its
+  // ends: a planner must be able to leave a state it accepted. (And only with a level of at most
+  // half the tolerance: the rest is the room an interval's growth needs before the tolerance
+  // can take the interval as colliding.)
+  std::vector<char>& tolerant = s.tolerant;
+  tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), 0);
+  if (options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2) {
+    std::vector<char>& near = s.near;
+    near.assign(tolerant.size(), 0);
+    mark_within_tolerance(start, near);
+    mark_within_tolerance(goal, near);
+    for (const int k : components_) tolerant[k] = near[k] ? 0 : 1;
+  }
   motion_speeds(start, goal);
   std::vector<int>& arena = s.pending;
   arena.assign(components_.begin(), components_.end());

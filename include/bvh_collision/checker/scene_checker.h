@@ -17,10 +17,12 @@
 //   between the two links only); an interval that fails is bisected, breadth first, its midpoint
 //   state checked (a collision there ends the motion). Once the growth is below the proxies' own
 //   error, an exact distance at the midpoint settles a link or pair (farther than its growth:
-//   free over the interval). At a tolerance t, for a motion whose ends are both clear of it, an
-//   interval whose growth and proxy error fit in t and still fails is within t of a collision
-//   (reported colliding, as the tolerance allows). Free means free at every instant, farther
-//   than min_clearance from every collision, at any tolerance.
+//   free over the interval). At a tolerance t, an interval whose growth and proxy error fit in t
+//   and still fails is within t of a collision (reported colliding, as the tolerance allows),
+//   for the self pairs and links (components) that are clear of t at both ends of the motion; one
+//   within t at an end is settled exactly (a planner must be able to leave the state it stands
+//   in, and a base resting on the floor must not make every motion exact). Free means free at
+//   every instant, farther than min_clearance from every collision, at any tolerance.
 #pragma once
 
 #include <memory>
@@ -180,9 +182,10 @@ class SceneChecker {
     double free_lo = 0.0, free_hi = 0.0;  // kSplit: a middle stretch already free (when free_hi > free_lo)
   };
   template <class At>
-  Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at, bool tolerant) const;
-  // Is the state farther than the tolerance from every collision (by the proxies)?
-  bool end_clear_at_tolerance(const double* state) const;
+  Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
+                      const std::vector<char>& tolerant) const;
+  // Marks the components of the state not proven farther than the tolerance (by the proxies).
+  void mark_within_tolerance(const double* state, std::vector<char>& near) const;
   void pose_links(const double* state, Posed& posed) const;
   void relative_pair_rates();
   void motion_speeds(const double* start, const double* goal) const;
