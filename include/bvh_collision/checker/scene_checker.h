@@ -29,12 +29,9 @@
 #include <vector>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/object_grid.h"
 
 namespace bvh_collision {
-
-// How deep p (the primitive's frame) lies inside it: the radius of the largest ball around p inside
-// the solid (<= 0 outside); -infinity for a cone (not bounded here).
-double inscribed_depth(const Primitive& prim, const Vec3& p);
 
 struct SceneCheckOptions {
   bool self = true, environment = true;
@@ -49,56 +46,6 @@ struct SceneCheckOptions {
   // state free, an exact test confirms a hit), so that a planner can accept a goal a millimetre
   // from a table; true: a state within the tolerance may count as colliding (cheaper hits).
   bool states_at_tolerance = false;
-};
-
-// The collision objects of a snapshot, for sphere queries: each object's exact primitive in its
-// own frame (boxes included; meshes by their bounding sphere until the exact test), and a grid over
-// a box of the world whose cells list the objects within `reach` of them.
-class ObjectGrid {
- public:
-  ObjectGrid() = default;
-  ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
-
-  // Calls f(object index) for every object that might lie within `radius` of `centre`: the
-  // cell's list when radius <= reach and the centre lies in the grid, else every object.
-  template <class F>
-  void for_each_near(const Vec3& centre, double radius, F&& f) const {
-    const int c = radius <= reach_ ? cell_of(centre) : -1;
-    if (c < 0) {
-      for (std::size_t o = 0; o < solids_.size(); ++o) f(static_cast<int>(o));
-      return;
-    }
-    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) f(static_cast<int>(list_[k]));
-  }
-
-  // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
-  // object, whenever the ball meets its bounding sphere.
-  bool ball_meets(int o, const Vec3& centre, double radius) const;
-  // A lower bound on how deep `centre` lies inside object `o` (the radius of a ball around it
-  // inside the object; <= 0 outside); -infinity for a mesh object or a cone (no bound given).
-  double depth(int o, const Vec3& centre) const;
-  // Is the ball's test against object `o` exact (a primitive), or only its bounding sphere's?
-  bool exact_ball_test(int o) const { return solids_[o].primitive; }
-  std::size_t size() const { return solids_.size(); }
-  std::size_t cells() const { return start_.empty() ? 0 : start_.size() - 1; }
-
- private:
-  struct Solid {
-    Transform to_local;  // world -> object frame
-    Primitive shape;     // exact when `primitive`
-    bool primitive = false;
-    Vec3 centre = Vec3::Zero();  // world bounding sphere
-    double radius = 0.0;
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // world box
-    double margin = 0.0;  // rounding of the ball test at this object's scale
-  };
-  int cell_of(const Vec3& p) const;
-
-  std::vector<Solid> solids_;
-  Vec3 origin_ = Vec3::Zero();
-  double cell_ = 1.0, reach_ = 0.0;
-  int n_[3] = {0, 0, 0};
-  std::vector<std::uint32_t> start_, list_;
 };
 
 class SceneChecker {
@@ -186,6 +133,7 @@ class SceneChecker {
                       const std::vector<char>& tolerant) const;
   // Marks the components of the state not proven farther than the tolerance (by the proxies).
   void mark_within_tolerance(const double* state, std::vector<char>& near) const;
+  const std::vector<char>& tolerant_components(const double* start, const double* goal) const;
   void pose_links(const double* state, Posed& posed) const;
   void relative_pair_rates();
   void motion_speeds(const double* start, const double* goal) const;

@@ -1,0 +1,69 @@
+// The collision objects of one environment snapshot as sphere queries see them (the planner's
+// state and motion checks, checker/scene_checker.h): each object's exact primitive in its own
+// frame, and a grid over the robot's reach whose cells list the objects near them.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "bvh_collision/checker/environment.h"
+#include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+// How deep p (the primitive's frame) lies inside it: the radius of the largest ball around p inside
+// the solid (<= 0 outside); -infinity for a cone (not bounded here).
+double inscribed_depth(const Primitive& prim, const Vec3& p);
+
+// The collision objects of a snapshot, for sphere queries: each object's exact primitive in its
+// own frame (boxes included; meshes by their bounding sphere until the exact test), and a grid over
+// a box of the world whose cells list the objects within `reach` of them.
+class ObjectGrid {
+ public:
+  ObjectGrid() = default;
+  ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
+
+  // Calls f(object index) for every object that might lie within `radius` of `centre`: the
+  // cell's list when radius <= reach and the centre lies in the grid, else every object.
+  template <class F>
+  void for_each_near(const Vec3& centre, double radius, F&& f) const {
+    const int c = radius <= reach_ ? cell_of(centre) : -1;
+    if (c < 0) {
+      for (std::size_t o = 0; o < solids_.size(); ++o) f(static_cast<int>(o));
+      return;
+    }
+    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) f(static_cast<int>(list_[k]));
+  }
+
+  // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
+  // object, whenever the ball meets its bounding sphere.
+  bool ball_meets(int o, const Vec3& centre, double radius) const;
+  // A lower bound on how deep `centre` lies inside object `o` (the radius of a ball around it
+  // inside the object; <= 0 outside); -infinity for a mesh object or a cone (no bound given).
+  double depth(int o, const Vec3& centre) const;
+  // Is the ball's test against object `o` exact (a primitive), or only its bounding sphere's?
+  bool exact_ball_test(int o) const { return solids_[o].primitive; }
+  std::size_t size() const { return solids_.size(); }
+  std::size_t cells() const { return start_.empty() ? 0 : start_.size() - 1; }
+
+ private:
+  struct Solid {
+    Transform to_local;  // world -> object frame
+    Primitive shape;     // exact when `primitive`
+    bool primitive = false;
+    Vec3 centre = Vec3::Zero();  // world bounding sphere
+    double radius = 0.0;
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // world box
+    double margin = 0.0;  // rounding of the ball test at this object's scale
+  };
+  int cell_of(const Vec3& p) const;
+
+  std::vector<Solid> solids_;
+  Vec3 origin_ = Vec3::Zero();
+  double cell_ = 1.0, reach_ = 0.0;
+  int n_[3] = {0, 0, 0};
+  std::vector<std::uint32_t> start_, list_;
+};
+
+}  // namespace bvh_collision

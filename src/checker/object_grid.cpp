@@ -1,0 +1,118 @@
+// ObjectGrid: the objects of a snapshot for sphere queries (checker/object_grid.h).
+#include "bvh_collision/checker/object_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "bvh_collision/geometry/safety_margin.h"
+
+namespace bvh_collision {
+
+namespace {
+
+// The world box of a primitive or mesh bound at `pose`: |R| half-extents around the centre.
+void world_box(const Transform& pose, const Vec3& centre, const Vec3& half, Vec3& lo, Vec3& hi) {
+  const Vec3 c = pose * centre;
+  const Vec3 e = pose.R.cwiseAbs() * half;
+  const double m = pose_margin(c.norm() + half.norm());
+  lo = c - e - Vec3::Constant(m);
+  hi = c + e + Vec3::Constant(m);
+}
+
+// The squared distance from p to the box [lo, hi].
+double squared_box_distance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  return (p.cwiseMax(lo).cwiseMin(hi) - p).squaredNorm();
+}
+
+}  // namespace
+
+ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach,
+                       double cell)
+    : origin_(lo), cell_(cell), reach_(reach) {
+  for (const CollisionObject& o : objects) {
+    Solid s;
+    s.to_local = o.pose.inverse();
+    s.primitive = o.mesh == nullptr || o.shape.kind == ObjectShape::Kind::kBox;
+    s.shape = o.mesh == nullptr ? o.primitive : Primitive::box(o.shape.size);
+    s.centre = o.pose * o.bound_center;
+    s.radius = o.bound_radius;
+    world_box(o.pose, s.primitive ? Vec3::Zero() : o.bound_center,
+              s.primitive ? half_extents(s.shape) : Vec3::Constant(o.bound_radius), s.lo, s.hi);
+    s.margin = pose_margin(s.centre.norm() + s.radius);
+    solids_.push_back(s);
+  }
+  for (int i = 0; i < 3; ++i) n_[i] = std::max(1, static_cast<int>(std::ceil((hi[i] - lo[i]) / cell)));
+  const std::size_t cells = static_cast<std::size_t>(n_[0]) * n_[1] * n_[2];
+  start_.assign(cells + 1, 0);
+  // A cell lists an object when the object's box comes within reach of the cell's box (the ball
+  // of a query centred in the cell, of radius up to reach, can then meet it).
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * cell;
+  std::vector<std::vector<std::uint32_t>> lists(cells);
+  for (std::size_t o = 0; o < solids_.size(); ++o) {
+    const Solid& s = solids_[o];
+    int first[3], last[3];
+    for (int i = 0; i < 3; ++i) {
+      first[i] = std::clamp(static_cast<int>(std::floor((s.lo[i] - reach - lo[i]) / cell)), 0, n_[i] - 1);
+      last[i] = std::clamp(static_cast<int>(std::floor((s.hi[i] + reach - lo[i]) / cell)), 0, n_[i] - 1);
+    }
+    for (int z = first[2]; z <= last[2]; ++z) {
+      for (int y = first[1]; y <= last[1]; ++y) {
+        for (int x = first[0]; x <= last[0]; ++x) {
+          const Vec3 centre = lo + cell * Vec3(x + 0.5, y + 0.5, z + 0.5);
+          const double within = reach + half_diagonal;
+          if (squared_box_distance(centre, s.lo, s.hi) > within * within * (1 + 1e-9)) continue;
+          lists[(static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x].push_back(static_cast<std::uint32_t>(o));
+        }
+      }
+    }
+  }
+  for (std::size_t c = 0; c < cells; ++c) start_[c + 1] = start_[c] + static_cast<std::uint32_t>(lists[c].size());
+  list_.reserve(start_.back());
+  for (const auto& l : lists) list_.insert(list_.end(), l.begin(), l.end());
+}
+
+int ObjectGrid::cell_of(const Vec3& p) const {
+  int at[3];
+  for (int i = 0; i < 3; ++i) {
+    const double f = (p[i] - origin_[i]) / cell_;
+    if (!(f >= 0.0) || f >= n_[i]) return -1;  // outside (or not a number): every object
+    at[i] = static_cast<int>(f);
+  }
+  return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
+}
+
+// How deep p (object frame) lies inside the primitive: the radius of the largest ball around p
+// inside it (0 or less outside). Convex solids: the smallest distance to a bounding surface.
+// Cones are not bounded this way here (-infinity: no proof from them).
+double inscribed_depth(const Primitive& prim, const Vec3& p) {
+  switch (prim.kind) {
+    case Primitive::Kind::kSphere: return prim.radius - p.norm();
+    case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
+    case Primitive::Kind::kCylinder: return std::min(prim.radius - std::hypot(p.x(), p.y()), prim.half_length - std::abs(p.z()));
+    case Primitive::Kind::kCapsule: {
+      const Vec3 axis_point(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
+      return prim.radius - (p - axis_point).norm();
+    }
+    case Primitive::Kind::kCone: break;
+  }
+  return -std::numeric_limits<double>::infinity();
+}
+
+double ObjectGrid::depth(int o, const Vec3& centre) const {
+  const Solid& s = solids_[o];
+  if (!s.primitive) return -std::numeric_limits<double>::infinity();
+  // Less the rounding of the transform and of the depth at this scale.
+  return inscribed_depth(s.shape, s.to_local * centre) - 2.0 * (s.margin + pose_margin(centre.norm()));
+}
+
+bool ObjectGrid::ball_meets(int o, const Vec3& centre, double radius) const {
+  const Solid& s = solids_[o];
+  const double reach = radius + s.margin + pose_margin(centre.norm());
+  if (squared_box_distance(centre, s.lo, s.hi) > reach * reach) return false;
+  if (!s.primitive) return (centre - s.centre).squaredNorm() <= (reach + s.radius) * (reach + s.radius);
+  const Vec3 p = s.to_local * centre;
+  return (closest_point(s.shape, p) - p).squaredNorm() <= reach * reach;
+}
+
+}  // namespace bvh_collision

@@ -1,0 +1,230 @@
+// SceneChecker's certified motions: intervals checked at once, bisected, settled by exact
+// distances below the proxies' error (checker/scene_checker.h).
+#include "bvh_collision/checker/scene_checker.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <stdexcept>
+
+#include "bvh_collision/geometry/safety_margin.h"
+
+namespace bvh_collision {
+
+namespace {
+
+struct Scratch {
+  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to;
+  std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
+  std::vector<char> tolerant, near;  // per component: may the tolerance's shortcut take it?
+};
+
+Scratch& scratch() {
+  thread_local Scratch s;
+  return s;
+}
+
+// How close (a fraction of the motion) the last valid state of a colliding motion must come to
+// the collision found when the earliest one is asked for.
+constexpr double kEarliestResolution = 1e-3;
+
+// An interval of the motion and the components still pending over it (arena[first, first +
+// count)): those its parent could not certify; the others are free over the parent, so over it.
+struct Interval {
+  double lo, hi;
+  std::size_t first, count;
+};
+
+// The end of the certified intervals' run from 0 (they may overlap only at their ends).
+double certified_prefix(std::vector<Interval> done) {
+  std::sort(done.begin(), done.end(), [](const Interval& a, const Interval& b) { return a.lo < b.lo; });
+  double end = 0.0;
+  for (const Interval& i : done) {
+    if (i.lo > end) break;
+    end = std::max(end, i.hi);
+  }
+  return end;
+}
+
+}  // namespace
+
+template <class At>
+SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
+                                                const std::vector<char>& tolerant) const {
+  thread_local Posed posed;
+  Scratch& s = scratch();
+  const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  s.from.assign(at(lo), at(lo) + s.state.size());
+  s.to.assign(at(hi), at(hi) + s.state.size());
+  pose_links(at(mid), posed);
+  for (const int l : links_) {
+    const double g = s.speed[l] * half;
+    // min_clearance on top: a certified interval stays that far from every collision.
+    s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
+  }
+  for (std::size_t p = 0; p < s.pair_speed.size(); ++p) {
+    const double g = s.pair_speed[p] * half;
+    s.pair_growth[p] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
+  }
+  posed.growth = s.growth.data();
+  posed.pair_growth = s.pair_growth.data();
+  posed.from = s.from.data();
+  posed.to = s.to.data();
+  // The pending components this interval cannot certify, appended to the arena for its halves;
+  // `largest`: the most any of them can move (or close) over half the interval.
+  posed.half = half;
+  posed.free_radius = std::numeric_limits<double>::infinity();
+  std::vector<int>& arena = s.pending;
+  const std::size_t failing = arena.size();
+  double largest = 0.0;
+  bool all_tolerant = true;  // every failing component may take the tolerance's shortcut
+  const int pairs = static_cast<int>(pair_rates_.size());
+  for (std::size_t j = first; j < first + count; ++j) {
+    const int k = arena[j];
+    posed.tolerant = tolerant[k] != 0;
+    if (component_check(k, posed) == Answer::kFree) continue;
+    // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
+    // collide, and mostly where the intervals first fail: that ends the motion at once.)
+    posed.growth = posed.pair_growth = nullptr;
+    posed.from = posed.to = nullptr;
+    const Answer now = component_check(k, posed);
+    posed.growth = s.growth.data(), posed.pair_growth = s.pair_growth.data();
+    posed.from = s.from.data(), posed.to = s.to.data();
+    // (What follows it inherits the whole pending list: the rest was not looked at.)
+    if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
+    arena.push_back(k);
+    all_tolerant = all_tolerant && tolerant[k] != 0;
+    largest = std::max(largest, (k < pairs ? s.pair_speed[k] : s.speed[k - pairs]) * half);
+  }
+  const std::size_t left = arena.size() - failing;
+  if (left == 0) return {Step::kCertified};
+  // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
+  // link within level + 2 largest (a self pair) of a collision at its midpoint.
+  if (all_tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) {
+    return {Step::kCollides, mid, failing, left};
+  }
+  // Growth below the level is tested by exact distances: a failure with the motion's own growth
+  // within min_clearance puts a pair within padding + 2 min_clearance at the midpoint (counted as
+  // colliding, as advancement counts one within min_clearance).
+  if (2.0 * largest <= options_.min_clearance && (largest <= level_ / 2 || proxies_.empty())) {
+    return {Step::kCollides, mid, failing, left};
+  }
+  // Every component that failed did so on an exact distance at the midpoint: each is free for
+  // as long as it cannot have closed that gap, the smallest of which frees a middle stretch.
+  Step split{Step::kSplit, -1.0, failing, left};
+  if (std::isfinite(posed.free_radius) && posed.free_radius > 0.0) {
+    split.free_lo = std::max(lo, mid - posed.free_radius);
+    split.free_hi = std::min(hi, mid + posed.free_radius);
+  }
+  return split;
+}
+
+// At a tolerance, a motion may count as colliding where a component (a self pair, a link against
+// the environment) comes within the tolerance, unless that component already is at one of its
+// ends: a planner must be able to leave a state it accepted. (And only with a level of at most
+// half the tolerance: the rest is the room an interval's growth needs before the tolerance can
+// take the interval as colliding.) Per component: may the shortcut take it on this motion?
+const std::vector<char>& SceneChecker::tolerant_components(const double* start, const double* goal) const {
+  Scratch& s = scratch();
+  std::vector<char>& tolerant = s.tolerant;
+  tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), 0);
+  if (options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2) {
+    std::vector<char>& near = s.near;
+    near.assign(tolerant.size(), 0);
+    mark_within_tolerance(start, near);
+    mark_within_tolerance(goal, near);
+    for (const int k : components_) tolerant[k] = near[k] ? 0 : 1;
+  }
+  return tolerant;
+}
+
+// Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
+void SceneChecker::motion_speeds(const double* start, const double* goal) const {
+  Scratch& s = scratch();
+  const RobotCollisionModel& m = checker_.collision_model();
+  s.speed.assign(m.shapes().size(), 0.0);
+  for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
+  s.growth.assign(m.shapes().size(), 0.0);
+  s.pair_speed.assign(pair_rates_.size(), 0.0);
+  s.pair_growth.assign(pair_rates_.size(), 0.0);
+  for (std::size_t p = 0; p < pair_rates_.size(); ++p) {
+    const auto [a, b] = m.checked_pairs()[p];
+    if (!pair_rates_[p].relative) {
+      s.pair_speed[p] = s.speed[a] + s.speed[b];
+      continue;
+    }
+    for (const auto& [v, w] : pair_rates_[p].weights) s.pair_speed[p] += w * std::abs(goal[v] - start[v]);
+  }
+}
+
+MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
+  const std::size_t n = checker_.model().variable_count();
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) throw std::invalid_argument("motion check: " + checker_.model().variable_names()[j] + " is not finite");
+  }
+  MotionResult result;
+  Scratch& s = scratch();
+  s.state.resize(n);
+  auto at = [&](double f) {
+    for (std::size_t j = 0; j < n; ++j) s.state[j] = f >= 1.0 ? goal[j] : start[j] + f * (goal[j] - start[j]);
+    return s.state.data();
+  };
+  // The ends first (a planner's goal state is often the colliding one); the start's collision is
+  // the earliest there is.
+  result.states_checked = 2;
+  double found = collides(at(0.0)) ? 0.0 : collides(at(1.0)) ? 1.0 : -1.0;  // the earliest collision known
+  if (found == 0.0 || (found > 0.0 && !earliest)) {
+    result.colliding_fraction = found;
+    result.certified = true;
+    return result;
+  }
+  const std::vector<char>& tolerant = tolerant_components(start, goal);
+  motion_speeds(start, goal);
+  std::vector<int>& arena = s.pending;
+  arena.assign(components_.begin(), components_.end());
+  std::vector<Interval> done;
+  std::deque<Interval> todo{{0.0, 1.0, 0, components_.size()}};
+  while (!todo.empty()) {
+    const Interval i = earliest ? todo.back() : todo.front();
+    earliest ? todo.pop_back() : todo.pop_front();
+    // Beyond a collision already found, or (the earliest one) within a thousandth of the motion
+    // before it: the last valid state is then that close to it, which is all a planner needs.
+    if (found >= 0.0 && i.lo >= found - (earliest ? kEarliestResolution : 0.0)) continue;
+    if (++result.states_checked > options_.max_intervals) {
+      result.message = "not certified after " + std::to_string(options_.max_intervals) + " intervals";
+      result.last_valid_fraction = certified_prefix(done);
+      return result;
+    }
+    const Step step = check_interval(i.lo, i.hi, i.first, i.count, at, tolerant);
+    if (step.outcome == Step::kCertified) {
+      done.push_back(i);
+    } else if (step.outcome == Step::kCollides) {
+      found = found < 0.0 ? step.at : std::min(found, step.at);
+      if (!earliest) break;
+      if (step.at > i.lo) todo.push_back({i.lo, step.at, step.first, step.count});
+    } else {
+      // The halves, less a middle stretch the exact distances freed (free_lo, free_hi).
+      const double mid = 0.5 * (i.lo + i.hi);
+      const double cut_lo = step.free_hi > step.free_lo ? step.free_lo : mid;
+      const double cut_hi = step.free_hi > step.free_lo ? step.free_hi : mid;
+      if (cut_hi > cut_lo) done.push_back({cut_lo, cut_hi, 0, 0});
+      const Interval left{i.lo, cut_lo, step.first, step.count}, right{cut_hi, i.hi, step.first, step.count};
+      for (const Interval& half : earliest ? std::array<Interval, 2>{right, left} : std::array<Interval, 2>{left, right}) {
+        if (half.hi > half.lo) todo.push_back(half);
+      }
+    }
+  }
+  result.certified = true;
+  if (found >= 0.0) {
+    result.colliding_fraction = found;
+    result.last_valid_fraction = certified_prefix(done);
+    return result;
+  }
+  result.valid = true;
+  result.last_valid_fraction = 1.0;
+  return result;
+}
+
+}  // namespace bvh_collision
