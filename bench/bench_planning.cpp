@@ -22,9 +22,9 @@
 
 #include <fstream>
 #include <random>
-#include <sstream>
 
 #include "bench_util.h"
+#include "checker_fixtures.h"
 #include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/planning/ompl_validity.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -41,23 +41,12 @@ using bench::Table;
 const std::vector<std::string> kArm = {"panda_joint1", "panda_joint2", "panda_joint3", "panda_joint4",
                                        "panda_joint5", "panda_joint6", "panda_joint7"};
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 CollisionChecker load_panda(const std::string& cache, double& build_seconds) {
-  const std::string dir = std::string(BVH_COLLISION_DEFAULT_ROBOTS) + "/panda";
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  apply_srdf(parse_srdf(read_text(dir + "/robot.srdf"), &model), model, acm);
   CheckerOptions options;
   options.proxy_levels = {0.005, 0.01, 0.02};
   options.proxy_cache = cache;
   const auto start = std::chrono::steady_clock::now();
-  CollisionChecker checker(std::move(model), std::move(acm), options);
+  CollisionChecker checker = test::panda_as_moveit(options);
   build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return checker;
 }
@@ -311,6 +300,17 @@ struct Tally {
   CallTimes calls;
 };
 
+// A run's figures into its checker's tally: its time (an unsolved one at the limit) and, solved,
+// whether its path collides by either re-check.
+void record(Tally& tally, const Run& run, double limit, const CollisionChecker& checker, const Environment& env, FclPanda& fcl) {
+  tally.seconds.push_back(run.solved ? run.seconds : limit);
+  if (!run.solved) return;
+  ++tally.solved;
+  const auto [ours, theirs] = path_collides(run, checker, env, fcl);
+  tally.ours_colliding += ours;
+  tally.fcl_colliding += theirs;
+}
+
 // One problem planned by one of our configurations (tolerance 0 or 10 mm).
 void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
                const planning::JointGroup& group, const Problem& p, double tolerance, double limit, FclPanda& fcl) {
@@ -336,12 +336,7 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
                 in_states / 1e3, motions.size(), in_motions / 1e3, bench::median(motions), bench::percentile(motions, 0.9),
                 motions.empty() ? 0.0 : *std::max_element(motions.begin(), motions.end()));
   }
-  tally.seconds.push_back(run.solved ? run.seconds : limit);
-  if (!run.solved) return;
-  ++tally.solved;
-  const auto [ours, theirs] = path_collides(run, checker, *env, fcl);
-  tally.ours_colliding += ours;
-  tally.fcl_colliding += theirs;
+  record(tally, run, limit, checker, *env, fcl);
 }
 
 void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
@@ -360,12 +355,7 @@ void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_p
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
   const Run run = plan(setup, *layout, p, limit);
-  tally.seconds.push_back(run.solved ? run.seconds : limit);
-  if (!run.solved) return;
-  ++tally.solved;
-  const auto [ours, theirs] = path_collides(run, checker, *env, fcl);
-  tally.ours_colliding += ours;
-  tally.fcl_colliding += theirs;
+  record(tally, run, limit, checker, *env, fcl);
 }
 
 void write_problems(const std::string& dir, const std::vector<Problem>& problems, std::uint64_t seed) {

@@ -2,6 +2,8 @@
 // allowed-collision matrix from adjacency: what most checker tests and benchmarks start from.
 #pragma once
 
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -26,6 +28,18 @@ inline CollisionChecker load_checker(const std::string& robot, const CheckerOpti
   const std::string dir = robots_dir() + "/" + robot;
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  return CollisionChecker(std::move(model), std::move(acm), options);
+}
+
+// Panda as MoveIt sets it up: adjacent links and its SRDF's disabled pairs allowed.
+inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) {
+  const std::string dir = robots_dir() + "/panda";
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  std::ifstream srdf(dir + "/robot.srdf");
+  std::stringstream text;
+  text << srdf.rdbuf();
+  apply_srdf(parse_srdf(text.str(), &model), model, acm);
   return CollisionChecker(std::move(model), std::move(acm), options);
 }
 

@@ -8,11 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <limits>
 #include <random>
-#include <sstream>
 
 #include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -23,23 +21,12 @@
 namespace bvh_collision {
 namespace {
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Panda as MoveIt sets it up (its SRDF's matrix), with the node's proxy levels.
+// Panda as MoveIt sets it up, with the node's proxy levels.
 const CollisionChecker& panda() {
   static const CollisionChecker checker = [] {
-    const std::string dir = test::robots_dir() + "/panda";
-    RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-    apply_srdf(parse_srdf(read_text(dir + "/robot.srdf"), &model), model, acm);
     CheckerOptions options;
     options.proxy_levels = {0.005, 0.01, 0.02};
-    return CollisionChecker(std::move(model), std::move(acm), options);
+    return test::panda_as_moveit(options);
   }();
   return checker;
 }
@@ -49,15 +36,20 @@ const CollisionChecker& padded(double padding) {
   static std::map<double, CollisionChecker> checkers;
   auto it = checkers.find(padding);
   if (it == checkers.end()) {
-    const std::string dir = test::robots_dir() + "/panda";
-    RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
-    AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-    apply_srdf(parse_srdf(read_text(dir + "/robot.srdf"), &model), model, acm);
     CheckerOptions options;
     options.padding = padding;  // (a self pair then by twice that: both links)
-    it = checkers.emplace(padding, CollisionChecker(std::move(model), std::move(acm), options)).first;
+    it = checkers.emplace(padding, test::panda_as_moveit(options)).first;
   }
   return it->second;
+}
+
+// Link poses at fraction s of the straight segment from a to b.
+std::vector<Transform> poses_along(const RobotModel& model, const std::vector<double>& a, const std::vector<double>& b, double s) {
+  std::vector<double> q(a.size());
+  for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
+  std::vector<Transform> poses;
+  forward_kinematics(model, q.data(), poses);
+  return poses;
 }
 
 // The smallest distance less padding over self pairs and obstacles (<= 0: in collision), exact.
@@ -131,13 +123,7 @@ TEST(SceneChecker, IntervalGrowthHoldsEveryVertex) {
   for (int i = 0; i < test::sized(60); ++i) {
     const std::vector<double> a = random_configuration(model, rng), b = random_configuration(model, rng);
     const double lo = unit(rng), hi = lo + (1.0 - lo) * unit(rng), mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-    auto at = [&](double s) {
-      std::vector<double> q(a.size());
-      for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
-      std::vector<Transform> poses;
-      forward_kinematics(model, q.data(), poses);
-      return poses;
-    };
+    auto at = [&](double s) { return poses_along(model, a, b, s); };
     const std::vector<Transform> centre = at(mid);
     for (int k = 0; k <= 10; ++k) {
       const std::vector<Transform> poses = at(lo + (hi - lo) * k / 10.0);
@@ -188,13 +174,7 @@ TEST(SceneChecker, PairGrowthHoldsEveryVertexInTheCommonAncestorsFrame) {
   for (int i = 0; i < test::sized(60); ++i) {
     const std::vector<double> a = random_configuration(model, rng), b = random_configuration(model, rng);
     const double lo = unit(rng), hi = lo + (1.0 - lo) * unit(rng), half = 0.5 * (hi - lo);
-    auto at = [&](double s) {
-      std::vector<double> q(a.size());
-      for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
-      std::vector<Transform> poses;
-      forward_kinematics(model, q.data(), poses);
-      return poses;
-    };
+    auto at = [&](double s) { return poses_along(model, a, b, s); };
     const std::vector<Transform> centre = at(0.5 * (lo + hi));
     std::vector<std::vector<Transform>> samples;
     for (int k = 0; k <= 10; ++k) samples.push_back(at(lo + (hi - lo) * k / 10.0));
