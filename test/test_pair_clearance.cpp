@@ -206,5 +206,58 @@ TEST(PairClearance, NoBoundOutsideTheGrid) {
   EXPECT_GT(ungridded, 0u);
 }
 
+// Panda as MoveIt checks it (its SRDF allows the wrist's neighbours): the forearm (link5) against
+// each finger is moved by three variables (joints 6 and 7 and the finger's travel), and those two
+// pairs took half the sphere walks of a planner's certified motions. They get three-variable grids
+// whose bounds hold against the exact distance, in random states, on cell edges and along
+// segments, and settle most states.
+TEST(PairClearance, ThreeVariableGridsForPandasForearmAndFingers) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::panda_as_moveit();
+  const RobotCollisionModel& m = c.collision_model();
+  const RobotModel& robot = c.model();
+  const int forearm = robot.link_index("panda_link5");
+  std::mt19937_64 rng(59);
+  for (const char* finger : {"panda_leftfinger", "panda_rightfinger"}) {
+    const int f = robot.link_index(finger);
+    const PairClearanceGrid* grid = nullptr;
+    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+      if (m.checked_pairs()[g.pair] == std::pair<int, int>(std::min(forearm, f), std::max(forearm, f))) grid = &g;
+    }
+    ASSERT_NE(grid, nullptr) << "panda_link5-" << finger << " has no grid";
+    ASSERT_EQ(grid->dims, 3);
+    int settled = 0;
+    for (int i = 0; i < test::sized(600); ++i) {
+      auto s = random_configuration(robot, rng);
+      if (i % 2 == 1) {  // on a cell edge of every variable
+        for (int k = 0; k < grid->dims; ++k) {
+          s[grid->variable[k]] = grid->lower[k] + std::uniform_int_distribution<int>(0, grid->cells[k])(rng) * grid->cell[k];
+        }
+      }
+      const double bound = m.pair_clearance().lower_bound(grid->pair, s.data());
+      if (!std::isfinite(bound)) continue;
+      ++settled;
+      ASSERT_LE(bound, exact_distance(m, forearm, f, s.data(), bound + 1e-6)) << finger;
+    }
+    EXPECT_GT(settled, test::sized(600) * 6 / 10) << finger;
+    int over = 0;
+    std::uniform_real_distribution<double> step(-0.1, 0.1);
+    for (int i = 0; i < test::sized(100); ++i) {
+      const auto a = random_configuration(robot, rng);
+      auto b = a;
+      for (double& v : b) v += step(rng);
+      const double bound = m.pair_clearance().lower_bound_over(grid->pair, a.data(), b.data());
+      if (!std::isfinite(bound)) continue;
+      ++over;
+      for (int k = 0; k <= 20; ++k) {
+        std::vector<double> q(a.size());
+        for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + (b[j] - a[j]) * k / 20.0;
+        ASSERT_LE(bound, exact_distance(m, forearm, f, q.data(), bound + 1e-6)) << finger;
+      }
+    }
+    EXPECT_GT(over, 0) << finger;
+  }
+}
+
 }  // namespace
 }  // namespace bvh_collision

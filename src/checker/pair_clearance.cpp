@@ -70,12 +70,21 @@ bool links_within(const RobotCollisionModel& model, int a, int b, const std::vec
   return false;
 }
 
+using Cells = std::array<int, PairClearanceGrid::kMaxDims>;
+
+// A grid of three variables gets this many times the cell budget (a float per cell: 64 KB at the
+// default) and is built only when that makes it this fine (half a cell closes the pair by at most
+// this per variable): coarser, most of its cells would hold no bound, at the cost of its build.
+constexpr double kThreeVariableBudget = 4.0;
+constexpr double kFineClosing = 0.01;
+
 // The grid's shape for a pair moved by `vars` (nullopt-like: dims 0 when a variable has no
-// finite range): cells per variable in proportion to how far the links move over its range.
+// finite range, or three variables need coarser cells than kFineClosing): cells per variable in
+// proportion to how far the links move over its range.
 PairClearanceGrid grid_shape(const RobotCollisionModel& model, int a, int b, const std::vector<int>& vars,
                              std::size_t max_cells) {
   PairClearanceGrid g;
-  std::array<double, 2> sweep{};  // how far the pair can close over the variable's whole range
+  std::array<double, PairClearanceGrid::kMaxDims> sweep{};  // how far the pair can close over the variable's whole range
   for (std::size_t k = 0; k < vars.size(); ++k) {
     const RobotJoint* joint = variable_joint(model.robot(), vars[k]);
     if (!joint) return {};
@@ -96,7 +105,9 @@ PairClearanceGrid grid_shape(const RobotCollisionModel& model, int a, int b, con
   // Half a cell closes the pair by at most `closing` per variable: 1 mm, or what the budget allows.
   double product = 1.0;
   for (int k = 0; k < g.dims; ++k) product *= std::max(sweep[k], 1e-9);
-  const double closing = std::max(1e-3, 0.5 * std::pow(product / static_cast<double>(max_cells), 1.0 / g.dims));
+  const double budget = static_cast<double>(max_cells) * (g.dims == 3 ? kThreeVariableBudget : 1.0);
+  const double closing = std::max(1e-3, 0.5 * std::pow(product / budget, 1.0 / g.dims));
+  if (g.dims == 3 && closing > kFineClosing) return {};
   for (int k = 0; k < g.dims; ++k) {
     const double want = std::ceil(sweep[k] / (2.0 * closing));
     g.cells[k] = static_cast<int>(std::clamp(want, 1.0, static_cast<double>(max_cells)));
@@ -105,42 +116,54 @@ PairClearanceGrid grid_shape(const RobotCollisionModel& model, int a, int b, con
   return g;
 }
 
-// Fills the cells [i0, i1) x [j0, j1) of the grid. One exact test at the block's centre, "are the
+std::size_t cell_index(const PairClearanceGrid& g, const Cells& i) {
+  return static_cast<std::size_t>(i[0]) + static_cast<std::size_t>(g.cells[0]) * (i[1] + static_cast<std::size_t>(g.cells[1]) * i[2]);
+}
+
+// Calls f(cell index) for every cell of the block [lo, hi) (hi exclusive per variable).
+template <class F>
+void for_each_cell(const PairClearanceGrid& g, const Cells& lo, const Cells& hi, F&& f) {
+  for (int k = lo[2]; k < hi[2]; ++k) {
+    for (int j = lo[1]; j < hi[1]; ++j) {
+      for (int i = lo[0]; i < hi[0]; ++i) f(cell_index(g, {i, j, k}));
+    }
+  }
+}
+
+// Fills the cells of a block [lo, hi) of the grid. One exact test at the block's centre, "are the
 // links within settled + closing?", settles the whole block when they are not: every cell gets
 // the bound `settled` (all a query needs: it only compares the bound with the padding). A block
-// where they are is halved, down to single cells, which then get no bound (-infinity). A boolean
-// test stops at the first overlap or the first proof of separation: several times cheaper than
-// distances on pr2's meshes.
+// where they are is halved along its longest side, down to single cells, which then get no bound
+// (-infinity). A boolean test stops at the first overlap or the first proof of separation:
+// several times cheaper than distances on pr2's meshes.
 class GridFiller {
  public:
   GridFiller(const RobotCollisionModel& model, int a, int b, PairClearanceGrid& g)
       : model_(model), a_(a), b_(b), g_(g), state_(model.robot().variable_count(), 0.0) {
     settled_ = model.paddings()[a] + model.paddings()[b] + kSettled;
     for (int k = 0; k < g.dims; ++k) rate_[k] = model.motion_rates()[a][g.variable[k]] + model.motion_rates()[b][g.variable[k]];
-    g.bound.assign(static_cast<std::size_t>(g.cells[0]) * g.cells[1], 0.0f);
+    g.bound.assign(static_cast<std::size_t>(g.cells[0]) * g.cells[1] * g.cells[2], 0.0f);
   }
-  void fill(int i0, int i1, int j0, int j1) {
+  void fill(const Cells& lo, const Cells& hi) {
     double closing = 0.0;  // from the block's centre to any point of it
-    const std::array<int, 2> lo{i0, j0}, hi{i1, j1};
+    int longest = 0;
     for (int k = 0; k < g_.dims; ++k) {
       state_[g_.variable[k]] = g_.lower[k] + 0.5 * (lo[k] + hi[k]) * g_.cell[k];
       closing += 0.5 * (hi[k] - lo[k]) * g_.cell[k] * rate_[k];
+      if (hi[k] - lo[k] > hi[longest] - lo[longest]) longest = k;
     }
     model_.kinematics().compute(state_.data(), poses_);
     const bool near = links_within(model_, a_, b_, poses_, settled_ + closing + kBoundMargin);
-    if (near && (i1 - i0 > 1 || j1 - j0 > 1)) {
-      if (i1 - i0 >= j1 - j0) {
-        const int mid = (i0 + i1) / 2;
-        fill(i0, mid, j0, j1), fill(mid, i1, j0, j1);
-      } else {
-        const int mid = (j0 + j1) / 2;
-        fill(i0, i1, j0, mid), fill(i0, i1, mid, j1);
-      }
+    if (near && hi[longest] - lo[longest] > 1) {
+      const int mid = (lo[longest] + hi[longest]) / 2;
+      Cells upper_lo = lo, lower_hi = hi;
+      upper_lo[longest] = lower_hi[longest] = mid;
+      fill(lo, lower_hi), fill(upper_lo, hi);
       return;
     }
     // Apart: d(centre) > settled + closing + margin, so d > settled anywhere in the block.
     const float f = near ? -std::numeric_limits<float>::infinity() : float_below(settled_);
-    for (int j = j0; j < j1; ++j) std::fill_n(g_.bound.begin() + static_cast<std::ptrdiff_t>(j) * g_.cells[0] + i0, i1 - i0, f);
+    for_each_cell(g_, lo, hi, [&](std::size_t c) { g_.bound[c] = f; });
   }
 
  private:
@@ -151,26 +174,31 @@ class GridFiller {
   PairClearanceGrid& g_;
   std::vector<double> state_;
   std::vector<Transform> poses_;
-  std::array<double, 2> rate_{};
+  std::array<double, PairClearanceGrid::kMaxDims> rate_{};
   double settled_ = 0.0;
 };
 
-// Worth a grid? Sampled on a coarse lattice, a pair within its padding in most of its range (a
-// shoulder and the upper arm when no matrix allows them) would rarely be skipped: its grid would
-// cost seconds of distances (pr2) for nothing. Only a choice of work, not of correctness.
+// Worth a grid? Sampled on a coarse lattice (64 points), a pair within its padding in most of
+// its range (a shoulder and the upper arm when no matrix allows them) would rarely be skipped:
+// its grid would cost seconds of distances (pr2) for nothing. Only a choice of work, not of
+// correctness.
 bool mostly_touching(const RobotCollisionModel& model, int a, int b, const PairClearanceGrid& g) {
-  constexpr int kLattice = 8;
+  const int per = g.dims == 1 ? 64 : g.dims == 2 ? 8 : 4;  // lattice points per variable
   std::vector<double> state(model.robot().variable_count(), 0.0);
   std::vector<Transform> poses;
   const double padding = model.paddings()[a] + model.paddings()[b];
   int touching = 0, total = 0;
-  for (int j = 0; j < (g.dims == 2 ? kLattice : 1); ++j) {
-    if (g.dims == 2) state[g.variable[1]] = g.lower[1] + (j + 0.5) / kLattice * g.cell[1] * g.cells[1];
-    for (int i = 0; i < kLattice * (g.dims == 2 ? 1 : kLattice); ++i) {
-      state[g.variable[0]] = g.lower[0] + (i + 0.5) / (kLattice * (g.dims == 2 ? 1 : kLattice)) * g.cell[0] * g.cells[0];
-      model.kinematics().compute(state.data(), poses);
-      touching += links_within(model, a, b, poses, padding);
-      ++total;
+  Cells hi{1, 1, 1};
+  for (int k = 0; k < g.dims; ++k) hi[k] = per;
+  for (int z = 0; z < hi[2]; ++z) {
+    for (int y = 0; y < hi[1]; ++y) {
+      for (int x = 0; x < hi[0]; ++x) {
+        const Cells at{x, y, z};
+        for (int k = 0; k < g.dims; ++k) state[g.variable[k]] = g.lower[k] + (at[k] + 0.5) / per * g.cell[k] * g.cells[k];
+        model.kinematics().compute(state.data(), poses);
+        touching += links_within(model, a, b, poses, padding);
+        ++total;
+      }
     }
   }
   return 2 * touching > total;
@@ -186,7 +214,7 @@ PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t
   std::vector<int> vars;
   for (std::size_t p = 0; p < model.checked_pairs().size(); ++p) {
     const auto [a, b] = model.checked_pairs()[p];
-    if (!path_variables(model.robot(), a, b, vars) || vars.empty() || vars.size() > 2) continue;
+    if (!path_variables(model.robot(), a, b, vars) || vars.empty() || vars.size() > PairClearanceGrid::kMaxDims) continue;
     PairClearanceGrid g = grid_shape(model, a, b, vars, std::max<std::size_t>(max_cells, 1));
     if (g.dims == 0) continue;
     g.pair = p;
@@ -197,7 +225,7 @@ PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t
     PairClearanceGrid& g = candidates[i];
     const auto [a, b] = model.checked_pairs()[g.pair];
     if (mostly_touching(model, a, b, g)) return;
-    GridFiller(model, a, b, g).fill(0, g.cells[0], 0, g.cells[1]);
+    GridFiller(model, a, b, g).fill({0, 0, 0}, g.cells);
     kept[i] = 1;
   });
   PairClearance out;
@@ -231,7 +259,7 @@ double PairClearance::lower_bound_over(std::size_t pair, const double* a, const 
   const int id = grid_of_.empty() ? -1 : grid_of_[pair];
   if (id < 0) return kNone;
   const PairClearanceGrid& g = grids_[id];
-  std::array<int, 2> first{0, 0}, last{0, 0};
+  Cells first{0, 0, 0}, end{1, 1, 1};
   std::size_t cells = 1;
   for (int k = 0; k < g.dims; ++k) {
     if (g.periodic[k]) return kNone;
@@ -239,16 +267,12 @@ double PairClearance::lower_bound_over(std::size_t pair, const double* a, const 
     const double hi = std::max(a[g.variable[k]], b[g.variable[k]]) - g.lower[k];
     if (!(lo >= 0.0 && hi <= g.cell[k] * g.cells[k])) return kNone;
     first[k] = std::min(static_cast<int>(lo / g.cell[k]), g.cells[k] - 1);
-    last[k] = std::min(static_cast<int>(hi / g.cell[k]), g.cells[k] - 1);
-    cells *= static_cast<std::size_t>(last[k] - first[k] + 1);
+    end[k] = std::min(static_cast<int>(hi / g.cell[k]), g.cells[k] - 1) + 1;
+    cells *= static_cast<std::size_t>(end[k] - first[k]);
   }
   if (cells > max_cells) return kNone;
   double bound = std::numeric_limits<double>::infinity();
-  for (int j = first[1]; j <= last[1]; ++j) {
-    for (int i = first[0]; i <= last[0]; ++i) {
-      bound = std::min(bound, static_cast<double>(g.bound[static_cast<std::size_t>(j) * g.cells[0] + i]));
-    }
-  }
+  for_each_cell(g, first, end, [&](std::size_t c) { bound = std::min(bound, static_cast<double>(g.bound[c])); });
   return bound;
 }
 

@@ -1,6 +1,7 @@
 // Proven clearance of the self pairs that few joints move: per checked pair whose relative pose
 // depends on one or two state variables (a wrist link and the hand, two fingers, links two joints
-// apart), a grid over those variables holding, per cell, a lower bound on the pair's exact
+// apart), or on three when a fine grid fits the budget (panda's forearm and a finger: two wrist
+// joints and the finger's short travel), a grid over those variables holding, per cell, a lower bound on the pair's exact
 // distance anywhere in the cell. Such pairs sit close in every state, so a sphere tree or an OBB
 // hierarchy has to descend far to tell them apart each time (measured on panda: link6-hand,
 // link5-link7 and the fingers took 60 % of the sphere tests of a proxy self check); the table
@@ -25,20 +26,22 @@ namespace bvh_collision {
 class RobotCollisionModel;
 
 struct PairClearanceGrid {
+  static constexpr int kMaxDims = 3;
   std::size_t pair = 0;             // index into RobotCollisionModel::checked_pairs()
-  int dims = 0;                     // 1 or 2 variables
-  std::array<int, 2> variable{-1, -1};
-  std::array<double, 2> lower{}, cell{};  // the grid's first value and cell width per variable
-  std::array<int, 2> cells{1, 1};
-  std::array<bool, 2> periodic{};   // a continuous joint: values wrap by 2 pi
+  int dims = 0;                     // 1 to kMaxDims variables
+  std::array<int, kMaxDims> variable{-1, -1, -1};
+  std::array<double, kMaxDims> lower{}, cell{};  // the grid's first value and cell width per variable
+  std::array<int, kMaxDims> cells{1, 1, 1};
+  std::array<bool, kMaxDims> periodic{};  // a continuous joint: values wrap by 2 pi
   std::vector<float> bound;         // per cell (first variable fastest): lower bound on the distance (m)
 };
 
 class PairClearance {
  public:
   PairClearance() = default;
-  // Grids for every checked pair of `model` that one or two variables move, each with at most
-  // `max_cells` cells (finer where the links move faster per unit of the variable).
+  // Grids for every checked pair of `model` that one or two variables move (three when, with four
+  // times the budget, half a cell closes the pair by at most 1 cm per variable), each with at
+  // most about `max_cells` cells (finer where the links move faster per unit of the variable).
   static PairClearance build(const RobotCollisionModel& model, std::size_t max_cells = 4096);
 
   // A lower bound on the distance of checked pair `pair` in `state`; -infinity when the pair has
