@@ -10,6 +10,7 @@
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/traversal_stack.h"
 
 namespace bvh_collision {
 namespace {
@@ -559,6 +560,11 @@ PairFrame pair_frame(const LinkProxy& a, const Transform& pose_a, const LinkProx
           pose_margin(pose_a.t.norm() + pose_b.t.norm() + ra.center.norm() + ra.radius + rb.center.norm() + rb.radius)};
 }
 
+// A pair of spheres a pair walk has still to visit: one of a's and one of b's.
+struct SpherePair {
+  std::int32_t a, b;
+};
+
 // A pair walk opens a's sphere unless it is a leaf or b's (not a leaf) is larger.
 bool open_a(const ProxySphere* sa, std::int32_t i, const ProxySphere* sb, std::int32_t j) {
   const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
@@ -576,28 +582,17 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   const Mat3& r = frame.r;
   const Vec3& t = frame.t;
   const double slack = padding + frame.margin;
-  // A local stack: each step pops one pair and pushes at most the children of one sphere, so
-  // it never holds more than (tree depth) x (children) pairs; past 256 it spills to a vector.
-  std::pair<std::int32_t, std::int32_t> local[256];
-  std::vector<std::pair<std::int32_t, std::int32_t>> spill;
-  int top = 0;
-  auto push = [&](std::int32_t i, std::int32_t j) {
-    if (top < 256) local[top++] = {i, j};
-    else spill.emplace_back(i, j);
-  };
-  push(0, 0);
-  while (top > 0 || !spill.empty()) {
-    std::pair<std::int32_t, std::int32_t> next;
-    if (!spill.empty()) next = spill.back(), spill.pop_back();
-    else next = local[--top];
-    const auto [i, j] = next;
+  TraversalStack<SpherePair> stack;
+  stack.push({0, 0});
+  while (!stack.empty()) {
+    const auto [i, j] = stack.pop();
     const double reach = sa[i].radius + sb[j].radius + slack;
     if ((sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach) continue;
     if (sa[i].skip == i + 1 && sb[j].skip == j + 1) return true;
     if (open_a(sa, i, sb, j)) {
-      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) push(k, j);
+      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.push({k, j});
     } else {
-      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) push(i, k);
+      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.push({i, k});
     }
   }
   return false;
@@ -612,14 +607,12 @@ double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkP
   const Mat3& r = frame.r;
   const Vec3& t = frame.t;
   const double margin = frame.margin;
-  std::vector<std::pair<std::int32_t, std::int32_t>> stack;
-  stack.reserve(64);
-  stack.emplace_back(0, 0);
+  TraversalStack<SpherePair> stack;
+  stack.push({0, 0});
   // The smallest gap of a pair of spheres left unopened because it was within the slack of best.
   double unopened = best;
   while (!stack.empty()) {
-    const auto [i, j] = stack.back();
-    stack.pop_back();
+    const auto [i, j] = stack.pop();
     // Spheres contain their subtrees: this gap bounds every leaf pair below from below.
     const double gap = std::max(0.0, (sa[i].center - apply(r, t, sb[j].center)).norm() - sa[i].radius - sb[j].radius - margin);
     if (gap >= best) continue;
@@ -629,9 +622,9 @@ double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkP
     } else if (slack.leaves(gap, best)) {
       unopened = std::min(unopened, gap);
     } else if (open_a(sa, i, sb, j)) {
-      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.emplace_back(k, j);
+      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.push({k, j});
     } else {
-      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.emplace_back(i, k);
+      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.push({i, k});
     }
   }
   return std::min(best, unopened);
