@@ -193,9 +193,15 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   const double margin = pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
   const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
   if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
-  if (m.pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
+  const bool gridded = m.pair_clearance().has_grid(p);
+  if (gridded && m.pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
+  // A grid that cannot bound the pair here puts it within a few centimetres (its cell's reach):
+  // coarser levels then fail where the finest does, so only the finest worth walking is walked.
+  const ProxyLevel* finest = nullptr;
+  for (const ProxyLevel* level : proxies_) finest = worth(level, grow) ? level : finest;
   const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-    return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
+    return worth(level, grow) && (!gridded || level == finest) &&
+           !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
   });
   if (apart) return Answer::kFree;
   if (s.growth != nullptr) {
