@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <stdexcept>
 
@@ -15,8 +14,20 @@ namespace bvh_collision {
 
 namespace {
 
+// An interval of the motion and the components still pending over it (arena[first, first +
+// count)): those its parent could not certify; the others are free over the parent, so over it.
+struct Interval {
+  double lo, hi;
+  std::size_t first, count;
+};
+
+// A thread's working memory, kept between motions: a planner's millionth motion allocates nothing.
 struct Scratch {
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to;
+  std::vector<Interval> done;   // certified intervals (check_motion)
+  // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
+  // (depth first).
+  std::vector<Interval> todo;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
   std::vector<char> tolerant, near;  // per component: may the tolerance's shortcut take it?
 };
@@ -30,15 +41,8 @@ Scratch& scratch() {
 // the collision found when the earliest one is asked for.
 constexpr double kEarliestResolution = 1e-3;
 
-// An interval of the motion and the components still pending over it (arena[first, first +
-// count)): those its parent could not certify; the others are free over the parent, so over it.
-struct Interval {
-  double lo, hi;
-  std::size_t first, count;
-};
-
 // The end of the certified intervals' run from 0 (they may overlap only at their ends).
-double certified_prefix(std::vector<Interval> done) {
+double certified_prefix(std::vector<Interval>& done) {
   std::sort(done.begin(), done.end(), [](const Interval& a, const Interval& b) { return a.lo < b.lo; });
   double end = 0.0;
   for (const Interval& i : done) {
@@ -184,11 +188,14 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   motion_speeds(start, goal);
   std::vector<int>& arena = s.pending;
   arena.assign(components_.begin(), components_.end());
-  std::vector<Interval> done;
-  std::deque<Interval> todo{{0.0, 1.0, 0, components_.size()}};
-  while (!todo.empty()) {
-    const Interval i = earliest ? todo.back() : todo.front();
-    earliest ? todo.pop_back() : todo.pop_front();
+  std::vector<Interval>& done = s.done;
+  std::vector<Interval>& todo = s.todo;
+  done.clear();
+  todo.assign(1, Interval{0.0, 1.0, 0, components_.size()});
+  std::size_t head = 0;
+  while (head < todo.size()) {
+    const Interval i = earliest ? todo.back() : todo[head];
+    earliest ? todo.pop_back() : void(++head);
     // Beyond a collision already found, or (the earliest one) within a thousandth of the motion
     // before it: the last valid state is then that close to it, which is all a planner needs.
     if (found >= 0.0 && i.lo >= found - (earliest ? kEarliestResolution : 0.0)) continue;
