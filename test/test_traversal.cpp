@@ -172,6 +172,53 @@ TEST(CubeWalk, DescendWhileReachesEveryOccupiedLeafAndNearestFirstFindsTheCloses
   }
 }
 
+// The octree's own walk (leaves, the .ot node stream): every node once, a parent before its
+// children, children in the order asked; each leaf is what find() says of its voxel; kSkip prunes
+// and kStop stops.
+TEST(CubeWalk, WalkNodesVisitsEveryNodeOnceInTheOrderAsked) {
+  const Octree tree = random_tree(0.05, 400);
+  for (const auto* order : {&kSeedChildOrder, &kOctomapChildOrder}) {
+    std::set<std::int32_t> seen;
+    std::vector<OctreeCube> path;  // the cubes from the root to the last one visited
+    std::size_t leaves = 0;
+    walk_nodes(
+        tree,
+        [&](const OctreeCube& c) {
+          EXPECT_TRUE(seen.insert(c.node).second);
+          // Pre-order: the parent is on the path, and an earlier sibling comes earlier in `order`.
+          while (!path.empty() && path.back().depth >= c.depth) {
+            const OctreeCube left = path.back();
+            path.pop_back();
+            if (left.depth == c.depth) {
+              const auto rank = [&](const OctreeCube& x) {
+                return std::find(order->begin(), order->end(), static_cast<std::uint8_t>((x.index - 1) % 8)) - order->begin();
+              };
+              EXPECT_LT(rank(left), rank(c));
+            }
+          }
+          EXPECT_EQ(static_cast<int>(path.size()), c.depth);
+          if (!path.empty()) EXPECT_EQ((c.index - 1) / 8, path.back().index);
+          path.push_back(c);
+          if (tree.is_leaf(c.node)) {
+            ++leaves;
+            const auto found = tree.find(c.corner);
+            EXPECT_TRUE(found && found->depth == c.depth && found->index == c.index && found->log_odds == tree.value(c.node));
+          }
+          return Visit::kEnter;
+        },
+        *order);
+    EXPECT_EQ(seen.size(), tree.node_count());
+    EXPECT_GT(leaves, 100u);
+  }
+  // kSkip below the root's children: the root and its children only; kStop at the fifth node.
+  std::size_t visited = 0;
+  walk_nodes(tree, [&](const OctreeCube& c) { ++visited; return c.depth == 1 ? Visit::kSkip : Visit::kEnter; });
+  EXPECT_EQ(visited, 1u + __builtin_popcount(tree.child_mask(tree.root())));
+  visited = 0;
+  walk_nodes(tree, [&](const OctreeCube&) { return ++visited == 5 ? Visit::kStop : Visit::kEnter; });
+  EXPECT_EQ(visited, 5u);
+}
+
 TEST(RobotCollisionModel, BuiltOnceAndSharedByCheckerCopies) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker checker = test::load_checker("panda");

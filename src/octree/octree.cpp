@@ -9,6 +9,8 @@
 #include <string>
 #include <unordered_set>
 
+#include "bvh_collision/octree/cube_walk.h"
+
 namespace bvh_collision {
 
 Octree::Octree(double resolution, const OccupancyModel& model) : grid_(resolution), model_(model) {
@@ -209,27 +211,7 @@ std::optional<Octree::Lookup> Octree::find(const OctreeKey& key) const {
 
 std::vector<Octree::Leaf> Octree::leaves() const {
   std::vector<Leaf> out;
-  if (empty()) return out;
-  struct Item {
-    std::int32_t node;
-    int depth;
-    OctreeKey key;
-    std::uint64_t index;
-  };
-  std::vector<Item> stack{{0, 0, OctreeKey{}, 0}};
-  while (!stack.empty()) {
-    const Item item = stack.back();
-    stack.pop_back();
-    const Node& n = at(item.node);
-    if (n.children < 0) {
-      out.push_back({item.key, item.depth, item.index, n.log_odds});
-      continue;
-    }
-    for (int b = 0; b < 8; ++b) {
-      if (!((n.mask >> b) & 1)) continue;
-      stack.push_back({n.children + b, item.depth + 1, child_corner(item.key, item.depth, b), child_index(item.index, b)});
-    }
-  }
+  for_each_leaf(*this, [&](const Leaf& leaf) { out.push_back(leaf); });
   return out;
 }
 
@@ -244,23 +226,20 @@ int octomap_child(int b) { return ((b >> 2) & 1) | (b & 2) | ((b & 1) << 2); }
 }  // namespace
 
 void Octree::write_nodes(std::ostream& out) const {
-  if (empty()) return;
-  std::vector<std::int32_t> stack{0};
-  while (!stack.empty()) {
-    const Node n = at(stack.back());
-    stack.pop_back();
-    out.write(reinterpret_cast<const char*>(&n.log_odds), sizeof(float));
-    unsigned char bits = 0;
-    for (int b = 0; b < 8; ++b) {
-      if ((n.mask >> b) & 1) bits = static_cast<unsigned char>(bits | (1u << octomap_child(b)));
-    }
-    out.write(reinterpret_cast<const char*>(&bits), 1);
-    // Children in OctoMap's order, the first on top of the stack.
-    for (int i = 7; i >= 0; --i) {
-      const int b = octomap_child(i);  // the mapping is its own inverse
-      if ((n.mask >> b) & 1) stack.push_back(n.children + b);
-    }
-  }
+  // Depth first, children in OctoMap's order: each node's value, then its child bits in OctoMap's numbering.
+  walk_nodes(
+      *this,
+      [&](const OctreeCube& c) {
+        const Node& n = at(c.node);
+        out.write(reinterpret_cast<const char*>(&n.log_odds), sizeof(float));
+        unsigned char bits = 0;
+        for (int b = 0; b < 8; ++b) {
+          if ((n.mask >> b) & 1) bits = static_cast<unsigned char>(bits | (1u << octomap_child(b)));
+        }
+        out.write(reinterpret_cast<const char*>(&bits), 1);
+        return Visit::kEnter;
+      },
+      kOctomapChildOrder);
 }
 
 void Octree::read_below(std::int32_t node, int depth, std::istream& in) {

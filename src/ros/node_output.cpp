@@ -1,11 +1,13 @@
 // What the node shows: occupied voxels and contacts as markers, and /diagnostics.
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "bvh_collision/octree/cube_walk.h"
 #include "bvh_collision/ros/collision_checker_node.h"
 
 namespace bvh_collision {
@@ -70,22 +72,16 @@ void CollisionCheckerNode::publish_occupied_cells(const ros::WallTimerEvent&) {
   cells_subscribers_ = subscribers;
   const std::shared_ptr<const Environment> env = store_->snapshot();
   const Octree& tree = env->octree();
-  std::vector<Octree::Leaf> leaves = tree.leaves();
-  leaves.erase(std::remove_if(leaves.begin(), leaves.end(),
-                              [&](const Octree::Leaf& l) { return !tree.occupied(l.log_odds); }),
-               leaves.end());
-  double lo = 0.0, hi = 0.0;
-  if (!leaves.empty()) {
-    lo = hi = tree.cube_min(leaves.front().key).z();
-    for (const auto& l : leaves) {
-      const double z = tree.cube_min(l.key).z();
-      lo = std::min(lo, z);
-      hi = std::max(hi, z);
-    }
-  }
+  // Two walks of the occupied leaves (the colours need the height range first), no list of them.
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for_each_occupied_leaf(tree, [&](const Octree::Leaf& l) {
+    const double z = tree.cube_min(l.key).z();
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  });
   // One cube list per depth: a marker has one cube size.
   std::map<int, visualization_msgs::Marker> lists;
-  for (const Octree::Leaf& l : leaves) {
+  for_each_occupied_leaf(tree, [&](const Octree::Leaf& l) {
     auto [it, fresh] = lists.try_emplace(l.depth);
     visualization_msgs::Marker& m = it->second;
     if (fresh) {
@@ -100,7 +96,7 @@ void CollisionCheckerNode::publish_occupied_cells(const ros::WallTimerEvent&) {
     m.points.push_back(p);
     m.colors.push_back(height_colour(c.z(), lo, hi));
     m.colors.back().a = static_cast<float>(params_.marker_alpha);
-  }
+  });
   visualization_msgs::MarkerArray array;
   array.markers.push_back(delete_all(params_.world_frame));
   for (auto& [depth, m] : lists) array.markers.push_back(std::move(m));

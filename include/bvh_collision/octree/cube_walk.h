@@ -1,16 +1,18 @@
-// The walks of the octree's occupied cubes, written once: every query that descends the tree
-// alone (a box, a ball, a primitive, a point's nearest cube, a solid's inside) is one of these two
-// loops with its own callbacks, in the spirit of OctoMap's leaf iterators with a "descend while
-// the predicate holds" test.
+// The walks of the octree, written once: every query that descends the tree alone (a box, a
+// ball, a primitive, a point's nearest cube, a solid's inside) is one of the first two loops with
+// its own callbacks, in the spirit of OctoMap's leaf iterators with a "descend while the
+// predicate holds" test; the tree's own listings (its leaves, the .ot node stream) are the third.
 //
 //   descend_while(tree, start, visit, leaf, children)   visit(cube) -> Visit, leaf(cube) -> stop?
 //   nearest_cubes_first(tree, start, bound, leaf, cutoff)
+//   walk_nodes(tree, visit, order)                       every node, free ones too
 //
-// Only occupied cubes are reached (an inner cube is occupied when some cube inside it is).
+// The first two reach only occupied cubes (an inner cube is occupied when some cube inside it is).
 // Header-only: the callbacks are lambdas, inlined into each query's loop.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -115,6 +117,55 @@ void nearest_cubes_first(const Octree& tree, const OctreeCube& start, BoundFn&& 
     std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     stack.insert(stack.end(), children.begin(), children.end());
   }
+}
+
+// Orders of a cube's children by seed child bits b: the seed's (b = 0 first) and OctoMap's (its x
+// is bit 0 where the seed's is bit 2: the order of the .ot node stream).
+inline constexpr std::array<std::uint8_t, 8> kSeedChildOrder{0, 1, 2, 3, 4, 5, 6, 7};
+inline constexpr std::array<std::uint8_t, 8> kOctomapChildOrder{0, 4, 2, 6, 1, 5, 3, 7};
+
+// Every node from the root, free and occupied (OctoMap's tree iterator): depth first, a node
+// before its children, the children of a node in `order`. `visit(cube)` answers kEnter (its
+// children next), kSkip (not them) or kStop (end the walk).
+template <class VisitFn>
+void walk_nodes(const Octree& tree, VisitFn&& visit, const std::array<std::uint8_t, 8>& order = kSeedChildOrder) {
+  if (tree.root() < 0) return;
+  TraversalStack<OctreeCube> stack;
+  stack.push(OctreeCube{tree.root(), 0, OctreeKey{}, 0});
+  while (!stack.empty()) {
+    const OctreeCube c = stack.pop();
+    const Visit v = visit(c);
+    if (v == Visit::kStop) return;
+    if (v == Visit::kSkip || tree.is_leaf(c.node)) continue;
+    const std::uint8_t mask = tree.child_mask(c.node);
+    const std::int32_t first = tree.children_block(c.node);
+    for (int i = 7; i >= 0; --i) {  // the last pushed is the first visited
+      const int b = order[i];
+      if ((mask >> b) & 1) stack.push(OctreeCube{first + b, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
+    }
+  }
+}
+
+// f(leaf) for every leaf, free or occupied (pruned ones above depth 16 included), in the seed's order.
+template <class F>
+void for_each_leaf(const Octree& tree, F&& f) {
+  walk_nodes(tree, [&](const OctreeCube& c) {
+    if (tree.is_leaf(c.node)) f(leaf_of(tree, c));
+    return Visit::kEnter;
+  });
+}
+
+// f(leaf) for every occupied leaf, in the seed's order.
+template <class F>
+void for_each_occupied_leaf(const Octree& tree, F&& f) {
+  const auto root = occupied_root(tree);
+  if (!root) return;
+  descend_while(
+      tree, *root, [](const OctreeCube&) { return Visit::kEnter; },
+      [&](const OctreeCube& c) {
+        f(leaf_of(tree, c));
+        return false;
+      });
 }
 
 }  // namespace bvh_collision
