@@ -139,6 +139,38 @@ TEST(OmplValidity, ValidatorsAgreeWithTheCheckersOwnQueries) {
   si->freeState(last);
 }
 
+// One adapter over either context: the in-process validator takes several motions in one call
+// as the service-backed one does (a lazy planner's candidate path), each answered as checkMotion
+// answers it alone, and counted.
+TEST(OmplValidity, SeveralMotionsInOneCallAnswerAsEachAlone) {
+  const auto context = demo_context();
+  auto si = std::make_shared<ob::SpaceInformation>(context->group.make_space());
+  CheckerMotionValidator motions(si, context);
+  CheckerMotionValidator one_by_one(si, context);
+  std::vector<ob::State*> states;
+  std::vector<std::pair<const ob::State*, const ob::State*>> pairs;
+  ob::ScopedState<> s(si->getStateSpace());
+  for (int i = 0; i < 2 * test::sized(40); ++i) {
+    s.random();
+    states.push_back(si->cloneState(s.get()));
+  }
+  for (std::size_t i = 0; i + 1 < states.size(); i += 2) pairs.emplace_back(states[i], states[i + 1]);
+  const std::uint64_t before = context->counters->motions;
+  const std::vector<bool> answers = motions.checkMotions(pairs);
+  ASSERT_EQ(answers.size(), pairs.size());
+  EXPECT_EQ(context->counters->motions - before, pairs.size());
+  int free = 0;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    EXPECT_EQ(answers[i], one_by_one.checkMotion(pairs[i].first, pairs[i].second)) << i;
+    free += answers[i];
+  }
+  EXPECT_GT(free, 0);
+  EXPECT_LT(free, static_cast<int>(pairs.size()));
+  EXPECT_EQ(motions.getCheckedMotionCount(), pairs.size());
+  EXPECT_EQ(motions.getValidMotionCount(), static_cast<unsigned>(free));
+  for (ob::State* state : states) si->freeState(state);
+}
+
 // At the default tolerance (1 cm): a state answered valid is free on the exact geometry, one
 // answered invalid is within 1 cm of a collision.
 TEST(OmplValidity, AtTheDefaultToleranceValidIsFree) {

@@ -5,16 +5,10 @@
 #include <limits>
 #include <stdexcept>
 
-#include <ompl/base/SpaceInformation.h>
-
 namespace bvh_collision::planning {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-
-const double* values(const ompl::base::State* state) {
-  return state->as<ompl::base::RealVectorStateSpace::StateType>()->values;
-}
 
 }  // namespace
 
@@ -82,7 +76,7 @@ std::vector<double> CheckerPlanningContext::full_state(const ompl::base::State* 
 
 void CheckerPlanningContext::full_state(const ompl::base::State* state, std::vector<double>& full) const {
   full.assign(base_state.begin(), base_state.end());
-  const double* v = values(state);
+  const double* v = state_values(state);
   for (std::size_t i = 0; i < variables_.size(); ++i) full[variables_[i]] = v[i];
 }
 
@@ -98,74 +92,48 @@ const SceneChecker& CheckerPlanningContext::scene() const {
   return *scene_;
 }
 
-CheckerStateValidityChecker::CheckerStateValidityChecker(const ompl::base::SpaceInformationPtr& si,
-                                                         std::shared_ptr<const CheckerPlanningContext> context)
-    : ompl::base::StateValidityChecker(si), context_(std::move(context)) {
-  specs_.clearanceComputationType = ompl::base::StateValidityCheckerSpecs::EXACT;
-}
-
-bool CheckerStateValidityChecker::isValid(const ompl::base::State* state) const {
-  const CheckerPlanningContext& c = *context_;
-  ++c.counters->states;
-  ValidityTimer timer(c.counters.get(), CheckKind::kState);
+bool CheckerPlanningContext::check_state(const ompl::base::State* state) const {
   thread_local std::vector<double> q;
-  c.full_state(state, q);
-  return !c.scene().collides(q.data());
+  full_state(state, q);
+  return !scene().collides(q.data());
 }
 
-double CheckerStateValidityChecker::clearance(const ompl::base::State* state) const {
-  const CheckerPlanningContext& c = *context_;
-  ValidityTimer timer(c.counters.get());
-  const std::vector<double> q = c.full_state(state);
+MotionAnswer CheckerPlanningContext::check_motion(const ompl::base::State* from, const ompl::base::State* to,
+                                                  bool earliest) const {
+  thread_local std::vector<double> a, b;
+  full_state(from, a);
+  full_state(to, b);
+  const MotionResult r = scene().check_motion(a.data(), b.data(), earliest);
+  return {r.valid, r.last_valid_fraction};
+}
+
+std::vector<bool> CheckerPlanningContext::check_motions(const std::vector<StatePair>& motions) const {
+  std::vector<bool> free;
+  free.reserve(motions.size());
+  for (const auto& [from, to] : motions) free.push_back(check_motion(from, to, false).valid);
+  return free;
+}
+
+double CheckerPlanningContext::clearance(const ompl::base::State* state) const {
+  const std::vector<double> q = full_state(state);
   double nearest = std::numeric_limits<double>::infinity();
-  if (c.self) {
+  if (self) {
     SelfCollisionRequest request;
     request.distance = true;
     request.all_pairs = true;
-    const SelfCollisionResult r = c.checker.check_self(q.data(), request);
+    const SelfCollisionResult r = checker.check_self(q.data(), request);
     nearest = r.collision ? 0.0 : std::min(nearest, r.min_distance);
   }
-  if (c.obstacles && nearest > 0.0) {
+  if (obstacles && nearest > 0.0) {
     EnvironmentRequest request;
     request.distance = true;
     request.all_links = true;
     request.contacts = false;
-    request.root_pose = c.root_pose;
-    const EnvironmentResult r = c.checker.check_environment(q.data(), *c.environment, request);
+    request.root_pose = root_pose;
+    const EnvironmentResult r = checker.check_environment(q.data(), *environment, request);
     nearest = r.collision ? 0.0 : std::min(nearest, r.min_distance);
   }
   return nearest;
-}
-
-CheckerMotionValidator::CheckerMotionValidator(const ompl::base::SpaceInformationPtr& si,
-                                               std::shared_ptr<const CheckerPlanningContext> context)
-    : ompl::base::MotionValidator(si), context_(std::move(context)) {}
-
-MotionResult CheckerMotionValidator::check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const {
-  const CheckerPlanningContext& c = *context_;
-  ++c.counters->motions;
-  ValidityTimer timer(c.counters.get(), CheckKind::kMotion);
-  thread_local std::vector<double> a, b;
-  c.full_state(s1, a);
-  c.full_state(s2, b);
-  return c.scene().check_motion(a.data(), b.data(), earliest);
-}
-
-bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const {
-  const bool free = check(s1, s2, false).valid;
-  ++(free ? valid_ : invalid_);
-  return free;
-}
-
-bool CheckerMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
-                                         std::pair<ompl::base::State*, double>& last_valid) const {
-  const MotionResult r = check(s1, s2, true);
-  if (!r.valid) {
-    last_valid.second = r.last_valid_fraction;
-    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, r.last_valid_fraction, last_valid.first);
-  }
-  ++(r.valid ? valid_ : invalid_);
-  return r.valid;
 }
 
 }  // namespace bvh_collision::planning

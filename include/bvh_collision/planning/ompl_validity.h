@@ -1,10 +1,11 @@
-// OMPL over the checker, in-process: a StateValidityChecker and a MotionValidator that answer a
-// sampling planner's questions with CollisionChecker's queries on one environment snapshot. The
+// OMPL over the checker: one StateValidityChecker and one MotionValidator (StateValidity,
+// MotionValidity) over a context that answers a sampling planner's questions. The context here,
+// CheckerPlanningContext, answers in-process with SceneChecker on one environment snapshot; the
+// ros layer's ServicePlanningContext (ros/service_validity.h) asks a running node's services. The
 // motion validator is the certified check_motion (no collision hides between the states it
 // checks), so a path made of motions it accepted is free along its whole length, not only at its
 // waypoints: OMPL's default validator checks states a fixed fraction of the space apart and can
-// step over a thin obstacle. Plain C++ and OMPL: no ROS (the ros layer's service-backed twins are
-// in ros/planning/service_validity.h).
+// step over a thin obstacle. Plain C++ and OMPL: no ROS.
 #pragma once
 
 #include <atomic>
@@ -13,10 +14,12 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <ompl/base/MotionValidator.h>
+#include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
@@ -69,7 +72,23 @@ class ValidityTimer {
   std::chrono::steady_clock::time_point start_;
 };
 
-// What the validators check and against what: the robot's other variables stay at `base_state`.
+// A planner's motion as a context answers it: free, or the fraction of the way to the last state
+// found free (to the first collision when the earliest was asked for).
+struct MotionAnswer {
+  bool valid = false;
+  double last_valid_fraction = 0.0;
+};
+
+// A pair of planner states: a motion from the first to the second.
+using StatePair = std::pair<const ompl::base::State*, const ompl::base::State*>;
+
+// The values of a planner state of JointGroup::make_space()'s space.
+inline const double* state_values(const ompl::base::State* state) {
+  return state->as<ompl::base::RealVectorStateSpace::StateType>()->values;
+}
+
+// What the validators check and against what, in-process: the robot's other variables stay at
+// `base_state`.
 struct CheckerPlanningContext {
   CollisionChecker checker;
   std::shared_ptr<const Environment> environment;  // a snapshot: never changes under the planner
@@ -95,37 +114,107 @@ struct CheckerPlanningContext {
   // fields above as they are then (set them before planning); shared by both validators.
   const SceneChecker& scene() const;
 
+  // The validators' questions (see StateValidity): free of self-collision and of the
+  // environment at the tolerance; the certified motion (SceneChecker::check_motion); several
+  // motions, each alone; the exact distance to the nearest collision (0 in collision).
+  bool check_state(const ompl::base::State* state) const;
+  MotionAnswer check_motion(const ompl::base::State* from, const ompl::base::State* to, bool earliest) const;
+  std::vector<bool> check_motions(const std::vector<StatePair>& motions) const;
+  double clearance(const ompl::base::State* state) const;
+
  private:
   std::vector<int> variables_;  // the group's entries in the full state
   mutable std::once_flag scene_once_;
   mutable std::unique_ptr<const SceneChecker> scene_;
 };
 
-class CheckerStateValidityChecker : public ompl::base::StateValidityChecker {
+namespace detail {
+template <class Context, class = void>
+struct MeasuresClearance : std::false_type {};
+template <class Context>
+struct MeasuresClearance<Context, std::void_t<decltype(std::declval<const Context&>().clearance(nullptr))>> : std::true_type {};
+}  // namespace detail
+
+// The state validity checker over a context that offers
+//   std::shared_ptr<ValidityCounters> counters;
+//   bool check_state(const ompl::base::State*) const;
+// and, when it can measure one, double clearance(const ompl::base::State*) const (exact).
+// Counts and times every question in the context's counters.
+template <class Context>
+class StateValidity : public ompl::base::StateValidityChecker {
  public:
-  CheckerStateValidityChecker(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const CheckerPlanningContext> context);
-  // Free of self-collision and of the environment (at the context's tolerance).
-  bool isValid(const ompl::base::State* state) const override;
-  // The exact distance to the nearest collision (self pairs and obstacles); 0 in collision.
-  double clearance(const ompl::base::State* state) const override;
+  StateValidity(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const Context> context)
+      : ompl::base::StateValidityChecker(si), context_(std::move(context)) {
+    if constexpr (detail::MeasuresClearance<Context>::value) {
+      specs_.clearanceComputationType = ompl::base::StateValidityCheckerSpecs::EXACT;
+    }
+  }
+  bool isValid(const ompl::base::State* state) const override {
+    ++context_->counters->states;
+    ValidityTimer timer(context_->counters.get(), CheckKind::kState);
+    return context_->check_state(state);
+  }
+  double clearance(const ompl::base::State* state) const override {
+    if constexpr (detail::MeasuresClearance<Context>::value) {
+      ValidityTimer timer(context_->counters.get());
+      return context_->clearance(state);
+    } else {
+      return ompl::base::StateValidityChecker::clearance(state);
+    }
+  }
 
  private:
-  std::shared_ptr<const CheckerPlanningContext> context_;
+  std::shared_ptr<const Context> context_;
 };
 
-class CheckerMotionValidator : public ompl::base::MotionValidator {
+// The motion validator over a context that offers
+//   MotionAnswer check_motion(const ompl::base::State*, const ompl::base::State*, bool earliest) const;
+//   std::vector<bool> check_motions(const std::vector<StatePair>&) const;  // one answer a motion
+// (and the counters). The straight motion in joint space, certified.
+template <class Context>
+class MotionValidity : public ompl::base::MotionValidator {
  public:
-  CheckerMotionValidator(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const CheckerPlanningContext> context);
-  // The straight motion in joint space, certified (SceneChecker::check_motion).
-  bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const override;
+  MotionValidity(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const Context> context)
+      : ompl::base::MotionValidator(si), context_(std::move(context)) {}
+  bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const override {
+    return count(check(s1, s2, false).valid);
+  }
   // The same; when it collides, `last_valid` gets the last state found free and its fraction.
   bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
-                   std::pair<ompl::base::State*, double>& last_valid) const override;
+                   std::pair<ompl::base::State*, double>& last_valid) const override {
+    const MotionAnswer a = check(s1, s2, true);
+    if (!a.valid) {
+      last_valid.second = a.last_valid_fraction;
+      if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, a.last_valid_fraction, last_valid.first);
+    }
+    return count(a.valid);
+  }
+  // Several motions in one call, for a caller that has them at once (a lazy planner's candidate
+  // path, a path's segments to certify): each answered as checkMotion answers it alone (over a
+  // node's services: one check_motions call).
+  std::vector<bool> checkMotions(const std::vector<StatePair>& motions) const {
+    if (motions.empty()) return {};
+    context_->counters->motions += motions.size();
+    ValidityTimer timer(context_->counters.get(), CheckKind::kMotion);
+    const std::vector<bool> free = context_->check_motions(motions);
+    for (const bool f : free) count(f);
+    return free;
+  }
 
  private:
-  // `earliest`: the first collision (for last_valid), else any.
-  MotionResult check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const;
-  std::shared_ptr<const CheckerPlanningContext> context_;
+  MotionAnswer check(const ompl::base::State* s1, const ompl::base::State* s2, bool earliest) const {
+    ++context_->counters->motions;
+    ValidityTimer timer(context_->counters.get(), CheckKind::kMotion);
+    return context_->check_motion(s1, s2, earliest);
+  }
+  bool count(bool free) const {
+    ++(free ? valid_ : invalid_);
+    return free;
+  }
+  std::shared_ptr<const Context> context_;
 };
+
+using CheckerStateValidityChecker = StateValidity<CheckerPlanningContext>;
+using CheckerMotionValidator = MotionValidity<CheckerPlanningContext>;
 
 }  // namespace bvh_collision::planning

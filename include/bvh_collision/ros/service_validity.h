@@ -1,8 +1,8 @@
-// OMPL through the node: a StateValidityChecker and a MotionValidator that ask a running
+// OMPL through the node: the context of planning/ompl_validity.h's validators that asks a running
 // collision_checker over its services (check_state, certified check_motion), a batch check of
-// many states in one check_states call, and of many motions in one check_motions call. The twins of planning/ompl_validity.h for a planner in
-// another process or on another machine; persistent connections (a new connection per call costs
-// more than the check). Joints outside the group take the node's current joint_states.
+// many states in one check_states call, and of many motions in one check_motions call: for a
+// planner in another process or on another machine. Persistent connections (a new connection per
+// call costs more than the check). Joints outside the group take the node's current joint_states.
 #pragma once
 
 #include <memory>
@@ -38,32 +38,17 @@ struct ServicePlanningContext {
   std::vector<bool> motions_valid(const double* starts, const double* goals, std::size_t count,
                                   std::vector<double>* last_valid_fractions = nullptr) const;
 
+  // The validators' questions (planning::StateValidity, planning::MotionValidity), as above.
+  bool check_state(const ompl::base::State* state) const;
+  planning::MotionAnswer check_motion(const ompl::base::State* from, const ompl::base::State* to, bool earliest) const;
+  std::vector<bool> check_motions(const std::vector<planning::StatePair>& motions) const;
+
  private:
   mutable std::mutex mutex_;  // one call at a time per connection
   mutable ros::ServiceClient state_, states_, motion_, motions_;
 };
 
-class ServiceStateValidityChecker : public ompl::base::StateValidityChecker {
- public:
-  ServiceStateValidityChecker(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const ServicePlanningContext> context);
-  bool isValid(const ompl::base::State* state) const override;
-
- private:
-  std::shared_ptr<const ServicePlanningContext> context_;
-};
-
-class ServiceMotionValidator : public ompl::base::MotionValidator {
- public:
-  ServiceMotionValidator(const ompl::base::SpaceInformationPtr& si, std::shared_ptr<const ServicePlanningContext> context);
-  bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const override;
-  bool checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
-                   std::pair<ompl::base::State*, double>& last_valid) const override;
-  // Several motions in one call (check_motions), for a caller that has them at once: a lazy
-  // planner's candidate path, a path's segments to certify.
-  std::vector<bool> checkMotions(const std::vector<std::pair<const ompl::base::State*, const ompl::base::State*>>& motions) const;
-
- private:
-  std::shared_ptr<const ServicePlanningContext> context_;
-};
+using ServiceStateValidityChecker = planning::StateValidity<ServicePlanningContext>;
+using ServiceMotionValidator = planning::MotionValidity<ServicePlanningContext>;
 
 }  // namespace bvh_collision

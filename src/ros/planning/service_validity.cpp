@@ -2,8 +2,6 @@
 
 #include <stdexcept>
 
-#include <ompl/base/SpaceInformation.h>
-
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
@@ -12,10 +10,6 @@
 
 namespace bvh_collision {
 namespace {
-
-const double* values(const ompl::base::State* state) {
-  return state->as<ompl::base::RealVectorStateSpace::StateType>()->values;
-}
 
 template <class Service>
 void call(ros::ServiceClient& client, Service& srv) {
@@ -96,56 +90,28 @@ std::vector<bool> ServicePlanningContext::states_valid(const double* v, std::siz
   return std::vector<bool>(srv.response.valid.begin(), srv.response.valid.end());
 }
 
-ServiceStateValidityChecker::ServiceStateValidityChecker(const ompl::base::SpaceInformationPtr& si,
-                                                         std::shared_ptr<const ServicePlanningContext> context)
-    : ompl::base::StateValidityChecker(si), context_(std::move(context)) {}
-
-bool ServiceStateValidityChecker::isValid(const ompl::base::State* state) const {
-  ++context_->counters->states;
-  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kState);
-  return context_->state_valid(values(state));
+bool ServicePlanningContext::check_state(const ompl::base::State* state) const {
+  return state_valid(planning::state_values(state));
 }
 
-ServiceMotionValidator::ServiceMotionValidator(const ompl::base::SpaceInformationPtr& si,
-                                               std::shared_ptr<const ServicePlanningContext> context)
-    : ompl::base::MotionValidator(si), context_(std::move(context)) {}
-
-bool ServiceMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2) const {
-  ++context_->counters->motions;
-  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
-  const bool free = context_->motion_valid(values(s1), values(s2));
-  ++(free ? valid_ : invalid_);
-  return free;
-}
-
-std::vector<bool> ServiceMotionValidator::checkMotions(
-    const std::vector<std::pair<const ompl::base::State*, const ompl::base::State*>>& motions) const {
-  if (motions.empty()) return {};
-  context_->counters->motions += motions.size();
-  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
-  const std::size_t n = context_->group.size();
-  std::vector<double> starts, goals;
-  for (const auto& [a, b] : motions) {
-    starts.insert(starts.end(), values(a), values(a) + n);
-    goals.insert(goals.end(), values(b), values(b) + n);
-  }
-  const std::vector<bool> free = context_->motions_valid(starts.data(), goals.data(), motions.size());
-  for (const bool f : free) ++(f ? valid_ : invalid_);
-  return free;
-}
-
-bool ServiceMotionValidator::checkMotion(const ompl::base::State* s1, const ompl::base::State* s2,
-                                         std::pair<ompl::base::State*, double>& last_valid) const {
-  ++context_->counters->motions;
-  planning::ValidityTimer timer(context_->counters.get(), planning::CheckKind::kMotion);
+planning::MotionAnswer ServicePlanningContext::check_motion(const ompl::base::State* from, const ompl::base::State* to,
+                                                            bool earliest) const {
+  // The node certifies through its SceneChecker in earliest mode: the fraction comes either way.
   double fraction = 0.0;
-  const bool free = context_->motion_valid(values(s1), values(s2), &fraction);
-  if (!free) {
-    last_valid.second = fraction;
-    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, fraction, last_valid.first);
+  const bool free = motion_valid(planning::state_values(from), planning::state_values(to), earliest ? &fraction : nullptr);
+  return {free, fraction};
+}
+
+std::vector<bool> ServicePlanningContext::check_motions(const std::vector<planning::StatePair>& motions) const {
+  const std::size_t n = group.size();
+  std::vector<double> starts, goals;
+  starts.reserve(motions.size() * n);
+  goals.reserve(motions.size() * n);
+  for (const auto& [a, b] : motions) {
+    starts.insert(starts.end(), planning::state_values(a), planning::state_values(a) + n);
+    goals.insert(goals.end(), planning::state_values(b), planning::state_values(b) + n);
   }
-  ++(free ? valid_ : invalid_);
-  return free;
+  return motions_valid(starts.data(), goals.data(), motions.size());
 }
 
 }  // namespace bvh_collision
