@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <random>
 #include <set>
 
 #include "bvh_collision/bvh/traversal.h"
 #include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/tree_walk.h"
 #include "bvh_collision/octree/cube_walk.h"
 #include "checker_fixtures.h"
 #include "mesh_fixtures.h"
@@ -52,6 +54,14 @@ TEST(Traversal, DepthFirstReachesEveryTriangleOnceAndStops) {
   int after_stop = 0;
   depth_first(bvh, [&](const BvhNode<Obb>&) { return ++after_stop, Visit::kStop; }, [](const BvhNode<Obb>&) { return false; });
   EXPECT_EQ(after_stop, 1);
+
+  // The tree's depth (a walk too) against recursion.
+  const auto& nodes = bvh.nodes();
+  std::function<int(std::int32_t)> depth = [&](std::int32_t i) {
+    return nodes[i].is_leaf() ? 1 : 1 + std::max(depth(nodes[i].left), depth(nodes[i].right));
+  };
+  EXPECT_EQ(bvh.depth(), depth(0));
+  EXPECT_GT(bvh.depth(), 3);
 }
 
 TEST(Traversal, NearestFirstFindsTheClosestTriangle) {
@@ -130,6 +140,55 @@ Octree random_tree(double resolution, int voxels) {
     }
   }
   return tree;
+}
+
+// The generic walks themselves (geometry/tree_walk.h) on a toy view: a complete binary tree of
+// depth d by heap index. Nothing pruned, every leaf (pair) is reached once, in push order; kSkip
+// prunes a subtree, kStop and a leaf's true end the walk.
+struct HeapTreeView {
+  using Node = int;
+  int leaves_from;  // nodes at or beyond this index are leaves
+  bool is_leaf(int i) const { return i >= leaves_from; }
+  template <class F>
+  void children(int i, F&& f) const {
+    f(2 * i + 2);  // the right child pushed first, so the left one (2i + 1) is walked first
+    f(2 * i + 1);
+  }
+};
+
+TEST(TreeWalk, EveryLeafAndLeafPairOnceInOrderAndStops) {
+  const HeapTreeView view{7};  // 15 nodes, leaves 7..14
+  std::vector<int> leaves;
+  depth_first_walk(view, 0, [](int) { return Visit::kEnter; }, [&](int i) {
+    leaves.push_back(i);
+    return false;
+  });
+  EXPECT_EQ(leaves, (std::vector<int>{7, 8, 9, 10, 11, 12, 13, 14}));
+  leaves.clear();
+  depth_first_walk(view, 0, [](int i) { return i == 1 ? Visit::kSkip : Visit::kEnter; }, [&](int i) {
+    leaves.push_back(i);
+    return i == 12;
+  });
+  EXPECT_EQ(leaves, (std::vector<int>{11, 12}));
+  std::set<std::pair<int, int>> pairs;
+  int visits = 0;
+  auto expand = [&](int a, int b, auto&& push) {
+    if (!view.is_leaf(a)) {
+      view.children(a, [&](int c) { push(c, b); });
+    } else {
+      view.children(b, [&](int c) { push(a, c); });
+    }
+  };
+  depth_first_pair_walk(view, view, 0, 0, [&](int, int) { return ++visits, Visit::kEnter; }, [&](int a, int b) {
+    EXPECT_TRUE(pairs.insert({a, b}).second);
+    return false;
+  }, expand);
+  EXPECT_EQ(pairs.size(), 64u);
+  EXPECT_EQ(visits, 15 + 8 * 14);  // a's tree, then b's below each leaf of a
+  visits = 0;
+  depth_first_pair_walk(view, view, 0, 0, [&](int, int) { return ++visits == 5 ? Visit::kStop : Visit::kEnter; },
+                        [](int, int) { return false; }, expand);
+  EXPECT_EQ(visits, 5);
 }
 
 TEST(CubeWalk, DescendWhileReachesEveryOccupiedLeafAndNearestFirstFindsTheClosest) {

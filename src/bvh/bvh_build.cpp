@@ -9,6 +9,7 @@
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/distance.h"
+#include "bvh_collision/geometry/tree_walk.h"
 
 namespace bvh_collision {
 
@@ -532,20 +533,38 @@ std::size_t Bvh<BV>::memory_bytes() const {
          triangle_ids_.size() * sizeof(std::int32_t) + component_points_.size() * sizeof(Vec3);
 }
 
+namespace {
+
+// A BVH's nodes with their depth (the root's is 1), as geometry/tree_walk.h walks them.
+template <class BV>
+struct DepthView {
+  struct Node {
+    std::int32_t index;
+    int depth;
+  };
+  const std::vector<BvhNode<BV>>& nodes;
+  bool is_leaf(const Node& n) const { return nodes[n.index].is_leaf(); }
+  template <class F>
+  void children(const Node& n, F&& f) const {
+    f(Node{nodes[n.index].left, n.depth + 1});
+    f(Node{nodes[n.index].right, n.depth + 1});
+  }
+};
+
+}  // namespace
+
 template <class BV>
 int Bvh<BV>::depth() const {
   if (nodes_.empty()) return 0;
-  std::vector<std::pair<std::int32_t, int>> stack{{0, 1}};
   int deepest = 0;
-  while (!stack.empty()) {
-    const auto [n, d] = stack.back();
-    stack.pop_back();
-    deepest = std::max(deepest, d);
-    if (!nodes_[n].is_leaf()) {
-      stack.push_back({nodes_[n].left, d + 1});
-      stack.push_back({nodes_[n].right, d + 1});
-    }
-  }
+  using Node = typename DepthView<BV>::Node;
+  depth_first_walk(
+      DepthView<BV>{nodes_}, Node{0, 1},
+      [&](const Node& n) {
+        deepest = std::max(deepest, n.depth);
+        return Visit::kEnter;
+      },
+      [](const Node&) { return false; });
   return deepest;
 }
 

@@ -10,7 +10,7 @@
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/safety_margin.h"
-#include "bvh_collision/geometry/traversal_stack.h"
+#include "bvh_collision/geometry/tree_walk.h"
 
 namespace bvh_collision {
 namespace {
@@ -560,15 +560,26 @@ PairFrame pair_frame(const LinkProxy& a, const Transform& pose_a, const LinkProx
           pose_margin(pose_a.t.norm() + pose_b.t.norm() + ra.center.norm() + ra.radius + rb.center.norm() + rb.radius)};
 }
 
-// A pair of spheres a pair walk has still to visit: one of a's and one of b's.
-struct SpherePair {
-  std::int32_t a, b;
+// A proxy's sphere tree as geometry/tree_walk.h walks it: spheres by index in depth-first
+// order, a sphere's subtree ending at its `skip`.
+struct SphereTreeView {
+  using Node = std::int32_t;
+  const ProxySphere* s;
+  bool is_leaf(Node i) const { return s[i].skip == i + 1; }
+  template <class F>
+  void children(Node i, F&& f) const {
+    for (std::int32_t k = i + 1; k < s[i].skip; k = s[k].skip) f(k);
+  }
 };
 
 // A pair walk opens a's sphere unless it is a leaf or b's (not a leaf) is larger.
-bool open_a(const ProxySphere* sa, std::int32_t i, const ProxySphere* sb, std::int32_t j) {
-  const bool leaf_a = sa[i].skip == i + 1, leaf_b = sb[j].skip == j + 1;
-  return !leaf_a && (leaf_b || sa[i].radius >= sb[j].radius);
+template <class Push>
+void open_larger(const SphereTreeView& a, std::int32_t i, const SphereTreeView& b, std::int32_t j, Push&& push) {
+  if (!a.is_leaf(i) && (b.is_leaf(j) || a.s[i].radius >= b.s[j].radius)) {
+    a.children(i, [&](std::int32_t k) { push(k, j); });
+  } else {
+    b.children(j, [&](std::int32_t k) { push(i, k); });
+  }
 }
 
 }  // namespace
@@ -579,23 +590,21 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   const ProxySphere* sa = a.spheres().data();
   const ProxySphere* sb = b.spheres().data();
   const PairFrame frame = pair_frame(a, pose_a, b, pose_b);
-  const Mat3& r = frame.r;
-  const Vec3& t = frame.t;
+  const Mat3 r = frame.r;
+  const Vec3 t = frame.t;
   const double slack = padding + frame.margin;
-  TraversalStack<SpherePair> stack;
-  stack.push({0, 0});
-  while (!stack.empty()) {
-    const auto [i, j] = stack.pop();
-    const double reach = sa[i].radius + sb[j].radius + slack;
-    if ((sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach) continue;
-    if (sa[i].skip == i + 1 && sb[j].skip == j + 1) return true;
-    if (open_a(sa, i, sb, j)) {
-      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.push({k, j});
-    } else {
-      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.push({i, k});
-    }
-  }
-  return false;
+  bool hit = false;
+  // The callbacks take their inputs by value: the walk's stack may spill to the heap, and values
+  // held by reference would be reloaded after every push.
+  depth_first_pair_walk(
+      SphereTreeView{sa}, SphereTreeView{sb}, 0, 0,
+      [sa, sb, r, t, slack](std::int32_t i, std::int32_t j) {
+        const double reach = sa[i].radius + sb[j].radius + slack;
+        return (sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach ? Visit::kSkip : Visit::kEnter;
+      },
+      [&hit](std::int32_t, std::int32_t) { return hit = true; },
+      [sa, sb](std::int32_t i, std::int32_t j, auto&& push) { open_larger(SphereTreeView{sa}, i, SphereTreeView{sb}, j, push); });
+  return hit;
 }
 
 double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
@@ -604,29 +613,29 @@ double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkP
   const ProxySphere* sa = a.spheres().data();
   const ProxySphere* sb = b.spheres().data();
   const PairFrame frame = pair_frame(a, pose_a, b, pose_b);
-  const Mat3& r = frame.r;
-  const Vec3& t = frame.t;
+  const Mat3 r = frame.r;
+  const Vec3 t = frame.t;
   const double margin = frame.margin;
-  TraversalStack<SpherePair> stack;
-  stack.push({0, 0});
   // The smallest gap of a pair of spheres left unopened because it was within the slack of best.
   double unopened = best;
-  while (!stack.empty()) {
-    const auto [i, j] = stack.pop();
-    // Spheres contain their subtrees: this gap bounds every leaf pair below from below.
-    const double gap = std::max(0.0, (sa[i].center - apply(r, t, sb[j].center)).norm() - sa[i].radius - sb[j].radius - margin);
-    if (gap >= best) continue;
-    const bool leaves = sa[i].skip == i + 1 && sb[j].skip == j + 1;
-    if (leaves) {
-      best = gap;
-    } else if (slack.leaves(gap, best)) {
-      unopened = std::min(unopened, gap);
-    } else if (open_a(sa, i, sb, j)) {
-      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) stack.push({k, j});
-    } else {
-      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) stack.push({i, k});
-    }
-  }
+  depth_first_pair_walk(
+      SphereTreeView{sa}, SphereTreeView{sb}, 0, 0,
+      [sa, sb, r, t, margin, &best, &unopened, &slack](std::int32_t i, std::int32_t j) {
+        // Spheres contain their subtrees: this gap bounds every leaf pair below from below.
+        const double gap = std::max(0.0, (sa[i].center - apply(r, t, sb[j].center)).norm() - sa[i].radius - sb[j].radius - margin);
+        if (gap >= best) return Visit::kSkip;
+        if (sa[i].skip == i + 1 && sb[j].skip == j + 1) {
+          best = gap;
+          return Visit::kSkip;
+        }
+        if (slack.leaves(gap, best)) {
+          unopened = std::min(unopened, gap);
+          return Visit::kSkip;
+        }
+        return Visit::kEnter;
+      },
+      [](std::int32_t, std::int32_t) { return false; },  // leaf pairs are settled in visit (their gap)
+      [sa, sb](std::int32_t i, std::int32_t j, auto&& push) { open_larger(SphereTreeView{sa}, i, SphereTreeView{sb}, j, push); });
   return std::min(best, unopened);
 }
 

@@ -4,7 +4,9 @@
 #include <array>
 
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/bvh/traversal.h"
 #include "bvh_collision/geometry/traversal_stack.h"
+#include "bvh_collision/geometry/tree_walk.h"
 #include "bvh_collision/octree/cube_walk.h"
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/geometry/distance.h"
@@ -285,58 +287,57 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
   QueryStats& s = stats ? *stats : local;
   const CubeFrame frame{tree, pose.inverse()};
   const auto& nodes = mesh.nodes();
-  struct Item {
-    Cube cube;
-    std::int32_t node;
-  };
   const KeyRange reach(tree.grid(), reach_lo, reach_hi);
   if (!occupied_in_range(frame, *root, reach)) return false;
   const double allowance = padding + rounding_slack(reach_lo, reach_hi, frame.lo(*root), frame.hi(*root));
   WorldVolumes& world = WorldVolumes::for_query(mesh, pose);
-  TraversalStack<Item> stack;
-  stack.push(Item{*root, 0});
-  while (!stack.empty()) {
-    const Item it = stack.pop();
-    const BvhNode<Obb>& n = nodes[it.node];
-    const double half = 0.5 * tree.cube_size(it.cube.depth);
-    ++s.volume_tests;
-    if (!node_meets_cube(world[it.node], frame.lo(it.cube) + Vec3::Constant(half), half, allowance)) continue;
-    // Every point of the volume lies within `slack` of the node's triangles, so a volume within
-    // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
-    // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.) The test
-    // above skips the nine edge axes, so it may pass boxes that are far apart edge to edge: the
-    // shortcut takes all fifteen axes (overlap_carried), whose rounding allowance is counted too.
-    const bool cube_leaf = tree.is_leaf(it.cube.node);
-    const bool settled = cube_leaf && tolerance > 0.0 && n.slack + kPoseMargin * (n.size + half) <= tolerance &&
-                         overlap_carried(n.volume, frame.box(it.cube), padding);
-    if (settled || (cube_leaf && n.is_leaf())) {
-      const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
-      for (std::int32_t i = n.first; i < n.first + n.count && !settled; ++i) {
-        const Triangle t = in_world(mesh.triangles()[i], pose);
-        ++s.primitive_tests;
-        Vec3 on_t, on_b;
-        const bool hit = padding > 0.0 ? bounds_gap(t, lo, hi) <= padding && triangle_box_distance(t, lo, hi, on_t, on_b) <= padding
-                                       : triangle_meets_box(t, lo, hi);
-        if (hit) {
-          if (contact) *contact = {frame.leaf(it.cube), padding > 0.0 ? on_t : t[0]};
-          return true;
+  bool hit = false;
+  depth_first_pair_walk(
+      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh}, *root, std::int32_t{0},
+      [&](const Cube& cube, std::int32_t node) {
+        const BvhNode<Obb>& n = nodes[node];
+        const double half = 0.5 * tree.cube_size(cube.depth);
+        ++s.volume_tests;
+        if (!node_meets_cube(world[node], frame.lo(cube) + Vec3::Constant(half), half, allowance)) return Visit::kSkip;
+        // Every point of the volume lies within `slack` of the node's triangles, so a volume within
+        // padding of the cube puts a triangle within padding + slack of it: allowed by the tolerance.
+        // (Only against a leaf: an inner cube is "occupied" when some cube inside it is.) The test
+        // above skips the nine edge axes, so it may pass boxes that are far apart edge to edge: the
+        // shortcut takes all fifteen axes (overlap_carried), whose rounding allowance is counted too.
+        const bool settled = tree.is_leaf(cube.node) && tolerance > 0.0 && n.slack + kPoseMargin * (n.size + half) <= tolerance &&
+                             overlap_carried(n.volume, frame.box(cube), padding);
+        if (!settled) return Visit::kEnter;
+        if (contact) *contact = {frame.leaf(cube), pose * n.volume.center};
+        hit = true;
+        return Visit::kStop;
+      },
+      [&](const Cube& cube, std::int32_t node) {  // a leaf cube and a leaf node: their triangles
+        const BvhNode<Obb>& n = nodes[node];
+        const Vec3 lo = frame.lo(cube), hi = frame.hi(cube);
+        for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+          const Triangle t = in_world(mesh.triangles()[i], pose);
+          ++s.primitive_tests;
+          Vec3 on_t, on_b;
+          hit = padding > 0.0 ? bounds_gap(t, lo, hi) <= padding && triangle_box_distance(t, lo, hi, on_t, on_b) <= padding
+                              : triangle_meets_box(t, lo, hi);
+          if (hit) {
+            if (contact) *contact = {frame.leaf(cube), padding > 0.0 ? on_t : t[0]};
+            return true;
+          }
         }
-      }
-      if (settled) {
-        if (contact) *contact = {frame.leaf(it.cube), pose * n.volume.center};
-        return true;
-      }
-      continue;
-    }
-    // Descend the larger of the two (a leaf cannot be descended).
-    if (!cube_leaf && (n.is_leaf() || std::sqrt(3.0) * half > n.size)) {
-      frame.for_children(it.cube, [&](const Cube& c) { stack.push({c, it.node}); },
-                         reach.children(it.cube.corner, it.cube.depth));
-    } else {
-      stack.push({it.cube, n.right});
-      stack.push({it.cube, n.left});
-    }
-  }
+        return false;
+      },
+      [&](const Cube& cube, std::int32_t node, auto&& push) {
+        // Descend the larger of the two (a leaf cannot be descended).
+        const BvhNode<Obb>& n = nodes[node];
+        if (!tree.is_leaf(cube.node) && (n.is_leaf() || std::sqrt(3.0) * 0.5 * tree.cube_size(cube.depth) > n.size)) {
+          frame.for_children(cube, [&](const Cube& c) { push(c, node); }, reach.children(cube.corner, cube.depth));
+        } else {
+          push(cube, n.right);
+          push(cube, n.left);
+        }
+      });
+  if (hit) return true;
   if (!solids) return false;
   if (const auto inside = cube_inside_solid(mesh, pose, frame, world, &s)) {
     if (contact) *contact = {frame.leaf(*inside), pose * frame.box(*inside).center};

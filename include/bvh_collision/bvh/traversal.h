@@ -1,7 +1,8 @@
 // The traversals of bounding volume hierarchies, written once: every query over one hierarchy or
 // a pair of them (collision, distance, containment, rays, a primitive against a mesh) is one of
-// these four loops with its own callbacks, so the order of descent, the stack and the pruning
-// rule live here and nowhere else.
+// these four with its own callbacks, so the order of descent, the stack and the pruning rule live
+// here and nowhere else. The two depth-first ones are the generic walks of geometry/tree_walk.h
+// over a BvhView; the bounded ones keep their own order (nearest first, best first).
 //
 //   depth_first(bvh, visit, leaf, left_first)          visit(node) -> Visit, leaf(node) -> stop?
 //   nearest_first(bvh, bound, leaf, cutoff)            bound(i) -> double, cutoff() -> double
@@ -21,6 +22,7 @@
 
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/traversal_stack.h"
+#include "bvh_collision/geometry/tree_walk.h"
 
 namespace bvh_collision {
 
@@ -38,26 +40,32 @@ bool split_first_of_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
   return na.size >= nb.size;
 }
 
+// A BVH as geometry/tree_walk.h walks it: nodes by index, `left_first(node)` ordering an inner
+// node's children.
+template <class BV, class OrderFn = LeftFirst>
+struct BvhView {
+  using Node = std::int32_t;
+  const Bvh<BV>& bvh;
+  OrderFn left_first;
+  bool is_leaf(Node i) const { return bvh.nodes()[i].is_leaf(); }
+  template <class F>
+  void children(Node i, F&& f) const {
+    const BvhNode<BV>& n = bvh.nodes()[i];
+    const bool left = left_first(n);
+    f(left ? n.right : n.left);  // the first child is walked next
+    f(left ? n.left : n.right);
+  }
+};
+
 // Depth first from the root. `visit(node)` decides for every node reached; an entered leaf goes
 // to `leaf(node)`, which returns true to stop. `left_first(node)` orders an inner node's children.
 template <class BV, class VisitFn, class LeafFn, class OrderFn = LeftFirst>
 void depth_first(const Bvh<BV>& bvh, VisitFn&& visit, LeafFn&& leaf, OrderFn&& left_first = {}) {
   if (bvh.empty()) return;
-  TraversalStack<std::int32_t> stack;
-  stack.push(0);
-  while (!stack.empty()) {
-    const BvhNode<BV>& n = bvh.nodes()[stack.pop()];
-    const Visit v = visit(n);
-    if (v == Visit::kStop) return;
-    if (v == Visit::kSkip) continue;
-    if (n.is_leaf()) {
-      if (leaf(n)) return;
-      continue;
-    }
-    const bool left = left_first(n);
-    stack.push(left ? n.right : n.left);  // the first child is popped next
-    stack.push(left ? n.left : n.right);
-  }
+  const auto& nodes = bvh.nodes();
+  const BvhView<BV, OrderFn&> view{bvh, left_first};
+  depth_first_walk(
+      view, 0, [&](std::int32_t i) { return visit(nodes[i]); }, [&](std::int32_t i) { return leaf(nodes[i]); });
 }
 
 // Depth first, nearer child first, pruned by bounds: a node whose `bound(index)` is not below
@@ -95,29 +103,21 @@ void nearest_first(const Bvh<BV>& bvh, BoundFn&& bound, LeafFn&& leaf, CutoffFn&
 template <class BV, class VisitFn, class LeafFn, class OrderFn = LeftFirst>
 void depth_first_pair(const Bvh<BV>& a, const Bvh<BV>& b, VisitFn&& visit, LeafFn&& leaf, OrderFn&& left_first = {}) {
   if (a.empty() || b.empty()) return;
-  struct Pair {
-    std::int32_t a, b;
-  };
-  TraversalStack<Pair> stack;
-  stack.push({0, 0});
-  while (!stack.empty()) {
-    const Pair p = stack.pop();
-    const Visit v = visit(p.a, p.b);
-    if (v == Visit::kStop) return;
-    if (v == Visit::kSkip) continue;
-    const BvhNode<BV>& na = a.nodes()[p.a];
-    const BvhNode<BV>& nb = b.nodes()[p.b];
-    if (na.is_leaf() && nb.is_leaf()) {
-      if (leaf(na, nb)) return;
-      continue;
-    }
-    const bool split_a = split_first_of_pair(na, nb);
-    const BvhNode<BV>& split = split_a ? na : nb;
-    const bool left = left_first(na, nb, split_a);
-    const std::int32_t first = left ? split.left : split.right, second = left ? split.right : split.left;
-    stack.push(split_a ? Pair{second, p.b} : Pair{p.a, second});  // the first is popped next
-    stack.push(split_a ? Pair{first, p.b} : Pair{p.a, first});
-  }
+  const auto& nodes_a = a.nodes();
+  const auto& nodes_b = b.nodes();
+  depth_first_pair_walk(
+      BvhView<BV>{a}, BvhView<BV>{b}, 0, 0, visit,
+      [&](std::int32_t ia, std::int32_t ib) { return leaf(nodes_a[ia], nodes_b[ib]); },
+      [&](std::int32_t ia, std::int32_t ib, auto&& push) {
+        const BvhNode<BV>& na = nodes_a[ia];
+        const BvhNode<BV>& nb = nodes_b[ib];
+        const bool split_a = split_first_of_pair(na, nb);
+        const BvhNode<BV>& split = split_a ? na : nb;
+        const bool left = left_first(na, nb, split_a);
+        const std::int32_t first = left ? split.left : split.right, second = left ? split.right : split.left;
+        split_a ? push(second, ib) : push(ia, second);  // the first is walked next
+        split_a ? push(first, ib) : push(ia, first);
+      });
 }
 
 // Best first over the pairs of two hierarchies: always expands the pair with the smallest

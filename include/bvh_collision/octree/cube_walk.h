@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bvh_collision/geometry/traversal_stack.h"
+#include "bvh_collision/geometry/tree_walk.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -62,35 +63,34 @@ void for_occupied_children(const Octree& tree, const OctreeCube& c, F&& f, std::
   }
 }
 
+// The octree's occupied cubes as geometry/tree_walk.h walks them: children in the seed's order
+// (child 0 walked first), only occupied ones, and of those only the ones `which(cube)` masks in.
+template <class MaskFn = AllChildren>
+struct OccupiedCubeView {
+  using Node = OctreeCube;
+  const Octree& tree;
+  MaskFn which;
+  bool is_leaf(const OctreeCube& c) const { return tree.is_leaf(c.node); }
+  template <class F>
+  void children(const OctreeCube& c, F&& f) const {
+    unsigned bits = which(c) & tree.child_mask(c.node);
+    const std::int32_t first = tree.children_block(c.node);
+    while (bits) {  // highest child bit pushed first, so child 0 is walked first
+      const int b = 31 - __builtin_clz(bits);
+      bits &= ~(1u << b);
+      const std::int32_t child = first + b;
+      if (tree.occupied(tree.value(child))) f(OctreeCube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
+    }
+  }
+};
+
 // Depth first from `start` (an occupied cube): `visit(cube)` decides for every cube reached; an
 // entered leaf goes to `leaf(cube)`, which returns true to stop; `children(cube)` masks which
 // children of an entered inner cube are reached (a cheap integer range test, say).
 template <class VisitFn, class LeafFn, class MaskFn = AllChildren>
 void descend_while(const Octree& tree, const OctreeCube& start, VisitFn&& visit, LeafFn&& leaf,
                    MaskFn&& children = {}) {
-  TraversalStack<OctreeCube> stack;
-  stack.push(start);
-  while (!stack.empty()) {
-    const OctreeCube c = stack.pop();
-    const Visit v = visit(c);
-    if (v == Visit::kStop) return;
-    if (v == Visit::kSkip) continue;
-    if (tree.is_leaf(c.node)) {
-      if (leaf(c)) return;
-      continue;
-    }
-    // Highest child bit pushed first, so child 0 is reached first (the seed's order).
-    unsigned bits = children(c) & tree.child_mask(c.node);
-    const std::int32_t first = tree.children_block(c.node);
-    while (bits) {
-      const int b = 31 - __builtin_clz(bits);
-      bits &= ~(1u << b);
-      const std::int32_t child = first + b;
-      if (tree.occupied(tree.value(child))) {
-        stack.push(OctreeCube{child, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
-      }
-    }
-  }
+  depth_first_walk(OccupiedCubeView<MaskFn&>{tree, children}, start, visit, leaf);
 }
 
 // Depth first from `start`, nearest child first, pruned by bounds: a cube whose `bound(cube)` is
@@ -124,26 +124,32 @@ void nearest_cubes_first(const Octree& tree, const OctreeCube& start, BoundFn&& 
 inline constexpr std::array<std::uint8_t, 8> kSeedChildOrder{0, 1, 2, 3, 4, 5, 6, 7};
 inline constexpr std::array<std::uint8_t, 8> kOctomapChildOrder{0, 4, 2, 6, 1, 5, 3, 7};
 
+// Every node of the octree, free and occupied, as geometry/tree_walk.h walks them: the children
+// of a node in `order`.
+struct OctreeNodeView {
+  using Node = OctreeCube;
+  const Octree& tree;
+  const std::array<std::uint8_t, 8>& order;
+  bool is_leaf(const OctreeCube& c) const { return tree.is_leaf(c.node); }
+  template <class F>
+  void children(const OctreeCube& c, F&& f) const {
+    const std::uint8_t mask = tree.child_mask(c.node);
+    const std::int32_t first = tree.children_block(c.node);
+    for (int i = 7; i >= 0; --i) {  // the last pushed is the first walked
+      const int b = order[i];
+      if ((mask >> b) & 1) f(OctreeCube{first + b, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
+    }
+  }
+};
+
 // Every node from the root, free and occupied (OctoMap's tree iterator): depth first, a node
 // before its children, the children of a node in `order`. `visit(cube)` answers kEnter (its
 // children next), kSkip (not them) or kStop (end the walk).
 template <class VisitFn>
 void walk_nodes(const Octree& tree, VisitFn&& visit, const std::array<std::uint8_t, 8>& order = kSeedChildOrder) {
   if (tree.root() < 0) return;
-  TraversalStack<OctreeCube> stack;
-  stack.push(OctreeCube{tree.root(), 0, OctreeKey{}, 0});
-  while (!stack.empty()) {
-    const OctreeCube c = stack.pop();
-    const Visit v = visit(c);
-    if (v == Visit::kStop) return;
-    if (v == Visit::kSkip || tree.is_leaf(c.node)) continue;
-    const std::uint8_t mask = tree.child_mask(c.node);
-    const std::int32_t first = tree.children_block(c.node);
-    for (int i = 7; i >= 0; --i) {  // the last pushed is the first visited
-      const int b = order[i];
-      if ((mask >> b) & 1) stack.push(OctreeCube{first + b, c.depth + 1, child_corner(c.corner, c.depth, b), child_index(c.index, b)});
-    }
-  }
+  depth_first_walk(OctreeNodeView{tree, order}, OctreeCube{tree.root(), 0, OctreeKey{}, 0}, visit,
+                   [](const OctreeCube&) { return false; });
 }
 
 // f(leaf) for every leaf, free or occupied (pruned ones above depth 16 included), in the seed's order.
