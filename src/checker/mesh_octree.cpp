@@ -357,50 +357,39 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
   const auto& nodes = mesh.nodes();
   const RelativeFrame same;  // cubes are already carried into the link frame
   double bound = upper_bound;
-  struct Item {
-    double lower;
-    Cube cube;
-    std::int32_t node;
-  };
-  std::vector<Item> stack{{0.0, *root, 0}};
-  std::vector<Item> children;
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    if (it.lower >= bound) continue;
-    const BvhNode<Obb>& n = nodes[it.node];
-    const bool cube_leaf = tree.is_leaf(it.cube.node);
-    if (cube_leaf && n.is_leaf()) {
-      const Vec3 lo = frame.lo(it.cube), hi = frame.hi(it.cube);
-      for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
-        const Triangle t = in_world(mesh.triangles()[i], pose);
-        if (bounds_gap(t, lo, hi) >= bound) continue;
-        ++s.primitive_tests;
-        Vec3 on_t, on_b;
-        const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
-        if (d < bound) {
-          bound = d;
-          best = {d, on_t, on_b, frame.leaf(it.cube)};
+  nearest_first_pair_walk(
+      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh}, *root, std::int32_t{0}, 0.0,
+      [&](const Cube& c, std::int32_t node) {
+        ++s.volume_tests;
+        return distance_lower_bound(nodes[node].volume, frame.box(c), same);
+      },
+      [&](const Cube& cube, std::int32_t node) {  // a leaf cube and a leaf node: their triangles
+        const BvhNode<Obb>& n = nodes[node];
+        const Vec3 lo = frame.lo(cube), hi = frame.hi(cube);
+        for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
+          const Triangle t = in_world(mesh.triangles()[i], pose);
+          if (bounds_gap(t, lo, hi) >= bound) continue;
+          ++s.primitive_tests;
+          Vec3 on_t, on_b;
+          const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
+          if (d < bound) {
+            bound = d;
+            best = {d, on_t, on_b, frame.leaf(cube)};
+          }
         }
-      }
-      continue;
-    }
-    children.clear();
-    auto add = [&](const Cube& c, std::int32_t node) {
-      ++s.volume_tests;
-      const double lower = distance_lower_bound(nodes[node].volume, frame.box(c), same);
-      if (lower < bound) children.push_back({lower, c, node});
-    };
-    if (!cube_leaf && (n.is_leaf() || 0.5 * std::sqrt(3.0) * tree.cube_size(it.cube.depth) > n.size)) {
-      frame.for_children(it.cube, [&](const Cube& c) { add(c, it.node); });
-    } else {
-      add(it.cube, n.left);
-      add(it.cube, n.right);
-    }
-    // Nearest on top, so that a small bound comes early and prunes the rest.
-    std::sort(children.begin(), children.end(), [](const Item& a, const Item& b) { return a.lower > b.lower; });
-    stack.insert(stack.end(), children.begin(), children.end());
-  }
+        return false;
+      },
+      [&](const Cube& cube, std::int32_t node, auto&& push) {
+        // Descend the larger of the two (a leaf cannot be descended).
+        const BvhNode<Obb>& n = nodes[node];
+        if (!tree.is_leaf(cube.node) && (n.is_leaf() || 0.5 * std::sqrt(3.0) * tree.cube_size(cube.depth) > n.size)) {
+          frame.for_children(cube, [&](const Cube& c) { push(c, node); });
+        } else {
+          push(cube, n.left);
+          push(cube, n.right);
+        }
+      },
+      [&] { return bound; });
   if (solids && best.distance > 0.0) {
     if (const auto inside = cube_inside_solid(mesh, pose, frame, WorldVolumes::for_query(mesh, pose), &s)) {
       const Vec3 centre = pose * frame.box(*inside).center;

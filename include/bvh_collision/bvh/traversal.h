@@ -2,7 +2,8 @@
 // a pair of them (collision, distance, containment, rays, a primitive against a mesh) is one of
 // these four with its own callbacks, so the order of descent, the stack and the pruning rule live
 // here and nowhere else. The two depth-first ones are the generic walks of geometry/tree_walk.h
-// over a BvhView; the bounded ones keep their own order (nearest first, best first).
+// over a BvhView, and so is nearest_first; best_first_pair keeps a heap (always the nearest pair
+// of all, not of one node's children).
 //
 //   depth_first(bvh, visit, leaf, left_first)          visit(node) -> Visit, leaf(node) -> stop?
 //   nearest_first(bvh, bound, leaf, cutoff)            bound(i) -> double, cutoff() -> double
@@ -17,6 +18,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +47,7 @@ bool split_first_of_pair(const BvhNode<BV>& na, const BvhNode<BV>& nb) {
 template <class BV, class OrderFn = LeftFirst>
 struct BvhView {
   using Node = std::int32_t;
+  static constexpr std::size_t kMaxChildren = 2;
   const Bvh<BV>& bvh;
   OrderFn left_first;
   bool is_leaf(Node i) const { return bvh.nodes()[i].is_leaf(); }
@@ -74,26 +77,8 @@ void depth_first(const Bvh<BV>& bvh, VisitFn&& visit, LeafFn&& leaf, OrderFn&& l
 template <class BV, class BoundFn, class LeafFn, class CutoffFn>
 void nearest_first(const Bvh<BV>& bvh, BoundFn&& bound, LeafFn&& leaf, CutoffFn&& cutoff) {
   if (bvh.empty()) return;
-  struct Entry {
-    std::int32_t node;
-    double bound;
-  };
-  TraversalStack<Entry> stack;
-  stack.push({0, bound(0)});
-  while (!stack.empty()) {
-    const Entry e = stack.pop();
-    if (!(e.bound < cutoff())) continue;
-    const BvhNode<BV>& n = bvh.nodes()[e.node];
-    if (n.is_leaf()) {
-      if (leaf(n)) return;
-      continue;
-    }
-    Entry far{n.left, bound(n.left)}, near{n.right, bound(n.right)};
-    if (far.bound < near.bound) std::swap(far, near);
-    const double limit = cutoff();
-    if (far.bound < limit) stack.push(far);
-    if (near.bound < limit) stack.push(near);
-  }
+  const auto& nodes = bvh.nodes();
+  nearest_first_walk(BvhView<BV>{bvh}, 0, bound, [&](std::int32_t i) { return leaf(nodes[i]); }, cutoff);
 }
 
 // Depth first over the pairs of two hierarchies from their roots. `visit(ia, ib)` decides for

@@ -6,6 +6,13 @@
 //   depth_first_walk(view, root, visit, leaf)                     visit(n) -> Visit, leaf(n) -> stop?
 //   depth_first_pair_walk(va, vb, ra, rb, visit, leaf, expand)    visit(a, b) -> Visit, leaf(a, b) -> stop?,
 //                                                                 expand(a, b, push(a', b'))
+//   nearest_first_walk(view, root, bound, leaf, cutoff)           bound(n) -> double, cutoff() -> double
+//   nearest_first_pair_walk(va, vb, ra, rb, root_bound, bound, leaf, expand, cutoff)
+//
+// The nearest-first walks are the bounded ones (distances): a node (pair) whose bound is not
+// below cutoff() is never entered, and of an entered node's children the nearest is walked
+// first, so that a small cutoff comes early and prunes the rest (cutoff() may fall as the leaves
+// find answers). Their views also give kMaxChildren, the most children a node has.
 //
 // A view offers `Node` (a small trivially copyable handle: an index, a cube), `is_leaf(node)` and
 // `children(node, f)`, which calls f(child) for each child in push order: the last one pushed is
@@ -15,6 +22,9 @@
 // stack for the usual depths; geometry/traversal_stack.h). Header-only: the callbacks are
 // lambdas, inlined into each query's loop.
 #pragma once
+
+#include <cstddef>
+#include <utility>
 
 #include "bvh_collision/geometry/traversal_stack.h"
 
@@ -66,6 +76,87 @@ void depth_first_pair_walk(const ViewA& va, const ViewB& vb, const typename View
       continue;
     }
     expand(p.a, p.b, [&](const typename ViewA::Node& a, const typename ViewB::Node& b) { stack.push(Pair{a, b}); });
+  }
+}
+
+namespace detail {
+
+// The children of an entered node, kept below `limit` and pushed farthest first (the nearest on
+// top). At most N of them.
+template <class Entry, std::size_t N>
+class NearestFirstChildren {
+ public:
+  void add(const Entry& e, double limit) {
+    if (e.bound < limit) entries_[count_++] = e;
+  }
+  template <class Stack>
+  void push_to(Stack& stack) {
+    // Insertion sort by bound, farthest first: at most a few entries.
+    for (std::size_t i = 1; i < count_; ++i) {
+      for (std::size_t j = i; j > 0 && entries_[j - 1].bound < entries_[j].bound; --j) std::swap(entries_[j - 1], entries_[j]);
+    }
+    for (std::size_t i = 0; i < count_; ++i) stack.push(entries_[i]);
+  }
+
+ private:
+  Entry entries_[N];
+  std::size_t count_ = 0;
+};
+
+}  // namespace detail
+
+// Nearest first from `root`, pruned by `bound(node)` against `cutoff()`; a leaf goes to
+// `leaf(node)`, which may lower the cutoff and returns true to stop.
+template <template <class> class Stack = DefaultTraversalStack, class View, class BoundFn, class LeafFn, class CutoffFn>
+void nearest_first_walk(const View& view, const typename View::Node& root, BoundFn&& bound, LeafFn&& leaf, CutoffFn&& cutoff) {
+  struct Entry {
+    typename View::Node node;
+    double bound;
+  };
+  Stack<Entry> stack;
+  stack.push(Entry{root, bound(root)});
+  while (!stack.empty()) {
+    const Entry e = stack.pop();
+    if (!(e.bound < cutoff())) continue;
+    if (view.is_leaf(e.node)) {
+      if (leaf(e.node)) return;
+      continue;
+    }
+    detail::NearestFirstChildren<Entry, View::kMaxChildren> children;
+    const double limit = cutoff();
+    view.children(e.node, [&](const typename View::Node& c) { children.add(Entry{c, bound(c)}, limit); });
+    children.push_to(stack);
+  }
+}
+
+// Nearest first over pairs from (ra, rb), whose bound is `root_bound`: `expand(a, b, push)` names
+// the child pairs of an entered pair that is not two leaves, each bounded by `bound(a', b')` and
+// walked nearest first; a pair of leaves goes to `leaf(a, b)` (true: stop).
+template <template <class> class Stack = DefaultTraversalStack, class ViewA, class ViewB, class BoundFn, class LeafFn,
+          class ExpandFn, class CutoffFn>
+void nearest_first_pair_walk(const ViewA& va, const ViewB& vb, const typename ViewA::Node& ra, const typename ViewB::Node& rb,
+                             double root_bound, BoundFn&& bound, LeafFn&& leaf, ExpandFn&& expand, CutoffFn&& cutoff) {
+  struct Entry {
+    typename ViewA::Node a;
+    typename ViewB::Node b;
+    double bound;
+  };
+  constexpr std::size_t kChildren = ViewA::kMaxChildren > ViewB::kMaxChildren ? ViewA::kMaxChildren : ViewB::kMaxChildren;
+  Stack<Entry> stack;
+  stack.push(Entry{ra, rb, root_bound});
+  while (!stack.empty()) {
+    const Entry e = stack.pop();
+    if (!(e.bound < cutoff())) continue;
+    if (va.is_leaf(e.a) && vb.is_leaf(e.b)) {
+      if (leaf(e.a, e.b)) return;
+      continue;
+    }
+    detail::NearestFirstChildren<Entry, kChildren> children;
+    const double limit = cutoff();
+    expand(e.a, e.b, [&](const typename ViewA::Node& a, const typename ViewB::Node& b) {
+      children.add(Entry{a, b, bound(a, b)}, limit);
+    });
+    children.push_to(stack);
   }
 }
 

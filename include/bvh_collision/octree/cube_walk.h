@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -68,6 +69,7 @@ void for_occupied_children(const Octree& tree, const OctreeCube& c, F&& f, std::
 template <class MaskFn = AllChildren>
 struct OccupiedCubeView {
   using Node = OctreeCube;
+  static constexpr std::size_t kMaxChildren = 8;
   const Octree& tree;
   MaskFn which;
   bool is_leaf(const OctreeCube& c) const { return tree.is_leaf(c.node); }
@@ -99,24 +101,7 @@ void descend_while(const Octree& tree, const OctreeCube& start, VisitFn&& visit,
 template <class BoundFn, class LeafFn, class CutoffFn>
 void nearest_cubes_first(const Octree& tree, const OctreeCube& start, BoundFn&& bound, LeafFn&& leaf,
                          CutoffFn&& cutoff) {
-  std::vector<std::pair<double, OctreeCube>> stack{{bound(start), start}}, children;
-  while (!stack.empty()) {
-    const auto [lower, c] = stack.back();
-    stack.pop_back();
-    if (!(lower < cutoff())) continue;
-    if (tree.is_leaf(c.node)) {
-      if (leaf(c)) return;
-      continue;
-    }
-    children.clear();
-    for_occupied_children(tree, c, [&](const OctreeCube& child) {
-      const double d = bound(child);
-      if (d < cutoff()) children.emplace_back(d, child);
-    });
-    // Nearest on top, so that a small cutoff comes early and prunes the rest.
-    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    stack.insert(stack.end(), children.begin(), children.end());
-  }
+  nearest_first_walk(OccupiedCubeView<>{tree, {}}, start, bound, leaf, cutoff);
 }
 
 // Orders of a cube's children by seed child bits b: the seed's (b = 0 first) and OctoMap's (its x
@@ -128,6 +113,7 @@ inline constexpr std::array<std::uint8_t, 8> kOctomapChildOrder{0, 4, 2, 6, 1, 5
 // of a node in `order`.
 struct OctreeNodeView {
   using Node = OctreeCube;
+  static constexpr std::size_t kMaxChildren = 8;
   const Octree& tree;
   const std::array<std::uint8_t, 8>& order;
   bool is_leaf(const OctreeCube& c) const { return tree.is_leaf(c.node); }
