@@ -136,12 +136,14 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
   posed.state = state;
   m.kinematics().compute(state, posed.poses);
   posed.centres.resize(posed.poses.size());
+  posed.centre_norms.resize(posed.poses.size());
   const bool moved = !root_at_origin_;
   for (const int l : links_) {
     if (moved) posed.poses[l] = options_.root_pose * posed.poses[l];
     const Transform& pose = posed.poses[l];
     const Vec3& c = m.bounds()[l].center;
     for (int i = 0; i < 3; ++i) posed.centres[l][i] = pose.R(i, 0) * c[0] + pose.R(i, 1) * c[1] + pose.R(i, 2) * c[2] + pose.t[i];
+    posed.centre_norms[l] = posed.centres[l].norm();
   }
 }
 
@@ -190,7 +192,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   const double pads = m.paddings()[a] + m.paddings()[b] + grow;
   const Vec3& ca = s.centres[a];
   const Vec3& cb = s.centres[b];
-  const double margin = pose_margin(ca.norm() + cb.norm() + bounds[a].radius + bounds[b].radius);
+  const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
   const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
   if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
   const bool gridded = m.pair_clearance().has_grid(p);
@@ -302,7 +304,7 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
   const RobotCollisionModel& m = checker_.collision_model();
   const double pad = m.paddings()[l] + s.grow(l);
   const Vec3& c = s.centres[l];
-  if (field_ && field_->lower_bound(c) > grown_radius(m.bounds()[l].radius + pad) + pose_margin(c.norm() + m.bounds()[l].radius)) {
+  if (field_ && field_->lower_bound(c) > grown_radius(m.bounds()[l].radius + pad) + pose_margin(s.centre_norms[l] + m.bounds()[l].radius)) {
     return Answer::kFree;
   }
   const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {

@@ -86,6 +86,7 @@ class SceneChecker {
     const double* state = nullptr;
     std::vector<Transform> poses;
     std::vector<Vec3> centres;
+    std::vector<double> centre_norms;  // |centre| per link, for the rounding margins
     const double* growth = nullptr;
     const double* pair_growth = nullptr;  // per checked pair: how far its links' distance can fall
     const double* from = nullptr;         // the interval's end states (with growth)
