@@ -1,0 +1,39 @@
+// What the environment benchmark's two units share (bench_environment.cpp, the insertion,
+// octree and clutter tables; bench_environment_world.cpp, the self filter and the snapshots):
+// the run's sizes and the depth camera's table scene.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bvh_collision/octree/octree.h"
+#include "bvh_collision/octree/scan.h"
+
+namespace bvh_collision::environment_bench {
+
+struct Sizes {
+  std::size_t runs, states;
+  int width, height;  // the camera's rays
+  std::vector<double> resolutions;
+  std::vector<int> clutter;  // box counts for the growth curve
+  std::size_t motions;       // random motions of the motion table
+};
+
+// The distance along a ray (unit direction) to something more in the scene than the boxes, if
+// nearer than `best`: the robot, for the self-filter figures.
+using ExtraHit = std::function<double(const Vec3& origin, const Vec3& direction, double best)>;
+
+// A depth camera (600 x 500 rays unless told, 70 x 58 degrees) above and behind a robot, looking
+// at a table with boxes on it, a floor and a wall; 2 mm depth noise; rays that hit nothing
+// return NaN.
+std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr, int width = 600, int height = 500);
+std::size_t occupied_voxels(const Octree& tree);
+
+// The self filter on the table scene with panda reaching over the table, and the shared
+// snapshots of a changing map (bench_environment_world.cpp).
+void self_filter(const Vec3& camera, double resolution, double padding, const Sizes& sizes, const std::string& dir);
+void snapshot_table(const Sizes& sizes, const std::string& dir);
+
+}  // namespace bvh_collision::environment_bench
