@@ -199,13 +199,15 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   if (gridded && m.pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
   // A grid that cannot bound the pair here puts it within a few centimetres (its cell's reach):
   // coarser levels then fail where the finest does, so only the finest worth walking is walked.
-  const ProxyLevel* finest = nullptr;
-  for (const ProxyLevel* level : proxies_) finest = worth(level, grow) ? level : finest;
-  const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
-    return worth(level, grow) && (!gridded || level == finest) &&
-           !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
-  });
-  if (apart) return Answer::kFree;
+  auto apart_at = [&](const ProxyLevel* level) {
+    return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
+  };
+  if (gridded) {
+    const auto finest = std::find_if(proxies_.rbegin(), proxies_.rend(), [&](const ProxyLevel* l) { return worth(l, grow); });
+    if (finest != proxies_.rend() && apart_at(*finest)) return Answer::kFree;
+  } else if (std::any_of(proxies_.begin(), proxies_.end(), apart_at)) {
+    return Answer::kFree;
+  }
   if (s.growth != nullptr) {
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
     if (!exact_distance_pays(s, grow, level_)) return s.no_free_radius();
