@@ -305,7 +305,7 @@ void speed_error_octree_table(const std::vector<ScanPoint>& scan, const Vec3& ca
     for (const auto& [mode, hits, times] : {std::tuple{"single", &single, &t_single}, std::tuple{"batch", &many, &t_batch}}) {
       const bench::AnswerErrors e = bench::answer_errors(*hits, distance);
       // The level an environment check at this tolerance answers from (up to twice it).
-      const ProxyLevel* level = checker.collision_model().proxies_for(2.0 * one.tolerance);
+      const ProxyLevel* level = checker.accelerators().proxies_for(2.0 * one.tolerance);
       table.row({"panda", "octree", mm, mode, bench::spread(*times).median, 100.0 * e.false_positives / n,
                  static_cast<double>(e.false_negatives), e.farthest_false_positive * 1000, exact.fcl.median,
                  level ? level->level * 1000 : 0.0, level ? double(level->leaves) : 0.0, level ? level->build_seconds : 0.0});

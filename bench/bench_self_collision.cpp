@@ -452,7 +452,7 @@ void proxy_proof_rows(const Robot& robot, const CollisionChecker& checker, std::
       truth[i] = checker.check_self((*states)[i].data(), exact).min_distance;
       colliding += truth[i] <= 0.0;
     }
-    for (const ProxyLevel& level : checker.collision_model().proxy_levels()) {
+    for (const ProxyLevel& level : checker.accelerators().proxy_levels()) {
       std::size_t fn = 0, beyond = 0, fp = 0;
       double farthest = 0.0;
       for (std::size_t i = 0; i < states->size(); ++i) {
@@ -516,7 +516,7 @@ void speed_error_rows(const Robot& robot, FclPipeline& fcl_pipeline, const std::
       }));
     }
     const Spread batch_time = bench::spread(runs);
-    const ProxyLevel* level = checker.collision_model().proxies_for(tolerances_mm[t] * 1e-3);
+    const ProxyLevel* level = checker.accelerators().proxies_for(tolerances_mm[t] * 1e-3);
     for (const auto& [mode, hits, time] : {std::tuple{"single", &single[t], times[t]}, std::tuple{"batch", &batch[t], batch_time}}) {
       const bench::AnswerErrors e = bench::answer_errors(*hits, truth);
       table.row({robot.name, "self", tolerances_mm[t], mode, time.median, 100.0 * e.false_positives / n,
@@ -572,7 +572,7 @@ int main(int argc, char** argv) {
   proof.write(bench::output_dir(argc, argv));
   speed_error.note("Uniform random states (the same as section 1), SRDF matrix, solids; the truth is our exact solid "
                    "distance. Tolerance 0 is the exact check; at tolerance t the coarsest proxy level e <= t answers "
-                   "(checker/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
+                   "(narrowphase/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
                    "clearance grid clears the padding (checker/pair_clearance.h). batch: check_batch over all states on "
                    "the shared thread pool (" + std::to_string(ThreadPool::shared().capacity()) +
                    " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (checker/proxy_batch.h, " +

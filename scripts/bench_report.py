@@ -427,7 +427,7 @@ def build_report(tables, bench_dir, quick):
             "missed collisions (never allowed).", "", headline_self(tables), "",
             f"![self-collision against tolerance]({plot_self(tables, plots_dir, 'tolerance')})", ""]
     out += [markdown(need(tables, f"self_tolerance_{r}")) for r in ROBOTS]
-    out += ["Solids, the node's default, with the link proxies (checker/link_proxy.h) answering at tolerances "
+    out += ["Solids, the node's default, with the link proxies (narrowphase/link_proxy.h) answering at tolerances "
             "from their level up; `build/bench/tables/speed_error.json` holds these rows.", "",
             markdown(need(tables, "speed_error")), markdown(need(tables, "proxy_proof")),
             markdown(need(tables, "motion_speed_error"))]

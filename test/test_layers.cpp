@@ -25,12 +25,13 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"bvh", {"geometry", "bvh"}},
     {"octree", {"geometry", "octree"}},
     {"robot", {"geometry", "bvh", "robot"}},
-    {"checker", {"geometry", "bvh", "octree", "robot", "checker"}},
-    {"planning", {"geometry", "bvh", "octree", "robot", "checker", "planning"}},
-    {"ros", {"geometry", "bvh", "octree", "robot", "checker", "planning", "ros"}},
-    {"nodes", {"geometry", "bvh", "octree", "robot", "checker", "planning", "ros"}},
+    {"narrowphase", {"geometry", "bvh", "octree", "narrowphase"}},
+    {"checker", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker"}},
+    {"planning", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning"}},
+    {"ros", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning", "ros"}},
+    {"nodes", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning", "ros"}},
 };
-const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "checker"};
+const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "narrowphase", "checker"};
 
 struct Include {
   std::string file;
@@ -127,6 +128,63 @@ TEST(Layers, CoreIncludesNoRosHeaderAndOctomapOnlyInTheBridge) {
       }
     }
   }
+}
+
+// One dispatch over the kinds of collidable things, in narrowphase/: above it no code tests what
+// kind a shape is (a primitive's kind, a mesh index or pointer), it hands the shape to the engine.
+// The one exception is where the world model turns a described object (ObjectShape) into the
+// engine's geometry: checker/environment.h and .cpp.
+std::vector<std::string> kind_tests_in(const fs::path& file) {
+  static const std::vector<std::regex> kinds = {
+      std::regex(R"(Primitive::Kind::)"), std::regex(R"(ShapeKind::)"), std::regex(R"(\.mesh\s*(>=|<|>)\s*-?[01]\b)"),
+      std::regex(R"(\bmesh(\.get\(\))?\s*(==|!=)\s*nullptr)"), std::regex(R"(!\s*[\w.>-]*\bmesh\b\s*(\)|\|\||&&|\?))"),
+      std::regex(R"([\w.>-]*\bmesh\s*\?)")};
+  static const std::regex described(R"(ObjectShape::Kind::)");
+  const bool world_model = file.filename() == "environment.cpp" || file.filename() == "environment.h";
+  std::vector<std::string> out;
+  std::ifstream in(file);
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    const std::string code = text.substr(0, text.find("//"));
+    bool found = !world_model && std::regex_search(code, described);
+    for (const std::regex& re : kinds) found = found || (!world_model && std::regex_search(code, re));
+    if (found) out.push_back(file.string() + ":" + std::to_string(line) + ": " + text);
+  }
+  return out;
+}
+
+TEST(Layers, NoShapeKindTestAboveTheNarrowphase) {
+  const auto layers = files_by_layer();
+  ASSERT_TRUE(layers.count("narrowphase")) << "no narrowphase layer";
+  std::size_t scanned = 0;
+  for (const std::string layer : {"checker", "planning", "ros", "nodes"}) {
+    if (!layers.count(layer)) continue;
+    for (const auto& file : layers.at(layer)) {
+      ++scanned;
+      for (const std::string& hit : kind_tests_in(file)) ADD_FAILURE() << "a kind test outside narrowphase/: " << hit;
+    }
+  }
+  EXPECT_GT(scanned, 40u);
+}
+
+TEST(Layers, KindTestFinderFindsTheFormsItLooksFor) {
+  // The check above is only as good as this finder: the forms the old dispatch by hand used.
+  const fs::path probe = fs::temp_directory_path() / "bvh_collision_kind_probe.cpp";
+  {
+    std::ofstream out(probe);
+    out << "if (s.mesh >= 0) {}\n"
+        << "} else if (s.primitive.kind != Primitive::Kind::kSphere) {\n"
+        << "if (!object.mesh) {\n"
+        << "s.primitive = o.mesh == nullptr || o.shape.kind == ObjectShape::Kind::kBox;\n"
+        << "x = o.mesh ? 1 : 2;\n"
+        << "const double d = inscribed_depth(prim, p);  // a plain call: no kind test\n"
+        << "// if (s.mesh < 0) in a comment is not code\n";
+  }
+  const std::vector<std::string> hits = kind_tests_in(probe);
+  fs::remove(probe);
+  ASSERT_EQ(hits.size(), 5u);
+  EXPECT_NE(hits[0].find(":1:"), std::string::npos);
+  EXPECT_NE(hits[4].find(":5:"), std::string::npos);
 }
 
 TEST(Layers, IncludeCheckRecognisesRosHeaders) {

@@ -1,4 +1,4 @@
-// Bounded-error link proxies (checker/link_proxy.h), checked independently of how they were
+// Bounded-error link proxies (narrowphase/link_proxy.h), checked independently of how they were
 // built: (a) every vertex, a dense grid of points on every triangle and a grid of points inside
 // the solid lie in some leaf sphere (brute force over the leaves); (b) every leaf sphere's centre
 // and 200 points of its boundary (where a ball's farthest point from a set lies) are within the
@@ -16,8 +16,8 @@
 #include <unistd.h>
 
 #include "bvh_collision/bvh/queries.h"
-#include "bvh_collision/checker/link_proxy.h"
-#include "bvh_collision/checker/link_proxy_cache.h"
+#include "bvh_collision/narrowphase/link_proxy.h"
+#include "bvh_collision/narrowphase/link_proxy_cache.h"
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/distance.h"
 #include "checker_fixtures.h"
@@ -70,9 +70,7 @@ void check_tree(const LinkProxy& p) {
 void check_mesh_proxy(const TriangleMesh& mesh, double level) {
   const Bvh<Obb> bvh = Bvh<Obb>::build(mesh);
   const bool solid = bvh.closed();  // an open mesh is its surface: no interior points
-  std::vector<LinkShape> shapes(1);
-  shapes[0].mesh = 0;
-  const LinkProxy proxy = LinkProxy::build(shapes, {bvh}, level);
+  const LinkProxy proxy = LinkProxy::build({BodyShape{ShapeRef{&bvh, nullptr, Primitive{}}, Transform()}}, level);
   ASSERT_FALSE(proxy.empty());
   EXPECT_LE(proxy.hausdorff_bound(), 0.5 * level);
   check_tree(proxy);
@@ -141,10 +139,10 @@ TEST(LinkProxy, PrimitivesAreCoveredWithinTheBound) {
   const Primitive prims[] = {Primitive::box(Vec3(0.1, 0.04, 0.2)), Primitive::cylinder(0.03, 0.15),
                              Primitive::capsule(0.02, 0.1), Primitive::sphere(0.05)};
   for (const Primitive& prim : prims) {
-    std::vector<LinkShape> shapes(1);
-    shapes[0].primitive = prim;
+    std::vector<BodyShape> shapes(1);
+    shapes[0].shape.primitive = prim;
     shapes[0].origin = Transform{Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()).toRotationMatrix(), Vec3(0.1, 0, 0)};
-    const LinkProxy proxy = LinkProxy::build(shapes, {}, 0.01);
+    const LinkProxy proxy = LinkProxy::build(shapes, 0.01);
     check_tree(proxy);
     const std::vector<ProxySphere> ls = leaves(proxy);
     const Transform to_shape = shapes[0].origin.inverse();
@@ -173,9 +171,7 @@ TEST(LinkProxy, PrimitivesAreCoveredWithinTheBound) {
 TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
   const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
   const Bvh<Obb> finger = Bvh<Obb>::build(test::robot_mesh(dir + "finger.stl"));
-  std::vector<LinkShape> shapes(1);
-  shapes[0].mesh = 0;
-  const LinkProxy proxy = LinkProxy::build(shapes, {finger}, 0.01);
+  const LinkProxy proxy = LinkProxy::build({BodyShape{ShapeRef{&finger, nullptr, Primitive{}}, Transform()}}, 0.01);
   const std::vector<ProxySphere> ls = leaves(proxy);
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-0.06, 0.06);
@@ -208,11 +204,11 @@ TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {
     proxy_options.proxy_levels = kLevels;
     const CollisionChecker exact = test::load_checker("panda", exact_options);
     const CollisionChecker proxied = test::load_checker("panda", proxy_options);
-    ASSERT_EQ(proxied.collision_model().proxy_levels().size(), kLevels.size());
-    EXPECT_EQ(proxied.collision_model().proxies_for(0.009), nullptr);
-    EXPECT_EQ(proxied.collision_model().proxies_for(0.5)->level, 0.02);
+    ASSERT_EQ(proxied.accelerators().proxy_levels().size(), kLevels.size());
+    EXPECT_EQ(proxied.accelerators().proxies_for(0.009), nullptr);
+    EXPECT_EQ(proxied.accelerators().proxies_for(0.5)->level, 0.02);
     if (kLevels.size() > 1) {
-      EXPECT_EQ(proxied.collision_model().proxies_for(0.015)->level, 0.01);
+      EXPECT_EQ(proxied.accelerators().proxies_for(0.015)->level, 0.01);
     }
     std::mt19937_64 rng(11);
     int near = 0, collide = 0;
@@ -258,7 +254,7 @@ TEST(LinkProxyCache, ASecondBuildReadsWhatTheFirstStored) {
   options.proxy_levels = {0.02};
   options.proxy_cache = folder.string();
   const CollisionChecker first = test::demo_arm_checker(options);
-  const ProxyLevel& built = first.collision_model().proxy_levels().front();
+  const ProxyLevel& built = first.accelerators().proxy_levels().front();
   std::size_t with_geometry = 0;
   for (const LinkProxy& p : built.links) with_geometry += !p.empty();
   ASSERT_GT(with_geometry, 0u);
@@ -270,7 +266,7 @@ TEST(LinkProxyCache, ASecondBuildReadsWhatTheFirstStored) {
   ASSERT_FALSE(files.empty());
 
   const CollisionChecker second = test::demo_arm_checker(options);
-  const ProxyLevel& read = second.collision_model().proxy_levels().front();
+  const ProxyLevel& read = second.accelerators().proxy_levels().front();
   EXPECT_EQ(read.links_from_cache, with_geometry);
   ASSERT_EQ(read.links.size(), built.links.size());
   for (std::size_t l = 0; l < built.links.size(); ++l) {
@@ -307,12 +303,12 @@ TEST(LinkProxyCache, ASecondBuildReadsWhatTheFirstStored) {
   for (const std::string& b : bad) {
     put(files[0], b);
     const CollisionChecker again = test::demo_arm_checker(options);
-    EXPECT_LT(again.collision_model().proxy_levels().front().links_from_cache, with_geometry);
+    EXPECT_LT(again.accelerators().proxy_levels().front().links_from_cache, with_geometry);
     EXPECT_EQ(bytes(files[0]), good) << "a file that did not check out is replaced by the one built";
   }
   // Another level: other keys, nothing read.
   options.proxy_levels = {0.01};
-  EXPECT_EQ(test::demo_arm_checker(options).collision_model().proxy_levels().front().links_from_cache, 0u);
+  EXPECT_EQ(test::demo_arm_checker(options).accelerators().proxy_levels().front().links_from_cache, 0u);
   fs::remove_all(folder);
 }
 
@@ -321,18 +317,18 @@ TEST(LinkProxyCache, KeysTellEveryNumberOfTheGeometryApart) {
   const RobotCollisionModel& m = checker.collision_model();
   std::size_t link = 0;
   while (m.shapes()[link].empty()) ++link;
-  std::vector<LinkShape> shapes = m.shapes()[link];
-  const std::uint64_t key = link_proxy_key(shapes, m.meshes(), 0.01);
-  EXPECT_EQ(link_proxy_key(shapes, m.meshes(), 0.01), key);
-  EXPECT_NE(link_proxy_key(shapes, m.meshes(), 0.0100000001), key);
+  std::vector<BodyShape> shapes = m.placed_shapes(static_cast<int>(link));
+  const std::uint64_t key = link_proxy_key(shapes, 0.01);
+  EXPECT_EQ(link_proxy_key(shapes, 0.01), key);
+  EXPECT_NE(link_proxy_key(shapes, 0.0100000001), key);
   shapes[0].origin.t.x() += 1e-12;
-  EXPECT_NE(link_proxy_key(shapes, m.meshes(), 0.01), key);
-  shapes = m.shapes()[link];
-  if (shapes[0].mesh < 0) {
-    shapes[0].primitive.radius *= 1.000001;
-    shapes[0].primitive.half *= 1.000001;
-    shapes[0].primitive.half_length *= 1.000001;
-    EXPECT_NE(link_proxy_key(shapes, m.meshes(), 0.01), key);
+  EXPECT_NE(link_proxy_key(shapes, 0.01), key);
+  shapes = m.placed_shapes(static_cast<int>(link));
+  if (shapes[0].shape.mesh == nullptr) {
+    shapes[0].shape.primitive.radius *= 1.000001;
+    shapes[0].shape.primitive.half *= 1.000001;
+    shapes[0].shape.primitive.half_length *= 1.000001;
+    EXPECT_NE(link_proxy_key(shapes, 0.01), key);
   }
 }
 

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/detail/shape_pairs.h"
+#include "bvh_collision/narrowphase/shape_pairs.h"
 #include "checker_fixtures.h"
 #include "robot_data.h"
 
@@ -33,7 +33,7 @@ double exact_distance(const RobotCollisionModel& m, int a, int b, const double* 
   for (const LinkShape& sa : m.shapes()[a]) {
     for (const LinkShape& sb : m.shapes()[b]) {
       Vec3 wa, wb;
-      best = std::min(best, detail::shapes_distance(m.ref(sa), poses[a] * sa.origin, m.ref(sb), poses[b] * sb.origin, best, true,
+      best = std::min(best, shapes_distance(m.ref(sa), poses[a] * sa.origin, m.ref(sb), poses[b] * sb.origin, best, true,
                                                     wa, wb, stats));
     }
   }
@@ -45,7 +45,7 @@ double exact_distance(const RobotCollisionModel& m, int a, int b, const double* 
 std::vector<std::vector<double>> stress_states(const CollisionChecker& c, int count, std::mt19937_64& rng) {
   std::vector<std::vector<double>> out;
   for (int i = 0; i < count; ++i) out.push_back(random_configuration(c.model(), rng));
-  const auto& grids = c.collision_model().pair_clearance().grids();
+  const auto& grids = c.accelerators().pair_clearance().grids();
   for (int i = 0; i < count; ++i) {
     std::vector<double> s = random_configuration(c.model(), rng);
     const PairClearanceGrid& g = grids[static_cast<std::size_t>(i) % grids.size()];
@@ -66,12 +66,13 @@ TEST_P(PairClearanceOnRobot, BoundsNeverExceedTheExactDistance) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker(GetParam());
   const RobotCollisionModel& m = c.collision_model();
-  ASSERT_FALSE(m.pair_clearance().grids().empty()) << GetParam() << ": no pair has a grid";
+  const PairClearance& grids = c.accelerators().pair_clearance();
+  ASSERT_FALSE(grids.grids().empty()) << GetParam() << ": no pair has a grid";
   std::mt19937_64 rng(41);
   std::size_t bounded = 0;
   for (const auto& s : stress_states(c, test::sized(1500), rng)) {
-    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
-      const double bound = m.pair_clearance().lower_bound(g.pair, s.data());
+    for (const PairClearanceGrid& g : grids.grids()) {
+      const double bound = grids.lower_bound(g.pair, s.data());
       if (!std::isfinite(bound)) continue;
       ++bounded;
       const auto [a, b] = m.checked_pairs()[g.pair];
@@ -91,6 +92,7 @@ TEST_P(PairClearanceOnRobot, BoundsOverASegmentNeverExceedTheExactDistance) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker(GetParam());
   const RobotCollisionModel& m = c.collision_model();
+  const PairClearance& grids = c.accelerators().pair_clearance();
   std::mt19937_64 rng(43);
   std::uniform_real_distribution<double> step(-0.15, 0.15);
   std::size_t bounded = 0;
@@ -98,8 +100,8 @@ TEST_P(PairClearanceOnRobot, BoundsOverASegmentNeverExceedTheExactDistance) {
     const std::vector<double> a = random_configuration(c.model(), rng);
     std::vector<double> b = a;
     for (double& v : b) v += step(rng);
-    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
-      const double bound = m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data());
+    for (const PairClearanceGrid& g : grids.grids()) {
+      const double bound = grids.lower_bound_over(g.pair, a.data(), b.data());
       if (!std::isfinite(bound)) continue;
       ++bounded;
       const auto [la, lb] = m.checked_pairs()[g.pair];
@@ -111,15 +113,15 @@ TEST_P(PairClearanceOnRobot, BoundsOverASegmentNeverExceedTheExactDistance) {
     }
   }
   EXPECT_GT(bounded, 0u);
-  const PairClearanceGrid& g = m.pair_clearance().grids().front();
+  const PairClearanceGrid& g = grids.grids().front();
   std::vector<double> a(c.model().variable_count(), 0.0), b = a;
   a[g.variable[0]] = g.lower[0];
   b[g.variable[0]] = g.lower[0] + g.cell[0] * g.cells[0];  // every cell of the first variable
   if (g.cells[0] > 64 && !g.periodic[0]) {
-    EXPECT_EQ(m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
+    EXPECT_EQ(grids.lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
   }
   b[g.variable[0]] = g.lower[0] - 1.0;  // outside the grid
-  EXPECT_EQ(m.pair_clearance().lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(grids.lower_bound_over(g.pair, a.data(), b.data()), -std::numeric_limits<double>::infinity());
 }
 
 // A skipped pair is free by the exact check of that pair alone, and whole boolean self checks
@@ -129,12 +131,13 @@ TEST_P(PairClearanceOnRobot, SkippingChangesNoAnswer) {
   const CollisionChecker with = test::load_checker(GetParam());
   const CollisionChecker without = test::load_checker(GetParam(), without_grids());
   const RobotCollisionModel& m = with.collision_model();
+  const PairClearance& grids = with.accelerators().pair_clearance();
   std::mt19937_64 rng(43);
   std::size_t skipped = 0;
   for (const auto& s : stress_states(with, test::sized(1000), rng)) {
-    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+    for (const PairClearanceGrid& g : grids.grids()) {
       const auto [a, b] = m.checked_pairs()[g.pair];
-      if (m.pair_clearance().lower_bound(g.pair, s.data()) <= m.paddings()[a] + m.paddings()[b]) continue;
+      if (grids.lower_bound(g.pair, s.data()) <= m.paddings()[a] + m.paddings()[b]) continue;
       ++skipped;
       const std::vector<std::size_t> only{g.pair};
       SelfCollisionRequest one;
@@ -157,6 +160,7 @@ TEST(PairClearance, SettlesPandasAlwaysNearPairs) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker("panda");
   const RobotCollisionModel& m = c.collision_model();
+  const PairClearance& grids = c.accelerators().pair_clearance();
   const RobotModel& robot = c.model();
   std::mt19937_64 rng(47);
   for (const auto& [x, y] : {std::pair<const char*, const char*>{"panda_link6", "panda_hand"}, {"panda_link5", "panda_link7"},
@@ -170,7 +174,7 @@ TEST(PairClearance, SettlesPandasAlwaysNearPairs) {
     int settled = 0;
     for (int i = 0; i < 1000; ++i) {
       const auto s = random_configuration(robot, rng);
-      settled += m.pair_clearance().lower_bound(pair, s.data()) > 0.0;
+      settled += grids.lower_bound(pair, s.data()) > 0.0;
     }
     EXPECT_GT(settled, 800) << x << "-" << y;
   }
@@ -180,7 +184,7 @@ TEST(PairClearance, SettlesPandasAlwaysNearPairs) {
 TEST(PairClearance, NoBoundOutsideTheGrid) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker("panda");
-  const PairClearance& table = c.collision_model().pair_clearance();
+  const PairClearance& table = c.accelerators().pair_clearance();
   ASSERT_FALSE(table.grids().empty());
   std::mt19937_64 rng(53);
   for (const PairClearanceGrid& g : table.grids()) {
@@ -215,13 +219,14 @@ TEST(PairClearance, ThreeVariableGridsForPandasForearmAndFingers) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::panda_as_moveit();
   const RobotCollisionModel& m = c.collision_model();
+  const PairClearance& grids = c.accelerators().pair_clearance();
   const RobotModel& robot = c.model();
   const int forearm = robot.link_index("panda_link5");
   std::mt19937_64 rng(59);
   for (const char* finger : {"panda_leftfinger", "panda_rightfinger"}) {
     const int f = robot.link_index(finger);
     const PairClearanceGrid* grid = nullptr;
-    for (const PairClearanceGrid& g : m.pair_clearance().grids()) {
+    for (const PairClearanceGrid& g : grids.grids()) {
       if (m.checked_pairs()[g.pair] == std::pair<int, int>(std::min(forearm, f), std::max(forearm, f))) grid = &g;
     }
     ASSERT_NE(grid, nullptr) << "panda_link5-" << finger << " has no grid";
@@ -234,7 +239,7 @@ TEST(PairClearance, ThreeVariableGridsForPandasForearmAndFingers) {
           s[grid->variable[k]] = grid->lower[k] + std::uniform_int_distribution<int>(0, grid->cells[k])(rng) * grid->cell[k];
         }
       }
-      const double bound = m.pair_clearance().lower_bound(grid->pair, s.data());
+      const double bound = grids.lower_bound(grid->pair, s.data());
       if (!std::isfinite(bound)) continue;
       ++settled;
       ASSERT_LE(bound, exact_distance(m, forearm, f, s.data(), bound + 1e-6)) << finger;
@@ -246,7 +251,7 @@ TEST(PairClearance, ThreeVariableGridsForPandasForearmAndFingers) {
       const auto a = random_configuration(robot, rng);
       auto b = a;
       for (double& v : b) v += step(rng);
-      const double bound = m.pair_clearance().lower_bound_over(grid->pair, a.data(), b.data());
+      const double bound = grids.lower_bound_over(grid->pair, a.data(), b.data());
       if (!std::isfinite(bound)) continue;
       ++over;
       for (int k = 0; k <= 20; ++k) {

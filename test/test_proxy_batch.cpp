@@ -102,7 +102,7 @@ const char* kJointKinds = R"(<robot name="kinds">
 
 void expect_poses_match(const CollisionChecker& c, int states, std::uint64_t seed) {
   const RobotCollisionModel& m = c.collision_model();
-  const ProxyBatch batch(m, ProxyLevel{});  // kinematics only: no proxy spheres
+  const ProxyBatch batch(m, PairClearance{}, ProxyLevel{});  // kinematics only: no proxy spheres
   std::mt19937_64 rng(seed);
   for (int i = 0; i < states; ++i) {
     std::vector<double> four;
@@ -113,7 +113,7 @@ void expect_poses_match(const CollisionChecker& c, int states, std::uint64_t see
       four.insert(four.end(), q.begin(), q.end());
     }
     std::vector<std::vector<double>> got;
-    for (const SimdPath p : kernels()) got.push_back(batch.poses(m, four.data(), 4, p));
+    for (const SimdPath p : kernels()) got.push_back(batch.poses(four.data(), 4, p));
     if (got.size() == 2) {
       ASSERT_EQ(got[0], got[1]) << "the SSE2 and AVX2 kernels computed different poses";
     }

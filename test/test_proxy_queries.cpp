@@ -92,7 +92,7 @@ TEST(ProxiesDistance, BoundsEveryPairWithinTheLevels) {
         exact.only_pairs = &only;
         const SelfCollisionResult r = checker.check_self(q.data(), exact);
         const double d = r.collision ? 0.0 : r.min_distance;
-        for (const ProxyLevel& level : model.proxy_levels()) {
+        for (const ProxyLevel& level : checker.accelerators().proxy_levels()) {
           const LinkProxy& pa = level.links[a];
           const LinkProxy& pb = level.links[b];
           const double bound = proxies_distance(pa, poses[a], pb, poses[b], 1e9);
@@ -126,7 +126,7 @@ TEST(ProxyClearance, LowerBoundWithinTheLevelAtTheStop) {
     const CollisionChecker checker = demo_checker(padding, kFew ? std::vector<double>{0.01} : std::vector<double>{0.005, 0.01});
     const auto field = checker.prepare_distance_field(env);
     ASSERT_NE(field, nullptr);
-    for (const ProxyLevel& level : checker.collision_model().proxy_levels()) {
+    for (const ProxyLevel& level : checker.accelerators().proxy_levels()) {
       int below_stop = 0;
       for (int i = 0; i < test::sized(250); ++i) {
         const std::vector<double> q = random_configuration(checker.model(), rng());
@@ -302,12 +302,12 @@ TEST(ProxyLevels, AddedLaterAnswerAsBuiltAtConstruction) {
   const CollisionChecker plain = demo_checker(0.0, {});
   const CollisionChecker built = demo_checker(0.0, {0.02});
   const CollisionChecker later = plain.with_proxy_level(0.02);
-  EXPECT_TRUE(plain.collision_model().proxy_levels().empty());
-  ASSERT_EQ(later.collision_model().proxy_levels().size(), 1u);
+  EXPECT_TRUE(plain.accelerators().proxy_levels().empty());
+  ASSERT_EQ(later.accelerators().proxy_levels().size(), 1u);
   const CollisionChecker both = later.with_proxy_level(0.01);
-  ASSERT_EQ(both.collision_model().proxy_levels().size(), 2u);
-  EXPECT_EQ(both.collision_model().proxy_levels()[0].level, 0.01);
-  EXPECT_EQ(both.collision_model().proxy_levels()[1].level, 0.02);
+  ASSERT_EQ(both.accelerators().proxy_levels().size(), 2u);
+  EXPECT_EQ(both.accelerators().proxy_levels()[0].level, 0.01);
+  EXPECT_EQ(both.accelerators().proxy_levels()[1].level, 0.02);
   const std::size_t n = plain.model().variable_count();
   std::vector<double> flat;
   int hits = 0;

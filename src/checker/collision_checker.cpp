@@ -52,11 +52,12 @@ struct SelfScratch {
 }  // namespace
 
 CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options)
-    : m_(std::make_shared<const RobotCollisionModel>(std::move(model), std::move(acm), options)) {}
+    : m_(std::make_shared<const RobotCollisionModel>(std::move(model), std::move(acm), options)),
+      a_(std::make_shared<const RobotAccelerators>(*m_, options)) {}
 
 bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,
                                      const SelfCollisionRequest& request, SelfCollisionResult& result) const {
-  detail::PairRequest pair;
+  PairRequest pair;
   pair.padding = m_->paddings()[a] + m_->paddings()[b];
   pair.tolerance = request.tolerance;
   pair.max_contacts = request.max_contacts;
@@ -66,7 +67,7 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   for (const LinkShape& sa : m_->shapes()[a]) {
     for (const LinkShape& sb : m_->shapes()[b]) {
       const bool want_contacts = request.max_contacts > 0 && contacts.size() < request.max_contacts;
-      if (detail::shapes_collide(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, pair,
+      if (shapes_collide(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, pair,
                                  want_contacts ? &contacts : nullptr, result.stats)) {
         hit = true;
         if (request.max_contacts == 0) return true;
@@ -84,7 +85,7 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
     for (const LinkShape& sb : m_->shapes()[b]) {
       Vec3 wa, wb;
       const double d =
-          detail::shapes_distance(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
+          shapes_distance(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
                           result.stats, request.tolerance);
       if (d < best) {
         best = d;
@@ -126,14 +127,14 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       if (d2 <= reach * reach) order.emplace_back(d2 / (reach * reach), p);
     }
     if (!request.all_pairs) std::sort(order.begin(), order.end());
-    // At a tolerance a proxy level fits, the proxies answer alone (checker/link_proxy.h): apart
+    // At a tolerance a proxy level fits, the proxies answer alone (narrowphase/link_proxy.h): apart
     // means the links are apart, overlapping means they are within padding + level.
-    const ProxyLevel* proxies = request.solids && request.max_contacts == 0 ? m_->proxies_for(request.tolerance) : nullptr;
+    const ProxyLevel* proxies = request.solids && request.max_contacts == 0 ? a_->proxies_for(request.tolerance) : nullptr;
     for (const auto& [key, p] : order) {
       const auto [a, b] = m_->checked_pairs()[p];
       // A pair whose proven clearance in this state exceeds its padding cannot collide and has
       // no contact (checker/pair_clearance.h).
-      if (m_->pair_clearance().lower_bound(p, state) > m_->paddings()[a] + m_->paddings()[b]) continue;
+      if (a_->pair_clearance().lower_bound(p, state) > m_->paddings()[a] + m_->paddings()[b]) continue;
       const bool hit = proxies ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
                                                  m_->paddings()[a] + m_->paddings()[b])
                                : pair_collides(a, b, poses, request, result);
@@ -227,14 +228,14 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
       request.environment && !env->octree().empty()
           ? octree_field(*env, request.root_pose, environment.distance_field == EnvironmentRequest::DistanceField::kBuild)
           : nullptr;
-  const ProxyLevel* proxies = request.self ? m_->proxies_for(request.tolerance) : nullptr;
+  const ProxyLevel* proxies = request.self ? a_->proxies_for(request.tolerance) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment
   // only for the states found free.
   if (proxies != nullptr && !proxies->batch.empty()) {
     constexpr std::size_t kBlock = 16;
     ThreadPool::shared().for_each((count + kBlock - 1) / kBlock, 1, [&](std::size_t block) {
       const std::size_t begin = block * kBlock, n = std::min(kBlock, count - begin);
-      proxies->batch.check(*m_, states + begin * stride, n, request.tolerance, out.data() + begin, request.simd);
+      proxies->batch.check(a_->pair_clearance(), states + begin * stride, n, request.tolerance, out.data() + begin, request.simd);
       if (!request.environment) return;
       for (std::size_t i = begin; i < begin + n; ++i) {
         if (!out[i]) out[i] = environment_check(states + i * stride, *env, environment, field.get()).collision;

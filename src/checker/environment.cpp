@@ -50,6 +50,11 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
 
 }  // namespace
 
+ShapeRef exact_shape_of(const CollisionObject& o) {
+  if (o.shape.kind == ObjectShape::Kind::kBox) return ShapeRef{nullptr, nullptr, Primitive::box(o.shape.size)};
+  return shape_of(o);
+}
+
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
   if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
   require_rigid(pose, id);

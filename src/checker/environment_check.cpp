@@ -17,17 +17,7 @@ bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const 
   for (const LinkShape& s : m_->shapes()[link]) {
     const Transform p = pose * s.origin;
     OctreeContact contact;
-    bool hit = false;
-    if (s.mesh >= 0) {
-      hit = mesh_meets_octree(m_->meshes()[s.mesh], p, tree, padding, request.tolerance, request.solids, &contact, &result.stats);
-    } else if (s.primitive.kind != Primitive::Kind::kSphere) {
-      hit = primitive_meets_octree(s.primitive, p, tree, padding, &contact, &result.stats);
-    } else if (const auto cubes = tree.occupied_in_sphere(p.t, s.primitive.radius + padding, true); !cubes.empty()) {
-      hit = true;
-      const Vec3 lo = tree.cube_min(cubes.front().key), hi = lo + Vec3::Constant(tree.cube_size(cubes.front().depth));
-      contact = {cubes.front(), p.t.cwiseMax(lo).cwiseMin(hi)};
-    }
-    if (hit) {
+    if (shape_meets_octree(m_->ref(s), p, tree, padding, request.tolerance, request.solids, &contact, &result.stats)) {
       result.contacts.push_back({link, std::string(), contact.voxel, contact.position});
       return true;
     }
@@ -40,15 +30,15 @@ bool CollisionChecker::link_meets_object(int link, const Transform& pose, const 
   const double padding = m_->paddings()[link];
   const double reach = m_->bounds()[link].radius + object.bound_radius + padding + request.tolerance;
   if ((pose * m_->bounds()[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
-  const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
-  detail::PairRequest r;
+  const ShapeRef obstacle = shape_of(object);
+  PairRequest r;
   r.padding = padding;
   r.tolerance = request.tolerance;
   r.max_contacts = 1;
   r.solids = request.solids;
   for (const LinkShape& s : m_->shapes()[link]) {
     std::vector<MeshContact> contacts;
-    if (detail::shapes_collide(m_->ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
+    if (shapes_collide(m_->ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
       EnvironmentContact c{link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position};
       result.contacts.push_back(c);
       return true;
@@ -90,22 +80,7 @@ bool CollisionChecker::proxy_meets_octree(int link, const Transform& pose, const
 double CollisionChecker::link_octree_distance(int link, const Transform& pose, const Octree& tree, double best,
                                               bool solids, EnvironmentResult& result) const {
   for (const LinkShape& s : m_->shapes()[link]) {
-    const Transform p = pose * s.origin;
-    OctreeDistance d;
-    if (s.mesh >= 0) {
-      d = mesh_octree_distance(m_->meshes()[s.mesh], p, tree, solids, best, &result.stats);
-    } else if (s.primitive.kind != Primitive::Kind::kSphere) {
-      d = primitive_octree_distance(s.primitive, p, tree, best, &result.stats);
-    } else {
-      const double radius = s.primitive.radius;
-      d = point_octree_distance(p.t, tree, best + radius);
-      if (std::isfinite(d.distance)) {
-        // The sphere's surface point towards the cube; inside the sphere the cube point itself.
-        const double gap = d.distance - radius;
-        d.on_link = gap > 0 ? Vec3(p.t + (d.on_cube - p.t) * (radius / d.distance)) : d.on_cube;
-        d.distance = std::max(0.0, gap);
-      }
-    }
+    const OctreeDistance d = shape_octree_distance(m_->ref(s), pose * s.origin, tree, solids, best, &result.stats);
     if (d.distance < best) {
       best = d.distance;
       result.min_distance = best;
@@ -121,10 +96,10 @@ double CollisionChecker::link_octree_distance(int link, const Transform& pose, c
 
 double CollisionChecker::link_object_distance(int link, const Transform& pose, const CollisionObject& object,
                                               double best, bool solids, EnvironmentResult& result) const {
-  const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
+  const ShapeRef obstacle = shape_of(object);
   for (const LinkShape& s : m_->shapes()[link]) {
     Vec3 wa, wb;
-    const double d = detail::shapes_distance(m_->ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
+    const double d = shapes_distance(m_->ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
     if (d < best) {
       best = d;
       result.min_distance = best;
@@ -172,13 +147,13 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
   const bool use_octree = request.octree && !env.octree().empty();
   const bool stop_early = !request.all_links && !request.distance;
   const std::vector<char>* only = request.only_links;
-  // At a tolerance, a boolean check may answer from a link's proxy (checker/link_proxy.h) against
+  // At a tolerance, a boolean check may answer from a link's proxy (narrowphase/link_proxy.h) against
   // the octree: against one obstacle its error is the proxy's alone, half its level, so a level
   // up to twice the tolerance fits; a contact is then an occupied cube within padding + level / 2.
   // Only with the distance field: without it a walk of the octree per sphere measured slower
   // than the OBB trees (panda, 2 cm table scene: 180 against 7 us a state).
   const ProxyLevel* proxies =
-      !request.distance && request.solids && field != nullptr ? m_->proxies_for(2.0 * request.tolerance) : nullptr;
+      !request.distance && request.solids && field != nullptr ? a_->proxies_for(2.0 * request.tolerance) : nullptr;
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
     if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);

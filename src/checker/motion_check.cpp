@@ -84,7 +84,7 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
               needed + 1.0, checker.collision_model().limits().motion_states, "max_motion_states");
   const auto steps = static_cast<std::size_t>(needed);
   const RobotCollisionModel& model = checker.collision_model();
-  const ProxyLevel* proxies = request.self ? model.proxies_for(request.tolerance) : nullptr;
+  const ProxyLevel* proxies = request.self ? checker.accelerators().proxies_for(request.tolerance) : nullptr;
   const bool lanes = proxies != nullptr && !proxies->batch.empty();
   constexpr std::size_t kBlock = 16;
   const std::size_t n = checker.model().variable_count();
@@ -97,7 +97,7 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
         const double* q = segment.at(static_cast<double>(first + k) / static_cast<double>(steps));
         std::copy(q, q + n, block.begin() + static_cast<std::ptrdiff_t>(k * n));
       }
-      proxies->batch.check(model, block.data(), count, request.tolerance, self_hit);
+      proxies->batch.check(checker.accelerators().pair_clearance(), block.data(), count, request.tolerance, self_hit);
     }
     for (std::size_t k = 0; k < count; ++k) {
       const double s = static_cast<double>(first + k) / static_cast<double>(steps);
@@ -168,7 +168,7 @@ double CollisionChecker::proxy_clearance(const double* state, const Environment&
       if (bound >= gap) break;
       const auto [a, b] = m_->checked_pairs()[p];
       const double pads = m_->paddings()[a] + m_->paddings()[b];
-      if (m_->pair_clearance().lower_bound(p, state) - pads >= gap) continue;
+      if (a_->pair_clearance().lower_bound(p, state) - pads >= gap) continue;
       gap = proxies_distance(proxies.links[a], poses[a], proxies.links[b], poses[b], gap + pads,
                              ProxySlack{kClearanceSlack, stop + pads}) - pads;
       if (gap <= stop) return gap;
@@ -195,11 +195,11 @@ double CollisionChecker::proxy_clearance(const double* state, const Environment&
       const double apart = (pose * m_->bounds()[l].center - object.pose * object.bound_center).norm() - radius -
                            object.bound_radius - padding;
       if (apart >= gap) continue;
-      const detail::ShapeRef obstacle{object.mesh.get(), object.hull.get(), object.primitive};
+      const ShapeRef obstacle = shape_of(object);
       QueryStats stats;
       gap = proxy_obstacle_distance(proxies.links[l], pose, gap + padding, [&](const Vec3& c, double r, double best) {
               Vec3 wa, wb;
-              return detail::shapes_distance({nullptr, nullptr, Primitive::sphere(r)}, Transform{Mat3::Identity(), c},
+              return shapes_distance({nullptr, nullptr, Primitive::sphere(r)}, Transform{Mat3::Identity(), c},
                                              obstacle, object.pose, best, true, wa, wb, stats);
             }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
       if (gap <= stop) return gap;
@@ -227,8 +227,8 @@ MotionResult motion_certified(const CollisionChecker& checker, Segment& segment,
   // coarsest level up to t / 2 leaves at least t / 2 of that room (so the steps near a contact
   // stay long); failing that, up to t, with min_clearance as the room.
   const RobotCollisionModel& model = checker.collision_model();
-  const ProxyLevel* proxies = model.proxies_for(request.tolerance / 2);
-  if (proxies == nullptr) proxies = model.proxies_for(request.tolerance);
+  const ProxyLevel* proxies = checker.accelerators().proxies_for(request.tolerance / 2);
+  if (proxies == nullptr) proxies = checker.accelerators().proxies_for(request.tolerance);
   const double stop = proxies ? std::max(request.tolerance - proxies->level, request.min_clearance)
                               : std::max(request.tolerance, request.min_clearance);
   const auto field = proxies && request.environment ? checker.kept_distance_field(env, request.root_pose) : nullptr;

@@ -33,8 +33,9 @@ ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& 
   for (const CollisionObject& o : objects) {
     Solid s;
     s.to_local = o.pose.inverse();
-    s.primitive = o.mesh == nullptr || o.shape.kind == ObjectShape::Kind::kBox;
-    s.shape = o.mesh == nullptr ? o.primitive : Primitive::box(o.shape.size);
+    const ShapeRef exact = exact_shape_of(o);
+    s.primitive = exact_primitive(exact) != nullptr;
+    s.shape = exact.primitive;
     s.centre = o.pose * o.bound_center;
     s.radius = o.bound_radius;
     world_box(o.pose, s.primitive ? Vec3::Zero() : o.bound_center,
@@ -80,23 +81,6 @@ int ObjectGrid::cell_of(const Vec3& p) const {
     at[i] = static_cast<int>(f);
   }
   return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
-}
-
-// How deep p (object frame) lies inside the primitive: the radius of the largest ball around p
-// inside it (0 or less outside). Convex solids: the smallest distance to a bounding surface.
-// Cones are not bounded this way here (-infinity: no proof from them).
-double inscribed_depth(const Primitive& prim, const Vec3& p) {
-  switch (prim.kind) {
-    case Primitive::Kind::kSphere: return prim.radius - p.norm();
-    case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
-    case Primitive::Kind::kCylinder: return std::min(prim.radius - std::hypot(p.x(), p.y()), prim.half_length - std::abs(p.z()));
-    case Primitive::Kind::kCapsule: {
-      const Vec3 axis_point(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
-      return prim.radius - (p - axis_point).norm();
-    }
-    case Primitive::Kind::kCone: break;
-  }
-  return -std::numeric_limits<double>::infinity();
 }
 
 double ObjectGrid::depth(int o, const Vec3& centre) const {

@@ -57,12 +57,12 @@ float float_below(double x) {
 
 // Do links a and b (solids) come within `padding` of each other? Exact, no tolerance.
 bool links_within(const RobotCollisionModel& model, int a, int b, const std::vector<Transform>& poses, double padding) {
-  detail::PairRequest request;
+  PairRequest request;
   request.padding = padding;
   QueryStats stats;
   for (const LinkShape& sa : model.shapes()[a]) {
     for (const LinkShape& sb : model.shapes()[b]) {
-      if (detail::shapes_collide(model.ref(sa), poses[a] * sa.origin, model.ref(sb), poses[b] * sb.origin, request, nullptr, stats)) {
+      if (shapes_collide(model.ref(sa), poses[a] * sa.origin, model.ref(sb), poses[b] * sb.origin, request, nullptr, stats)) {
         return true;
       }
     }

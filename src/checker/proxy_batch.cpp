@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <stdexcept>
 
+#include "bvh_collision/checker/pair_clearance.h"
+#include "bvh_collision/checker/robot_accelerators.h"
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/safety_margin.h"
 
@@ -98,7 +100,7 @@ bool use_avx2(SimdPath path) {
 
 }  // namespace
 
-ProxyBatch::ProxyBatch(const RobotCollisionModel& model, const ProxyLevel& level) {
+ProxyBatch::ProxyBatch(const RobotCollisionModel& model, const PairClearance& clearance, const ProxyLevel& level) {
   const KinematicsPlan& kinematics = model.kinematics();
   root_ = kinematics.root();
   stride_ = static_cast<int>(model.robot().variable_count());
@@ -129,14 +131,14 @@ ProxyBatch::ProxyBatch(const RobotCollisionModel& model, const ProxyLevel& level
     const auto [a, b] = pairs[p];
     pb::Pair pair;
     pair.a = a, pair.b = b, pair.index = static_cast<std::int32_t>(p);
-    pair.graded = model.pair_clearance().has_grid(p) ? 1 : 0;
+    pair.graded = clearance.has_grid(p) ? 1 : 0;
     pair.padding = model.paddings()[a] + model.paddings()[b];
     pair.reach = model.bounds()[a].radius + model.bounds()[b].radius + model.paddings()[a] + model.paddings()[b];
     pairs_.push_back(pair);
   }
 }
 
-pb::Plan ProxyBatch::plan(const RobotCollisionModel& model, double tolerance) const {
+pb::Plan ProxyBatch::plan(const PairClearance* clearance, double tolerance) const {
   pb::Plan p;
   p.steps = steps_.data();
   p.step_count = static_cast<std::int32_t>(steps_.size());
@@ -150,15 +152,15 @@ pb::Plan ProxyBatch::plan(const RobotCollisionModel& model, double tolerance) co
   p.pose_margin = kPoseMargin;
   p.tolerance = tolerance;
   p.clearance = clearance_bound;
-  p.clearance_context = &model.pair_clearance();
+  p.clearance_context = clearance;
   p.stack_capacity = stack_capacity_;
   return p;
 }
 
-void ProxyBatch::check(const RobotCollisionModel& model, const double* states, std::size_t count, double tolerance,
+void ProxyBatch::check(const PairClearance& clearance, const double* states, std::size_t count, double tolerance,
                        char* out, SimdPath path) const {
   const bool avx2 = use_avx2(path);
-  const pb::Plan p = plan(model, tolerance);
+  const pb::Plan p = plan(&clearance, tolerance);
   const pb::Scratch scratch = batch_scratch().get(p);
   for (std::size_t begin = 0; begin < count; begin += pb::kLanes) {
     const double* lanes[pb::kLanes];
@@ -171,10 +173,9 @@ void ProxyBatch::check(const RobotCollisionModel& model, const double* states, s
   }
 }
 
-std::vector<double> ProxyBatch::poses(const RobotCollisionModel& model, const double* states, std::size_t count,
-                                      SimdPath path) const {
+std::vector<double> ProxyBatch::poses(const double* states, std::size_t count, SimdPath path) const {
   if (count == 0 || count > static_cast<std::size_t>(pb::kLanes)) throw std::invalid_argument("poses: 1 to 4 states");
-  const pb::Plan p = plan(model, 0.0);
+  const pb::Plan p = plan(nullptr, 0.0);  // kinematics only: no pair is looked up
   const pb::Scratch scratch = batch_scratch().get(p);
   const double* lanes[pb::kLanes];
   for (std::size_t l = 0; l < pb::kLanes; ++l) lanes[l] = states + std::min(l, count - 1) * stride_;

@@ -3,18 +3,14 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/narrowphase/shape_queries.h"
 
 namespace bvh_collision {
 namespace {
 
 // Where the ray first meets an object, or infinity.
 double ray_meets_object(const CollisionObject& object, const Vec3& origin, const Vec3& unit, double length) {
-  if (!object.mesh) {
-    const Mat3 Rt = object.pose.R.transpose();
-    return ray_entry(object.primitive, Rt * (origin - object.pose.t), Rt * unit, length);
-  }
-  const RayHit hit = raycast(*object.mesh, object.pose, origin, unit, length);
-  return hit.hit ? hit.distance : std::numeric_limits<double>::infinity();
+  return shape_ray_entry(shape_of(object), object.pose, origin, unit, length);
 }
 
 }  // namespace

@@ -8,45 +8,34 @@
 #include <numeric>
 #include <optional>
 
-#include "bvh_collision/checker/link_proxy_cache.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
+#include "bvh_collision/narrowphase/link_proxy_cache.h"
+#include "bvh_collision/narrowphase/shape_queries.h"
 
 namespace bvh_collision {
 namespace {
 
 // A sphere in the link frame that holds every shape of the link.
-LinkBound bounding_sphere(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes) {
+LinkBound bounding_sphere(const std::vector<BodyShape>& shapes) {
   Aabb box;
-  for (const auto& s : shapes) {
-    if (s.mesh < 0) {
-      const double r = bounding_radius(s.primitive);
-      box.extend(s.origin.t - Vec3::Constant(r));
-      box.extend(s.origin.t + Vec3::Constant(r));
-      continue;
-    }
-    for (const Triangle& t : meshes[s.mesh].triangles()) {
-      for (int k = 0; k < 3; ++k) box.extend(s.origin * t[k]);
-    }
-  }
+  for (const BodyShape& s : shapes) extend_by_shape(s, box);
   const Vec3 c = center(box);
   double r = 0.0;
-  for (const auto& s : shapes) {
-    if (s.mesh < 0) {
-      r = std::max(r, (s.origin.t - c).norm() + bounding_radius(s.primitive));
-      continue;
-    }
-    for (const Triangle& t : meshes[s.mesh].triangles()) {
-      for (int k = 0; k < 3; ++k) r = std::max(r, (s.origin * t[k] - c).norm());
-    }
-  }
+  for (const BodyShape& s : shapes) r = std::max(r, shape_reach(s, c));
   return {c, grown_radius(r)};
 }
 
 }  // namespace
 
+std::vector<BodyShape> RobotCollisionModel::placed_shapes(int link) const {
+  std::vector<BodyShape> out;
+  for (const LinkShape& s : shapes_[static_cast<std::size_t>(link)]) out.push_back({ref(s), s.origin});
+  return out;
+}
+
 RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options)
-    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits), proxy_cache_(options.proxy_cache) {
+    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits) {
   const std::size_t n = robot_.links().size();
   check_limit("robot '" + robot_.name() + "' with its links", double(n), limits_.robot_links, "max_robot_links");
   if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
@@ -75,69 +64,6 @@ RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatri
   build_shapes(options, needed);
   kinematics_ = KinematicsPlan(robot_, needed);
   compute_motion_rates();
-  if (options.pair_clearance_cells > 0) pair_clearance_ = PairClearance::build(*this, options.pair_clearance_cells);
-  build_proxies(options.proxy_levels);  // after the grids: the batch plans note which pairs have one
-}
-
-void RobotCollisionModel::build_proxies(std::vector<double> levels) {
-  std::sort(levels.begin(), levels.end());
-  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-  for (const double level : levels) proxy_levels_.push_back(build_proxy_level(level, nullptr));
-}
-
-ProxyLevel RobotCollisionModel::build_proxy_level(double level, const std::atomic<bool>* cancel) const {
-  if (!(level > 0.0) || !std::isfinite(level)) {
-    throw std::invalid_argument("proxy level " + std::to_string(level) + " m: must be a positive number of metres");
-  }
-  const auto start = std::chrono::steady_clock::now();
-  ProxyLevel out;
-  out.level = level;
-  out.links.resize(shapes_.size());
-  for (std::size_t l = 0; l < shapes_.size(); ++l) {
-    if (shapes_[l].empty()) continue;
-    if (cancel != nullptr && cancel->load()) throw ProxyBuildCancelled();
-    out.links[l] = cached_or_built_proxy(l, level, out.links_from_cache);
-    out.leaves += out.links[l].leaf_count();
-    out.memory_bytes += out.links[l].memory_bytes();
-  }
-  out.batch = ProxyBatch(*this, out);
-  out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return out;
-}
-
-// From the cache when it holds this link's proxy at this level (its key covers every number of
-// the link's shapes), else built and stored there.
-LinkProxy RobotCollisionModel::cached_or_built_proxy(std::size_t link, double level, std::size_t& from_cache) const {
-  if (proxy_cache_.empty()) return LinkProxy::build(shapes_[link], meshes_, level);
-  const std::uint64_t key = link_proxy_key(shapes_[link], meshes_, level);
-  if (std::optional<LinkProxy> cached = read_cached_link_proxy(proxy_cache_, key)) {
-    ++from_cache;
-    return std::move(*cached);
-  }
-  LinkProxy built = LinkProxy::build(shapes_[link], meshes_, level);
-  write_cached_link_proxy(proxy_cache_, key, built);  // a cache that cannot be written only costs time
-  return built;
-}
-
-RobotCollisionModel RobotCollisionModel::with_proxy_level(double level, const std::atomic<bool>* cancel) const {
-  ProxyLevel built = build_proxy_level(level, cancel);
-  RobotCollisionModel copy = *this;
-  auto& levels = copy.proxy_levels_;
-  const auto at = std::find_if(levels.begin(), levels.end(), [&](const ProxyLevel& p) { return p.level >= level; });
-  if (at != levels.end() && at->level == level) {
-    *at = std::move(built);
-  } else {
-    levels.insert(at, std::move(built));
-  }
-  return copy;
-}
-
-const ProxyLevel* RobotCollisionModel::proxies_for(double tolerance) const {
-  const ProxyLevel* best = nullptr;
-  for (const ProxyLevel& p : proxy_levels_) {
-    if (p.level <= tolerance) best = &p;
-  }
-  return best;
 }
 
 // Exact primitives stay primitives; each distinct mesh gets one hierarchy and one hull, shared by
@@ -167,7 +93,7 @@ void RobotCollisionModel::build_shapes(const CheckerOptions& options, const std:
   }
   build_meshes(distinct, options.bvh);
   for (std::size_t l = 0; l < n; ++l) {
-    if (needed[l]) bounds_[l] = bounding_sphere(shapes_[l], meshes_);
+    if (needed[l]) bounds_[l] = bounding_sphere(placed_shapes(static_cast<int>(l)));
   }
 }
 

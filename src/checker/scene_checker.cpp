@@ -19,7 +19,7 @@ namespace {
 
 // The levels tests go through, coarsest first, down to the finest that serves `tolerance`: at
 // a tolerance the coarsest level up to half of it (or up to it), exact: every level.
-std::vector<const ProxyLevel*> levels_for(const RobotCollisionModel& m, double tolerance) {
+std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
   const ProxyLevel* finest = nullptr;
   if (tolerance > 0.0) finest = m.proxies_for(tolerance / 2);
   if (finest == nullptr && tolerance > 0.0) finest = m.proxies_for(tolerance);
@@ -40,7 +40,7 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   if (!is_rigid(options.root_pose)) throw std::invalid_argument("scene checker: the root pose is not a finite rigid transform");
   if (!std::isfinite(options.tolerance) || options.tolerance < 0.0) throw std::invalid_argument("scene checker: tolerance must be finite and >= 0");
   const RobotCollisionModel& m = checker_.collision_model();
-  proxies_ = levels_for(m, options.tolerance);
+  proxies_ = levels_for(checker_.accelerators(), options.tolerance);
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
   proxies_decide_self_ = !proxies_.empty() && options.tolerance >= level_;
   proxies_decide_objects_ = !proxies_.empty() && options.tolerance >= level_ / 2;
@@ -149,23 +149,6 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
 
 // ---- SceneChecker: one posed state ----------------------------------------------------------------
 
-namespace {
-
-// An object as the exact tests take it: a box as the exact primitive it is (the environment
-// keeps it as 12 triangles too, which the general queries use; mesh against box primitive measured
-// faster here), everything else as the environment keeps it.
-detail::ShapeRef object_shape(const CollisionObject& o) {
-  if (o.shape.kind == ObjectShape::Kind::kBox) return {nullptr, nullptr, Primitive::box(o.shape.size)};
-  return {o.mesh.get(), o.hull.get(), o.primitive};
-}
-
-}  // namespace
-
-// An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
-// (some 10-30 us against 1-3 for a proxy test)? Not at a tolerance, where a failed interval is
-// bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
-// proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
-// where halving the interval no longer helps them; always without proxies.
 // Is a finer level worth walking after the coarser ones failed, for this growth? Not when the
 // growth exceeds its level: its spheres' error (half the level) is then small against the growth
 // and it fails where they did, at the cost of a deeper walk. The coarsest always is.
@@ -173,6 +156,11 @@ bool SceneChecker::worth(const ProxyLevel* level, double growth) const {
   return level == proxies_.front() || level->level >= growth;
 }
 
+// An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
+// (some 10-30 us against 1-3 for a proxy test)? Not at a tolerance, where a failed interval is
+// bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
+// proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
+// where halving the interval no longer helps them; always without proxies.
 bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double error) const {
   if (proxies_.empty()) return true;
   return !s.tolerant && growth <= error;
@@ -185,7 +173,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   // Over an interval, the pair's proven clearance over the whole of it (a grid over the one or
   // two variables that move it) settles it with no growth at all.
   if (s.from != nullptr &&
-      m.pair_clearance().lower_bound_over(p, s.from, s.to) > m.paddings()[a] + m.paddings()[b] + options_.min_clearance) {
+      checker_.accelerators().pair_clearance().lower_bound_over(p, s.from, s.to) > m.paddings()[a] + m.paddings()[b] + options_.min_clearance) {
     return Answer::kFree;
   }
   const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
@@ -195,8 +183,8 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
   const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
   if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
-  const bool gridded = m.pair_clearance().has_grid(p);
-  if (gridded && m.pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
+  const bool gridded = checker_.accelerators().pair_clearance().has_grid(p);
+  if (gridded && checker_.accelerators().pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
   // A grid that cannot bound the pair here puts it within a few centimetres (its cell's reach):
   // coarser levels then fail where the finest does, so only the finest worth walking is walked.
   auto apart_at = [&](const ProxyLevel* level) {
@@ -227,13 +215,13 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
 bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
-  const detail::ShapeRef obstacle = object_shape(o);
-  detail::PairRequest r;
+  const ShapeRef obstacle = exact_shape_of(o);
+  PairRequest r;
   r.padding = m.paddings()[link];
   r.tolerance = tolerance;
   QueryStats stats;
   for (const LinkShape& shape : m.shapes()[link]) {
-    if (detail::shapes_collide(m.ref(shape), pose * shape.origin, obstacle, o.pose, r, nullptr, stats)) return true;
+    if (shapes_collide(m.ref(shape), pose * shape.origin, obstacle, o.pose, r, nullptr, stats)) return true;
   }
   return false;
 }
@@ -241,12 +229,12 @@ bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int 
 double SceneChecker::link_object_distance(int link, const Transform& pose, int object, double limit) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
-  const detail::ShapeRef obstacle = object_shape(o);
+  const ShapeRef obstacle = exact_shape_of(o);
   QueryStats stats;
   double best = limit * (1 + 1e-9) + 1e-12;
   for (const LinkShape& shape : m.shapes()[link]) {
     Vec3 wa, wb;
-    best = std::min(best, detail::shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, best, true, wa, wb, stats));
+    best = std::min(best, shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, best, true, wa, wb, stats));
   }
   return best;
 }

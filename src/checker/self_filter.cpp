@@ -6,6 +6,7 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
+#include "bvh_collision/narrowphase/shape_queries.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
 
@@ -42,7 +43,7 @@ std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
   return parts;
 }
 
-// What a link's proxy (checker/link_proxy.h) says of a point and a padding: -1, the point is
+// What a link's proxy (narrowphase/link_proxy.h) says of a point and a padding: -1, the point is
 // farther than the padding from the link (no leaf sphere grown by the padding holds it); 1, it is
 // within the padding (a leaf sphere grown by padding - h holds it, h >= the distance from any
 // sphere point to the link, so padding >= h is needed); 0, the exact test must tell. The spheres
@@ -76,33 +77,15 @@ int proxy_point_verdict(const LinkProxy& proxy, const Transform& pose, const Vec
 
 bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const {
   // "On or within": a point exactly at the padding distance counts.
-  const double reach = std::nextafter(padding, std::numeric_limits<double>::infinity());
-  for (const LinkShape& s : m_->shapes()[link]) {
-    const Transform sp = pose * s.origin;
-    if (s.mesh < 0) {
-      const Vec3 local = sp.R.transpose() * (p - sp.t);
-      if ((closest_point(s.primitive, local) - local).norm() <= padding) return true;
-      continue;
-    }
-    const Bvh<Obb>& mesh = m_->meshes()[s.mesh];
-    if (point_distance(mesh, sp, p, reach).distance <= padding) return true;
-    if (mesh.closed() && contains_point(mesh, sp.R.transpose() * (p - sp.t))) return true;
-  }
-  return false;
+  return std::any_of(m_->shapes()[link].begin(), m_->shapes()[link].end(),
+                     [&](const LinkShape& s) { return shape_holds_point(m_->ref(s), pose * s.origin, p, padding); });
 }
 
 double CollisionChecker::ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit,
                                         double length) const {
   double first = std::numeric_limits<double>::infinity();
   for (const LinkShape& s : m_->shapes()[link]) {
-    const Transform sp = pose * s.origin;
-    if (s.mesh < 0) {
-      const Mat3 Rt = sp.R.transpose();
-      first = std::min(first, ray_entry(s.primitive, Rt * (origin - sp.t), Rt * unit, length));
-      continue;
-    }
-    const RayHit hit = raycast(m_->meshes()[s.mesh], sp, origin, unit, std::min(first, length));
-    if (hit.hit) first = std::min(first, hit.distance);
+    first = std::min(first, shape_ray_entry(m_->ref(s), pose * s.origin, origin, unit, std::min(first, length)));
   }
   return first;
 }
@@ -128,8 +111,8 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
   // Where proxies are built, they settle most points near a link without the exact test, with
   // the same answers: the coarsest level whose spheres lie within the padding of their links
   // (accepts and rejects), else the finest (rejects only).
-  const std::vector<ProxyLevel>& levels = m_->proxy_levels();
-  const ProxyLevel* proxies = m_->proxies_for(2.0 * padding);
+  const std::vector<ProxyLevel>& levels = a_->proxy_levels();
+  const ProxyLevel* proxies = a_->proxies_for(2.0 * padding);
   if (proxies == nullptr && !levels.empty()) proxies = &levels.front();
   // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`
   // before the ray first meets a link.

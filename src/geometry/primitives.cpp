@@ -155,6 +155,26 @@ Vec3 half_extents(const Primitive& p) {
   return Vec3::Zero();
 }
 
+double inscribed_depth(const Primitive& prim, const Vec3& p) {
+  switch (prim.kind) {
+    case Primitive::Kind::kSphere: return prim.radius - p.norm();
+    case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
+    case Primitive::Kind::kCylinder:
+      return std::min(prim.radius - p.head<2>().norm(), prim.half_length - std::abs(p.z()));
+    case Primitive::Kind::kCapsule: {
+      const Vec3 axis(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
+      return prim.radius - (p - axis).norm();
+    }
+    case Primitive::Kind::kCone: {
+      // The nearer of the base and the slant (its distance in the (rho, z) half plane).
+      const double h = prim.half_length, slope = prim.radius / std::max(2.0 * h, 1e-300);
+      const double slant = (slope * (h - p.z()) - p.head<2>().norm()) / std::sqrt(1.0 + slope * slope);
+      return std::min(p.z() + h, slant);
+    }
+  }
+  return 0.0;
+}
+
 double bounding_radius(const Primitive& p) {
   switch (p.kind) {
     case Primitive::Kind::kSphere: return p.radius;

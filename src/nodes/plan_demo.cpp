@@ -254,7 +254,7 @@ int run(ros::NodeHandle& pnh) {
   std::printf("plan_demo: RRTConnect for %zu joints in the node's octree (%zu nodes), up to %.0f s per run; in-process: "
               "tolerance %g m, proxy levels of %zu sizes, the snapshot prepared in %.0f ms\n",
               group.size(), env->octree().node_count(), seconds, context->tolerance,
-              checker.collision_model().proxy_levels().size(), 1e3 * prepare_seconds);
+              checker.accelerators().proxy_levels().size(), 1e3 * prepare_seconds);
   double straight = 0.0;
   const bool straight_free = service->motion_valid(start.data(), goal.data(), &straight);
   std::printf("  the straight motion from start to goal: %s\n",

@@ -61,7 +61,7 @@ void CollisionCheckerNode::build_proxy_levels() {
   for (std::size_t i = 0; i < levels.size() && !stop_building_; ++i) {
     try {
       auto next = std::make_shared<const CollisionChecker>(checker()->with_proxy_level(levels[i], &stop_building_));
-      const ProxyLevel* built = next->collision_model().proxies_for(levels[i]);
+      const ProxyLevel* built = next->accelerators().proxies_for(levels[i]);
       std::atomic_store(&checker_, std::shared_ptr<const CollisionChecker>(next));
       ROS_INFO("collision_checker: proxy level %.4g m ready: %zu spheres, %.1f KiB, in %.2f s (%zu links from the cache)",
                built->level, built->leaves, built->memory_bytes / 1024.0, built->build_seconds, built->links_from_cache);
@@ -139,7 +139,7 @@ void CollisionCheckerNode::load_robot() {
   } catch (const LimitExceeded& e) {
     throw NodeStartupError(std::string("robot '") + summary_.name + "': " + e.what());
   }
-  const PairClearance& grids = checker()->collision_model().pair_clearance();
+  const PairClearance& grids = checker()->accelerators().pair_clearance();
   ROS_INFO("collision_checker: clearance grids for %zu of %zu checked pairs, %.1f KiB, built in %.2f s", grids.grids().size(),
            checker()->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());
   joint_map_ = std::make_unique<const JointValueMap>(checker()->model());

@@ -152,7 +152,7 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
     // Meshes are read before the environment is locked: a slow file delays no other change.
     const std::vector<PlacedShape> shapes = object_shapes(req, resolver_);
     double triangles = 0.0;
-    for (const PlacedShape& s : shapes) triangles += s.shape.mesh ? double(s.shape.mesh->triangles.size()) : 0.0;
+    for (const PlacedShape& s : shapes) triangles += static_cast<double>(s.shape.triangle_count());
     check_limit("collision object '" + req.id + "' with its triangles", triangles, params_.limits.object_triangles,
                 "max_object_triangles");
     // The hierarchies and hulls too: the store's write lock is held only to swap the objects in.

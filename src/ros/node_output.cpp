@@ -186,7 +186,7 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   queries.message = "ok";
   std::ostringstream levels;
   const std::shared_ptr<const CollisionChecker> checker = this->checker();  // alive through the loop
-  for (const ProxyLevel& level : checker->collision_model().proxy_levels()) {
+  for (const ProxyLevel& level : checker->accelerators().proxy_levels()) {
     levels << (levels.tellp() > 0 ? " " : "") << level.level;
   }
   queries.values.push_back(kv("proxy levels ready (m)", levels.str()));

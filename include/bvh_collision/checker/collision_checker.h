@@ -15,16 +15,17 @@
 
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/checker/batch_query.h"
-#include "bvh_collision/checker/detail/shape_pairs.h"
 #include "bvh_collision/checker/environment.h"
 #include "bvh_collision/checker/environment_query.h"
-#include "bvh_collision/checker/mesh_octree.h"
 #include "bvh_collision/checker/motion_query.h"
-#include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/checker/ray_query.h"
+#include "bvh_collision/checker/robot_accelerators.h"
+#include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/checker/self_filter_query.h"
 #include "bvh_collision/checker/self_query.h"
 #include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/narrowphase/shape_octree.h"
+#include "bvh_collision/narrowphase/shape_pairs.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
@@ -34,15 +35,17 @@ namespace bvh_collision {
 class CollisionChecker {
  public:
   CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
-  // This checker with one more proxy level (RobotCollisionModel::with_proxy_level).
+  // This checker with one more proxy level (RobotAccelerators::with_proxy_level); the model is shared.
   CollisionChecker with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const {
-    return CollisionChecker(std::make_shared<const RobotCollisionModel>(m_->with_proxy_level(level, cancel)));
+    return CollisionChecker(m_, std::make_shared<const RobotAccelerators>(a_->with_proxy_level(*m_, level, cancel)));
   }
 
   const RobotModel& model() const { return m_->robot(); }
   const AllowedCollisionMatrix& acm() const { return m_->acm(); }
   // What every query reads: shapes, hierarchies, bounds, kinematics, motion rates (immutable).
   const RobotCollisionModel& collision_model() const { return *m_; }
+  // What is built from it to answer faster: proxy levels and clearance grids (immutable).
+  const RobotAccelerators& accelerators() const { return *a_; }
   // The link pairs a self-collision query examines: both have geometry and the matrix allows
   // neither.
   const std::vector<std::pair<int, int>>& checked_pairs() const { return m_->checked_pairs(); }
@@ -163,10 +166,12 @@ class CollisionChecker {
   bool point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const;
   double ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit, double length) const;
 
-  explicit CollisionChecker(std::shared_ptr<const RobotCollisionModel> model) : m_(std::move(model)) {}
+  CollisionChecker(std::shared_ptr<const RobotCollisionModel> model, std::shared_ptr<const RobotAccelerators> accelerators)
+      : m_(std::move(model)), a_(std::move(accelerators)) {}
 
   // Shared, never changed: a copy of the checker is cheap and answers the same.
   std::shared_ptr<const RobotCollisionModel> m_;
+  std::shared_ptr<const RobotAccelerators> a_;
 };
 
 }  // namespace bvh_collision

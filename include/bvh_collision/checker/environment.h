@@ -9,6 +9,7 @@
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/narrowphase/shape.h"
 #include "bvh_collision/octree/distance_field.h"
 #include "bvh_collision/octree/octree.h"
 
@@ -29,6 +30,8 @@ struct ObjectShape {
   static ObjectShape capsule(double radius, double length) { return {Kind::kCapsule, Vec3::Zero(), radius, length, nullptr}; }
   // Base (radius) at z = -length/2, tip at +length/2 (shape_msgs/SolidPrimitive's cone).
   static ObjectShape cone(double radius, double length) { return {Kind::kCone, Vec3::Zero(), radius, length, nullptr}; }
+  // The triangles it is given as (0 for a primitive): what the node's size limit counts.
+  std::size_t triangle_count() const { return mesh != nullptr ? mesh->triangles.size() : 0; }
   static ObjectShape triangles(TriangleMesh m) {
     return {Kind::kMesh, Vec3::Zero(), 0.0, 0.0, std::make_shared<const TriangleMesh>(std::move(m))};
   }
@@ -46,6 +49,12 @@ struct CollisionObject {
   Vec3 bound_center = Vec3::Zero();  // object frame
   double bound_radius = 0.0;
 };
+
+// The object as the narrowphase takes it (its mesh and hull, or its primitive) ...
+inline ShapeRef shape_of(const CollisionObject& o) { return ShapeRef{o.mesh.get(), o.hull.get(), o.primitive}; }
+// ... and as the single-state tests take it: a box as the exact primitive it is (kept as 12
+// triangles too, which the general queries use; mesh against box primitive measured faster).
+ShapeRef exact_shape_of(const CollisionObject& o);
 
 // An object as queries use it: its hierarchy and hull built (the costly part of adding one).
 // Throws std::invalid_argument as Environment::add_object does.

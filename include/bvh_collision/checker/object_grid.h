@@ -12,10 +12,6 @@
 
 namespace bvh_collision {
 
-// How deep p (the primitive's frame) lies inside it: the radius of the largest ball around p inside
-// the solid (<= 0 outside); -infinity for a cone (not bounded here).
-double inscribed_depth(const Primitive& prim, const Vec3& p);
-
 // The collision objects of a snapshot, for sphere queries: each object's exact primitive in its
 // own frame (boxes included; meshes by their bounding sphere until the exact test), and a grid over
 // a box of the world whose cells list the objects within `reach` of them.

@@ -6,7 +6,6 @@
 // share one (copies of a CollisionChecker) share it safely between threads.
 #pragma once
 
-#include <atomic>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -14,13 +13,10 @@
 #include <vector>
 
 #include "bvh_collision/bvh/bvh.h"
-#include "bvh_collision/checker/detail/shape_pairs.h"
-#include "bvh_collision/checker/link_proxy.h"
-#include "bvh_collision/checker/pair_clearance.h"
-#include "bvh_collision/checker/proxy_batch.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/narrowphase/shape.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
 
@@ -32,13 +28,14 @@ struct CheckerOptions {
   // How link BVHs are built: two triangles per leaf took 6-15% fewer instructions than one for
   // boolean and distance self-collision on panda, ur5e and pr2 (three was worse on pr2).
   BuildOptions bvh = {BuildMethod::kSah, 2};
-  // Proxy levels e (m) for bounded-error sphere proxies (checker/link_proxy.h), built at
+  // The accelerators built beside the model (checker/robot_accelerators.h) read the next three.
+  // Proxy levels e (m) for bounded-error sphere proxies (narrowphase/link_proxy.h), built at
   // construction. A boolean self check at tolerance t >= e answers from the coarsest such level.
   // Empty by default: their build delays the start (panda 1.8 s at 10 mm, 34 s at 2 mm; pr2
   // 41 s at 10 mm); with_proxy_level adds one later (the node builds 5, 10 and 20 mm so, after
   // start-up). Levels of 5 mm and up pay; 2 mm was slower than the exact check on panda.
   std::vector<double> proxy_levels;
-  // A folder where link proxies are kept by content (checker/link_proxy_cache.h): a level whose
+  // A folder where link proxies are kept by content (narrowphase/link_proxy_cache.h): a level whose
   // links are there is read instead of built. Empty: none (the node's ~proxy_cache has one).
   std::string proxy_cache;
   // Grids of proven clearance for the self pairs one or two variables move
@@ -49,21 +46,6 @@ struct CheckerOptions {
   // robot with more links or checked pairs, check_motion a fixed-step motion with more states,
   // check_batch a larger batch, each with LimitExceeded.
   Limits limits;
-};
-
-// One proxy level as built: its link proxies and what they cost.
-struct ProxyLevel {
-  double level = 0.0;
-  std::vector<LinkProxy> links;  // per link (empty for links without geometry)
-  std::size_t leaves = 0, memory_bytes = 0;
-  std::size_t links_from_cache = 0;  // read from CheckerOptions::proxy_cache, not built
-  double build_seconds = 0.0;
-  ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
-};
-
-// RobotCollisionModel::with_proxy_level stopped by its cancel flag.
-struct ProxyBuildCancelled : std::runtime_error {
-  ProxyBuildCancelled() : std::runtime_error("proxy level build cancelled") {}
 };
 
 // One collision element of a link.
@@ -107,30 +89,15 @@ class RobotCollisionModel {
   const std::vector<std::vector<SlideBound>>& motion_slides() const { return motion_slides_; }
   double reach() const { return reach_; }
   const Limits& limits() const { return limits_; }
-  // The proxy levels built (CheckerOptions::proxy_levels), finest first; the coarsest level
-  // whose e is at most `tolerance`, or null.
-  const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
-  const ProxyLevel* proxies_for(double tolerance) const;
-  // A copy of this model with proxy level `level` built as well: it answers every query as this
-  // one does and uses the level wherever it fits (a node builds its levels this way after
-  // start-up, coarsest first, and swaps each copy in). `cancel`, once true, stops the build
-  // between links with ProxyBuildCancelled. Throws std::invalid_argument for a bad level.
-  RobotCollisionModel with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const;
-  const PairClearance& pair_clearance() const { return pair_clearance_; }
-
-  // A shape as the shape-pair dispatch takes it.
-  detail::ShapeRef ref(const LinkShape& s) const {
-    return s.mesh < 0 ? detail::ShapeRef{nullptr, nullptr, s.primitive}
-                      : detail::ShapeRef{&meshes_[s.mesh], &hulls_[s.mesh], Primitive{}};
-  }
+  // A shape as the narrowphase takes it.
+  ShapeRef ref(const LinkShape& s) const { return shape_ref(meshes_, hulls_, s.mesh, s.primitive); }
+  // Link `link`'s shapes so, in the link frame.
+  std::vector<BodyShape> placed_shapes(int link) const;
 
  private:
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);
   void build_meshes(const std::vector<const TriangleMesh*>& distinct, const BuildOptions& bvh);
   void compute_motion_rates();
-  void build_proxies(std::vector<double> levels);
-  ProxyLevel build_proxy_level(double level, const std::atomic<bool>* cancel) const;
-  LinkProxy cached_or_built_proxy(std::size_t link, double level, std::size_t& from_cache) const;
 
   RobotModel robot_;
   AllowedCollisionMatrix acm_;
@@ -146,9 +113,6 @@ class RobotCollisionModel {
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
   Limits limits_;
-  std::string proxy_cache_;  // CheckerOptions::proxy_cache
-  std::vector<ProxyLevel> proxy_levels_;
-  PairClearance pair_clearance_;
 };
 
 }  // namespace bvh_collision

@@ -41,6 +41,11 @@ double bounding_radius(const Primitive& p);
 // Is p (in the primitive's frame) inside or on the primitive?
 bool contains(const Primitive& prim, const Vec3& p);
 
+// How deep p (in the primitive's frame) lies inside it: the radius of a ball around p that the
+// solid holds (its distance to the surface, exact but for the cone, whose slant is measured to
+// the whole line in p's half plane: never more than the true depth); 0 or less outside.
+double inscribed_depth(const Primitive& prim, const Vec3& p);
+
 // The point of the primitive (the solid) closest to p, in the primitive's frame: p itself when
 // p is inside.
 Vec3 closest_point(const Primitive& prim, const Vec3& p);

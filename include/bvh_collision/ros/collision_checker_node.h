@@ -64,14 +64,14 @@ struct NodeParameters {
   double padding = 0.0;
   std::map<std::string, double> link_padding;
   double tolerance = 0.0;
-  // Bounded-error link proxy levels (m) (checker/link_proxy.h), built after start-up on a thread
+  // Bounded-error link proxy levels (m) (narrowphase/link_proxy.h), built after start-up on a thread
   // of their own, coarsest first, each put to use as it is done (until then queries at a
   // tolerance take the exact path, within the same contract). Finer levels are skipped once a
   // level needs more than kProxySphereBudget spheres (pr2: 105,893 at 10 mm). 2 mm is not a
   // default: it took 47-113 s to build (demo arm, panda, ur5e) and answered panda's self checks
   // slower than the exact path (1.8 against 1.35 us).
   std::vector<double> proxy_levels = {0.005, 0.01, 0.02};
-  // Where built link proxies are kept by content (checker/link_proxy_cache.h), so that a restart
+  // Where built link proxies are kept by content (narrowphase/link_proxy_cache.h), so that a restart
   // reads them instead of building them again. Unset: $ROS_HOME (or ~/.ros)/bvh_collision/proxy_cache;
   // empty: none.
   std::string proxy_cache;

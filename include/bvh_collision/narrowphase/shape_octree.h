@@ -1,5 +1,8 @@
-// A link's geometry against the occupied cubes of the environment octree: the BVH and the octree
-// descended together (cube against volume), then cube against triangle, exactly. Semantics of
+// A shape against the occupied cubes of the environment octree, the octree being one more kind of
+// the narrowphase: shape_meets_octree and shape_octree_distance dispatch over the shape's kind (a
+// mesh: the BVH and the octree descended together, cube against volume, then cube against
+// triangle, exactly; a primitive: certified convex distance against each nearby cube; a sphere:
+// the octree's own sphere query and nearest-cube search). Semantics of
 // DESIGN.md section 2: touching is collision, padding p, tolerance eps, and solids: a link inside
 // occupied space, or an occupied cube inside a closed link, is in collision (distance 0).
 #pragma once
@@ -8,6 +11,7 @@
 
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/narrowphase/shape.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -17,16 +21,28 @@ struct OctreeContact {
   Vec3 position = Vec3::Zero();  // world frame, a point of the link within padding of the cube
 };
 
-// Does the mesh (pose in world) come within `padding` of an occupied cube? With tolerance > 0
-// it may also answer yes up to padding + tolerance, never no below padding.
-bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
-                       double tolerance, bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
-
 struct OctreeDistance {
   double distance = std::numeric_limits<double>::infinity();  // inf: nothing below upper_bound
   Vec3 on_link = Vec3::Zero(), on_cube = Vec3::Zero();        // world-frame witnesses
   Octree::Leaf voxel;
 };
+
+// Does the shape (pose in world) come within `padding` of an occupied cube? With tolerance > 0
+// it may also answer yes up to padding + tolerance, never no below padding; `contact` (when not
+// null) gets the cube and a point of the shape within padding of it.
+bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, double padding, double tolerance,
+                        bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
+
+// The distance from the shape to the nearest occupied cube, if below `upper_bound` (else
+// infinity), with witnesses.
+OctreeDistance shape_octree_distance(const ShapeRef& shape, const Transform& pose, const Octree& tree, bool solids,
+                                     double upper_bound = std::numeric_limits<double>::infinity(),
+                                     QueryStats* stats = nullptr);
+
+// The kinds, for the dispatch above and their tests. Does the mesh (pose in world) come within `padding` of an occupied cube? With tolerance > 0
+// it may also answer yes up to padding + tolerance, never no below padding.
+bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
+                       double tolerance, bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
 
 // The distance from the mesh to the nearest occupied cube, if below `upper_bound`.
 OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, bool solids,

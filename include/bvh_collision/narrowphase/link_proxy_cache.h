@@ -1,5 +1,5 @@
 // Link proxies kept on disk by content. A proxy depends only on its link's shapes and its level,
-// and proves its bounds for that geometry (checker/link_proxy.h), so it can be stored once and
+// and proves its bounds for that geometry (narrowphase/link_proxy.h), so it can be stored once and
 // read at every later start: panda's three levels (20, 10, 5 mm) took 11.8 s to build here, and
 // a node restart read them back in 3 ms. The key is a 64-bit FNV-1a hash of every number that describes the link
 // (shape origins, primitives, each mesh's triangles and whether it is closed), the level and the
@@ -12,14 +12,14 @@
 #include <string>
 #include <vector>
 
-#include "bvh_collision/checker/link_proxy.h"
+#include "bvh_collision/narrowphase/link_proxy.h"
 
 namespace bvh_collision {
 
 // Bump when LinkProxy::build changes what it builds: files of another version are rebuilt.
 constexpr std::uint32_t kLinkProxyBuildVersion = 1;
 
-std::uint64_t link_proxy_key(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes, double level);
+std::uint64_t link_proxy_key(const std::vector<BodyShape>& shapes, double level);
 
 // The file that holds the proxy of `key` in `folder`.
 std::string link_proxy_file(const std::string& folder, std::uint64_t key);

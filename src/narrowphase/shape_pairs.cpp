@@ -1,5 +1,5 @@
 // The shape-pair dispatch table (detail/shape_pairs.h): one entry per pair of shape kinds.
-#include "bvh_collision/checker/detail/shape_pairs.h"
+#include "bvh_collision/narrowphase/shape_pairs.h"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/geometry/safety_margin.h"
 
-namespace bvh_collision::detail {
+namespace bvh_collision {
 namespace {
 
 using CollideFn = bool (*)(const ShapeRef&, const Transform&, const ShapeRef&, const Transform&, const PairRequest&,
@@ -310,4 +310,4 @@ double shapes_distance(const ShapeRef& a, const Transform& pa, const ShapeRef& b
                                                                                       wb, stats, tolerance);
 }
 
-}  // namespace bvh_collision::detail
+}  // namespace bvh_collision

@@ -1,4 +1,4 @@
-#include "bvh_collision/checker/mesh_octree.h"
+#include "bvh_collision/narrowphase/shape_octree.h"
 
 #include <algorithm>
 #include <array>
@@ -497,6 +497,37 @@ OctreeDistance primitive_octree_distance(const Primitive& primitive, const Trans
   };
   nearest_cubes_first(tree, *root, lower, leaf, [&] { return bound; });
   return best;
+}
+
+// ---- The dispatch over the shape's kind ----------------------------------------------------------
+
+bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, double padding, double tolerance,
+                        bool solids, OctreeContact* contact, QueryStats* stats) {
+  if (shape.mesh != nullptr) return mesh_meets_octree(*shape.mesh, pose, tree, padding, tolerance, solids, contact, stats);
+  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_meets_octree(shape.primitive, pose, tree, padding, contact, stats);
+  const auto cubes = tree.occupied_in_sphere(pose.t, shape.primitive.radius + padding, true);
+  if (cubes.empty()) return false;
+  if (contact != nullptr) {
+    const Vec3 lo = tree.cube_min(cubes.front().key), hi = lo + Vec3::Constant(tree.cube_size(cubes.front().depth));
+    *contact = {cubes.front(), pose.t.cwiseMax(lo).cwiseMin(hi)};
+  }
+  return true;
+}
+
+OctreeDistance shape_octree_distance(const ShapeRef& shape, const Transform& pose, const Octree& tree, bool solids,
+                                     double upper_bound, QueryStats* stats) {
+  if (shape.mesh != nullptr) return mesh_octree_distance(*shape.mesh, pose, tree, solids, upper_bound, stats);
+  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_octree_distance(shape.primitive, pose, tree, upper_bound, stats);
+  // A sphere is its centre with the radius taken off: the surface point towards the cube, or
+  // inside the sphere the cube point itself.
+  const double radius = shape.primitive.radius;
+  OctreeDistance d = point_octree_distance(pose.t, tree, upper_bound + radius);
+  if (std::isfinite(d.distance)) {
+    const double gap = d.distance - radius;
+    d.on_link = gap > 0 ? Vec3(pose.t + (d.on_cube - pose.t) * (radius / d.distance)) : d.on_cube;
+    d.distance = std::max(0.0, gap);
+  }
+  return d;
 }
 
 }  // namespace bvh_collision

@@ -1,4 +1,4 @@
-#include "bvh_collision/checker/link_proxy_cache.h"
+#include "bvh_collision/narrowphase/link_proxy_cache.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,7 +9,6 @@
 
 #include <unistd.h>
 
-#include "bvh_collision/checker/robot_collision_model.h"
 
 namespace bvh_collision {
 namespace {
@@ -111,26 +110,26 @@ struct LinkProxyFile {
   }
 };
 
-std::uint64_t link_proxy_key(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes, double level) {
+std::uint64_t link_proxy_key(const std::vector<BodyShape>& shapes, double level) {
   Fnv h;
   h.value(kLinkProxyBuildVersion);
   h.value(level);
-  for (const LinkShape& s : shapes) {
+  for (const BodyShape& s : shapes) {
     for (int r = 0; r < 3; ++r) h.vec(s.origin.R.row(r).transpose());
     h.vec(s.origin.t);
-    h.value(s.mesh >= 0);
-    if (s.mesh >= 0) {
-      const Bvh<Obb>& mesh = meshes[s.mesh];
+    h.value(s.shape.mesh != nullptr);
+    if (s.shape.mesh != nullptr) {
+      const Bvh<Obb>& mesh = *s.shape.mesh;
       h.value(mesh.closed());
       h.value(mesh.triangles().size());
       for (const Triangle& t : mesh.triangles()) {
         for (int k = 0; k < 3; ++k) h.vec(t[k]);
       }
     } else {
-      h.value(static_cast<std::uint8_t>(s.primitive.kind));
-      h.vec(s.primitive.half);
-      h.value(s.primitive.radius);
-      h.value(s.primitive.half_length);
+      h.value(static_cast<std::uint8_t>(s.shape.primitive.kind));
+      h.vec(s.shape.primitive.half);
+      h.value(s.shape.primitive.radius);
+      h.value(s.shape.primitive.half_length);
     }
   }
   return h.h;

@@ -1,6 +1,6 @@
 // Pairs of link proxies: do two sphere trees come within a padding, and how far apart are they
-// (checker/link_proxy.h), by the pair walk of geometry/tree_walk.h.
-#include "bvh_collision/checker/link_proxy.h"
+// (narrowphase/link_proxy.h), by the pair walk of geometry/tree_walk.h.
+#include "bvh_collision/narrowphase/link_proxy.h"
 
 #include <algorithm>
 #include <cmath>

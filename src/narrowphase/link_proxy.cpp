@@ -1,4 +1,4 @@
-#include "bvh_collision/checker/link_proxy.h"
+#include "bvh_collision/narrowphase/link_proxy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,6 @@
 #include <stdexcept>
 
 #include "bvh_collision/bvh/queries.h"
-#include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/safety_margin.h"
 
@@ -19,27 +18,6 @@ namespace {
 constexpr double kLevelSlack = 1e-5;
 // A cube this many halvings below the shape's box is far below any level (2^-40 of a metre box).
 constexpr int kMaxDepth = 40;
-
-// How deep p (inside the primitive, its frame) lies: its distance to the primitive's surface.
-double primitive_depth(const Primitive& prim, const Vec3& p) {
-  switch (prim.kind) {
-    case Primitive::Kind::kSphere: return prim.radius - p.norm();
-    case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
-    case Primitive::Kind::kCylinder:
-      return std::min(prim.radius - p.head<2>().norm(), prim.half_length - std::abs(p.z()));
-    case Primitive::Kind::kCapsule: {
-      const Vec3 axis(0.0, 0.0, std::clamp(p.z(), -prim.half_length, prim.half_length));
-      return prim.radius - (p - axis).norm();
-    }
-    case Primitive::Kind::kCone: {
-      // The nearer of the base and the slant (its distance in the (rho, z) half plane).
-      const double h = prim.half_length, slope = prim.radius / std::max(2.0 * h, 1e-300);
-      const double slant = (slope * (h - p.z()) - p.head<2>().norm()) / std::sqrt(1.0 + slope * slope);
-      return std::min(p.z() + h, slant);
-    }
-  }
-  return 0.0;
-}
 
 // The point of the primitive's surface nearest p (p inside the primitive, its frame).
 Vec3 nearest_surface_point(const Primitive& prim, const Vec3& p) {
@@ -100,7 +78,7 @@ struct ShapeField {
       if (nearest) *nearest = q;
       return (p - q).norm();
     }
-    const double depth = std::max(0.0, primitive_depth(primitive, p));
+    const double depth = std::max(0.0, inscribed_depth(primitive, p));
     if (nearest) *nearest = nearest_surface_point(primitive, p);
     return depth;
   }
@@ -493,24 +471,24 @@ void build_tree(std::vector<Chosen>& leaves, std::size_t begin, std::size_t end,
 
 }  // namespace
 
-LinkProxy LinkProxy::build(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes, double level) {
+LinkProxy LinkProxy::build(const std::vector<BodyShape>& shapes, double level) {
   if (!(level > 0.0)) throw std::invalid_argument("link proxy: the level must be positive");
   LinkProxy proxy;
   proxy.level_ = level;
   const double half_level = 0.5 * level * (1.0 - kLevelSlack);
   std::vector<Chosen> leaves;
-  for (const LinkShape& shape : shapes) {
+  for (const BodyShape& shape : shapes) {
     ShapeField field;
-    if (shape.mesh >= 0) field.mesh = &meshes[shape.mesh];
-    field.primitive = shape.primitive;
+    field.mesh = shape.shape.mesh;
+    field.primitive = shape.shape.primitive;
     if (field.mesh && field.mesh->empty()) continue;
-    if (!field.mesh && shape.primitive.kind == Primitive::Kind::kSphere) {
-      leaves.push_back({shape.origin.t, shape.primitive.radius});  // its own exact proxy
+    if (!field.mesh && field.primitive.kind == Primitive::Kind::kSphere) {
+      leaves.push_back({shape.origin.t, field.primitive.radius});  // its own exact proxy
       continue;
     }
     if (field.mesh) field.faces = field.mesh->triangles();  // closed: the solid's boundary; open: the link
-    if (!field.mesh && shape.primitive.kind == Primitive::Kind::kBox) {
-      const TriangleMesh box = box_mesh(2.0 * shape.primitive.half);
+    if (!field.mesh && field.primitive.kind == Primitive::Kind::kBox) {
+      const TriangleMesh box = box_mesh(2.0 * field.primitive.half);
       for (const auto& t : box.triangles) field.faces.push_back({box.vertices[t[0]], box.vertices[t[1]], box.vertices[t[2]]});
     }
     std::vector<Chosen> chosen;

@@ -1,26 +1,14 @@
-// Two placed shapes of the checker (a link's collision element or a collision object) against
-// each other: collision and distance with witnesses, through one dispatch table over the pair of
-// shape kinds instead of a type test in each query. Not API: the checker's queries use it.
+// Two placed shapes (a link's collision element or a collision object) against each other:
+// collision and distance with witnesses, through one dispatch table over the pair of shape kinds
+// (narrowphase/shape.h) instead of a type test in each query.
 #pragma once
 
 #include <vector>
 
 #include "bvh_collision/bvh/queries.h"
-#include "bvh_collision/geometry/convex_hull.h"
-#include "bvh_collision/geometry/primitives.h"
+#include "bvh_collision/narrowphase/shape.h"
 
-namespace bvh_collision::detail {
-
-// One shape's geometry, whoever owns it: a mesh (its BVH and hull), or an exact primitive.
-struct ShapeRef {
-  const Bvh<Obb>* mesh = nullptr;  // null: `primitive`
-  const ConvexHull* hull = nullptr;
-  Primitive primitive;
-};
-
-// The kinds the dispatch table is indexed by.
-enum class ShapeKind : int { kSphere, kBox, kCylinder, kCapsule, kCone, kMesh, kCount };
-ShapeKind kind_of(const ShapeRef& s);
+namespace bvh_collision {
 
 struct PairRequest {
   double padding = 0.0;          // the pair collides when its distance is at most this
@@ -38,4 +26,4 @@ bool shapes_collide(const ShapeRef& a, const Transform& pa, const ShapeRef& b, c
 double shapes_distance(const ShapeRef& a, const Transform& pa, const ShapeRef& b, const Transform& pb, double best,
                        bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance = 0.0);
 
-}  // namespace bvh_collision::detail
+}  // namespace bvh_collision

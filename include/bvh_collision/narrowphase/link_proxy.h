@@ -32,10 +32,9 @@
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/types.h"
+#include "bvh_collision/narrowphase/shape.h"
 
 namespace bvh_collision {
-
-struct LinkShape;
 
 // A sphere of the tree, in depth-first order: its subtree is [index, skip); a leaf has skip ==
 // index + 1. Every sphere contains the spheres of its subtree.
@@ -48,9 +47,9 @@ struct ProxySphere {
 class LinkProxy {
  public:
   LinkProxy() = default;
-  // The proxy of a link's shapes (in the link frame) at level e > 0. `meshes` holds the BVHs the
-  // shapes' mesh indices name; a closed mesh stands for its solid, an open one for its surface.
-  static LinkProxy build(const std::vector<LinkShape>& shapes, const std::vector<Bvh<Obb>>& meshes, double level);
+  // The proxy of a link's shapes (in the link frame) at level e > 0; a closed mesh stands for its
+  // solid, an open one for its surface.
+  static LinkProxy build(const std::vector<BodyShape>& shapes, double level);
 
   const std::vector<ProxySphere>& spheres() const { return spheres_; }
   bool empty() const { return spheres_.empty(); }
@@ -61,7 +60,7 @@ class LinkProxy {
   std::size_t memory_bytes() const { return spheres_.capacity() * sizeof(ProxySphere); }
 
  private:
-  friend struct LinkProxyFile;  // checker/link_proxy_cache.cpp: stores and restores it as built
+  friend struct LinkProxyFile;  // narrowphase/link_proxy_cache.cpp: stores and restores it as built
 
   std::vector<ProxySphere> spheres_;
   double level_ = 0.0;

@@ -1,0 +1,44 @@
+// The narrowphase's unit: one shape of a body (a link's collision element, a collision object),
+// whoever owns its geometry, and the kinds the engine dispatches over. A query takes ShapeRefs and
+// dispatches once, here in narrowphase/ (shape_pairs.h for two shapes, shape_octree.h for a shape
+// against the octree, shape_queries.h for a point, a ray or a bound); code above this layer never
+// tests a shape's kind.
+#pragma once
+
+#include <vector>
+
+#include "bvh_collision/bvh/bvh.h"
+#include "bvh_collision/geometry/convex_hull.h"
+#include "bvh_collision/geometry/primitives.h"
+
+namespace bvh_collision {
+
+// One shape's geometry: a mesh (its BVH and hull), or an exact primitive.
+struct ShapeRef {
+  const Bvh<Obb>* mesh = nullptr;  // null: `primitive`
+  const ConvexHull* hull = nullptr;
+  Primitive primitive;
+};
+
+// The kinds the dispatch tables are indexed by.
+enum class ShapeKind : int { kSphere, kBox, kCylinder, kCapsule, kCone, kMesh, kCount };
+ShapeKind kind_of(const ShapeRef& s);
+
+// The shape's exact primitive, or null for a mesh (for accelerators that keep primitives apart).
+inline const Primitive* exact_primitive(const ShapeRef& s) { return s.mesh == nullptr ? &s.primitive : nullptr; }
+
+// A shape of a body's list: the mesh `index` names in `meshes` and `hulls` (same indices), or the
+// exact primitive when `index` is negative. Inline: link shapes are looked up in every query.
+inline ShapeRef shape_ref(const std::vector<Bvh<Obb>>& meshes, const std::vector<ConvexHull>& hulls, int index,
+                          const Primitive& primitive) {
+  if (index < 0) return ShapeRef{nullptr, nullptr, primitive};
+  return ShapeRef{&meshes[static_cast<std::size_t>(index)], &hulls[static_cast<std::size_t>(index)], Primitive{}};
+}
+
+// A shape placed in its body's frame.
+struct BodyShape {
+  ShapeRef shape;
+  Transform origin;  // shape frame -> body frame
+};
+
+}  // namespace bvh_collision
