@@ -191,6 +191,46 @@ TEST(TreeWalk, EveryLeafAndLeafPairOnceInOrderAndStops) {
   EXPECT_EQ(visits, 5);
 }
 
+// The stackless walk of a depth-first tree with skip indices (the proxy sphere trees) against the
+// stack walk of the same tree: the same nodes in the same order, pruning and stopping alike.
+TEST(TreeWalk, SkipWalkVisitsAsTheStackWalk) {
+  const HeapTreeView view{7};
+  // The heap tree laid out depth first, children in order: pre[k] is the heap node at position k.
+  std::vector<int> pre, skip;
+  const auto lay = [&](const auto& self, int node) -> void {
+    const std::size_t at = pre.size();
+    pre.push_back(node);
+    skip.push_back(0);
+    if (!view.is_leaf(node)) self(self, 2 * node + 1), self(self, 2 * node + 2);
+    skip[at] = static_cast<int>(pre.size());
+  };
+  lay(lay, 0);
+  ASSERT_EQ(pre.size(), 15u);
+  for (const int pruned : {-1, 1, 5, 12}) {
+    for (const int stop_at : {-1, 9, 13}) {
+      std::vector<int> by_stack, by_skip;
+      // The stack walk takes the left child first: the same preorder.
+      depth_first_walk(view, 0, [&](int i) {
+        by_stack.push_back(i);
+        if (i == stop_at) return Visit::kStop;
+        return i == pruned ? Visit::kSkip : Visit::kEnter;
+      }, [](int) { return false; });
+      skip_walk(15, [&](std::int32_t k) { return skip[k]; }, [&](std::int32_t k, bool leaf) {
+        EXPECT_EQ(leaf, view.is_leaf(pre[k]));
+        by_skip.push_back(pre[k]);
+        if (pre[k] == stop_at) return Visit::kStop;
+        return pre[k] == pruned ? Visit::kSkip : Visit::kEnter;
+      });
+      EXPECT_EQ(by_skip, by_stack) << "pruned " << pruned << " stop " << stop_at;
+    }
+  }
+  // In order: a whole walk is the depth-first (pre)order itself.
+  std::vector<int> all;
+  skip_walk(15, [&](std::int32_t k) { return skip[k]; }, [&](std::int32_t k, bool) { return all.push_back(pre[k]), Visit::kEnter; });
+  EXPECT_EQ(all, pre);
+  EXPECT_EQ(pre, (std::vector<int>{0, 1, 3, 7, 8, 4, 9, 10, 2, 5, 11, 12, 6, 13, 14}));
+}
+
 TEST(CubeWalk, DescendWhileReachesEveryOccupiedLeafAndNearestFirstFindsTheClosest) {
   const Octree tree = random_tree(0.05, 400);
   std::set<std::uint64_t> occupied;

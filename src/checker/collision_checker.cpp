@@ -2,6 +2,7 @@
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 #include <algorithm>
 #include <map>
@@ -127,9 +128,12 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       if (d2 <= reach * reach) order.emplace_back(d2 / (reach * reach), p);
     }
     if (!request.all_pairs) std::sort(order.begin(), order.end());
-    // At a tolerance a proxy level fits, the proxies answer alone (narrowphase/link_proxy.h): apart
-    // means the links are apart, overlapping means they are within padding + level.
-    const ProxyLevel* proxies = request.solids && request.max_contacts == 0 ? a_->proxies_for(request.tolerance) : nullptr;
+    // At a tolerance a proxy level fits (narrowphase/tolerance_policy.h), the proxies answer alone:
+    // apart means the links are apart, overlapping means they are within padding + level.
+    ToleranceQuestion question{request.tolerance, Counterpart::kLink};
+    question.boolean = request.max_contacts == 0;
+    question.solids = request.solids;
+    const ProxyLevel* proxies = a_->proxies_for(proxy_use(question).decide_up_to);
     for (const auto& [key, p] : order) {
       const auto [a, b] = m_->checked_pairs()[p];
       // A pair whose proven clearance in this state exceeds its padding cannot collide and has
@@ -228,7 +232,8 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
       request.environment && !env->octree().empty()
           ? octree_field(*env, request.root_pose, environment.distance_field == EnvironmentRequest::DistanceField::kBuild)
           : nullptr;
-  const ProxyLevel* proxies = request.self ? a_->proxies_for(request.tolerance) : nullptr;
+  const ProxyLevel* proxies =
+      request.self ? a_->proxies_for(proxy_use({request.tolerance, Counterpart::kLink}).decide_up_to) : nullptr;
   // Self checks in the SIMD lanes, four states a step (checker/proxy_batch.h); the environment
   // only for the states found free.
   if (proxies != nullptr && !proxies->batch.empty()) {

@@ -3,6 +3,7 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
 namespace {
@@ -147,13 +148,16 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
   const bool use_octree = request.octree && !env.octree().empty();
   const bool stop_early = !request.all_links && !request.distance;
   const std::vector<char>* only = request.only_links;
-  // At a tolerance, a boolean check may answer from a link's proxy (narrowphase/link_proxy.h) against
-  // the octree: against one obstacle its error is the proxy's alone, half its level, so a level
-  // up to twice the tolerance fits; a contact is then an occupied cube within padding + level / 2.
-  // Only with the distance field: without it a walk of the octree per sphere measured slower
-  // than the OBB trees (panda, 2 cm table scene: 180 against 7 us a state).
-  const ProxyLevel* proxies =
-      !request.distance && request.solids && field != nullptr ? a_->proxies_for(2.0 * request.tolerance) : nullptr;
+  // At a tolerance, a boolean check may answer from a link's proxy against the octree
+  // (narrowphase/tolerance_policy.h: against an obstacle its error is half its level); a contact
+  // is then an occupied cube within padding + level / 2. Only with the distance field: without it
+  // a walk of the octree per sphere measured slower than the OBB trees (panda, 2 cm table scene:
+  // 180 against 7 us a state).
+  ToleranceQuestion question{request.tolerance, Counterpart::kOctree};
+  question.boolean = !request.distance;
+  question.solids = request.solids;
+  question.octree_field = field != nullptr;
+  const ProxyLevel* proxies = a_->proxies_for(proxy_use(question).decide_up_to);
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
     if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);

@@ -10,6 +10,7 @@
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
 
@@ -84,7 +85,8 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
               needed + 1.0, checker.collision_model().limits().motion_states, "max_motion_states");
   const auto steps = static_cast<std::size_t>(needed);
   const RobotCollisionModel& model = checker.collision_model();
-  const ProxyLevel* proxies = request.self ? checker.accelerators().proxies_for(request.tolerance) : nullptr;
+  const ProxyLevel* proxies =
+      request.self ? checker.accelerators().proxies_for(proxy_use({request.tolerance, Counterpart::kLink}).decide_up_to) : nullptr;
   const bool lanes = proxies != nullptr && !proxies->batch.empty();
   constexpr std::size_t kBlock = 16;
   const std::size_t n = checker.model().variable_count();
@@ -227,8 +229,11 @@ MotionResult motion_certified(const CollisionChecker& checker, Segment& segment,
   // coarsest level up to t / 2 leaves at least t / 2 of that room (so the steps near a contact
   // stay long); failing that, up to t, with min_clearance as the room.
   const RobotCollisionModel& model = checker.collision_model();
-  const ProxyLevel* proxies = checker.accelerators().proxies_for(request.tolerance / 2);
-  if (proxies == nullptr) proxies = checker.accelerators().proxies_for(request.tolerance);
+  ToleranceQuestion question{request.tolerance, Counterpart::kLink};
+  question.motion = true;
+  const ProxyUse use = proxy_use(question);
+  const ProxyLevel* proxies = checker.accelerators().proxies_for(use.prefer_up_to);
+  if (proxies == nullptr) proxies = checker.accelerators().proxies_for(use.decide_up_to);
   const double stop = proxies ? std::max(request.tolerance - proxies->level, request.min_clearance)
                               : std::max(request.tolerance, request.min_clearance);
   const auto field = proxies && request.environment ? checker.kept_distance_field(env, request.root_pose) : nullptr;

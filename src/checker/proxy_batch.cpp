@@ -11,6 +11,7 @@
 #include "bvh_collision/checker/robot_accelerators.h"
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/tree_walk.h"
 
 namespace bvh_collision {
 
@@ -58,13 +59,16 @@ pb::Step flat_step(const KinematicsPlan::Step& step) {
 
 // Depth (spheres on the longest root-to-leaf path) and most children of one sphere tree.
 void tree_shape(const std::vector<ProxySphere>& s, int& depth, int& children) {
-  std::vector<int> level(s.size(), 1);
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    int n = 0;
-    for (std::int32_t k = static_cast<std::int32_t>(i) + 1; k < s[i].skip; k = s[k].skip, ++n) level[k] = level[i] + 1;
-    depth = std::max(depth, level[i]);
-    children = std::max(children, n);
-  }
+  // Walked whole, in order: the open subtrees above each node are its ancestors.
+  std::vector<std::int32_t> open;  // the skip of each open ancestor, innermost last
+  std::vector<int> count;          // children seen of each
+  skip_walk(static_cast<std::int32_t>(s.size()), [&](std::int32_t i) { return s[i].skip; }, [&](std::int32_t i, bool) {
+    while (!open.empty() && open.back() <= i) open.pop_back(), count.pop_back();
+    if (!count.empty()) children = std::max(children, ++count.back());
+    open.push_back(s[i].skip), count.push_back(0);
+    depth = std::max(depth, static_cast<int>(open.size()));
+    return Visit::kEnter;
+  });
 }
 
 // One thread's kernel memory, grown to the largest plan it has run.

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
 
@@ -17,12 +18,15 @@ namespace bvh_collision {
 namespace {
 
 
-// The levels tests go through, coarsest first, down to the finest that serves `tolerance`: at
-// a tolerance the coarsest level up to half of it (or up to it), exact: every level.
+// The levels tests go through, coarsest first, down to the finest that serves `tolerance` as a
+// certified motion's (narrowphase/tolerance_policy.h; states use the same): at a tolerance the
+// coarsest level up to half of it (or up to it), exact: every level.
 std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
-  const ProxyLevel* finest = nullptr;
-  if (tolerance > 0.0) finest = m.proxies_for(tolerance / 2);
-  if (finest == nullptr && tolerance > 0.0) finest = m.proxies_for(tolerance);
+  ToleranceQuestion question{tolerance, Counterpart::kLink};
+  question.motion = true;
+  const ProxyUse use = proxy_use(question);
+  const ProxyLevel* finest = m.proxies_for(use.prefer_up_to);
+  if (finest == nullptr) finest = m.proxies_for(use.decide_up_to);
   std::vector<const ProxyLevel*> out;
   for (const ProxyLevel& p : m.proxy_levels()) {
     if (finest == nullptr || p.level >= finest->level) out.push_back(&p);
@@ -42,8 +46,8 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   const RobotCollisionModel& m = checker_.collision_model();
   proxies_ = levels_for(checker_.accelerators(), options.tolerance);
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
-  proxies_decide_self_ = !proxies_.empty() && options.tolerance >= level_;
-  proxies_decide_objects_ = !proxies_.empty() && options.tolerance >= level_ / 2;
+  proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
+  proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {
     if (m.shapes()[l].empty()) continue;

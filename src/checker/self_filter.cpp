@@ -6,9 +6,11 @@
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
-#include "bvh_collision/narrowphase/shape_queries.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
+#include "bvh_collision/geometry/tree_walk.h"
+#include "bvh_collision/narrowphase/shape_queries.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
 namespace {
@@ -55,22 +57,19 @@ int proxy_point_verdict(const LinkProxy& proxy, const Transform& pose, const Vec
   const double margin = proxy_pose_margin(proxy, pose) + pose_margin(p.norm());
   const bool can_accept = padding >= proxy.hausdorff_bound();
   const double accept = padding - proxy.hausdorff_bound() - margin;
-  bool near = false;
-  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
+  int verdict = -1;
+  skip_walk(static_cast<std::int32_t>(s.size()), [&](std::int32_t i) { return s[i].skip; }, [&](std::int32_t i, bool leaf) {
     const double d2 = (s[i].center - local).squaredNorm();
     const double reach = grown_radius(s[i].radius + padding + margin);
-    if (d2 > reach * reach) {
-      i = s[i].skip;
-      continue;
-    }
-    if (s[i].skip == i + 1) {
-      near = true;
-      const double inside = s[i].radius + accept;
-      if (can_accept && inside > 0.0 && d2 <= inside * inside) return 1;
-    }
-    ++i;
-  }
-  return near ? 0 : -1;
+    if (d2 > reach * reach) return Visit::kSkip;
+    if (!leaf) return Visit::kEnter;
+    verdict = 0;
+    const double inside = s[i].radius + accept;
+    if (!(can_accept && inside > 0.0 && d2 <= inside * inside)) return Visit::kSkip;
+    verdict = 1;
+    return Visit::kStop;
+  });
+  return verdict;
 }
 
 }  // namespace
@@ -112,7 +111,8 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
   // the same answers: the coarsest level whose spheres lie within the padding of their links
   // (accepts and rejects), else the finest (rejects only).
   const std::vector<ProxyLevel>& levels = a_->proxy_levels();
-  const ProxyLevel* proxies = a_->proxies_for(2.0 * padding);
+  // (A point is an exact obstacle and the padding the room: tolerance_policy.h's rule.)
+  const ProxyLevel* proxies = a_->proxies_for(proxy_use({padding, Counterpart::kObject}).decide_up_to);
   if (proxies == nullptr && !levels.empty()) proxies = &levels.front();
   // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`
   // before the ray first meets a link.

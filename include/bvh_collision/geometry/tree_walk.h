@@ -8,6 +8,7 @@
 //                                                                 expand(a, b, push(a', b'))
 //   nearest_first_walk(view, root, bound, leaf, cutoff)           bound(n) -> double, cutoff() -> double
 //   nearest_first_pair_walk(va, vb, ra, rb, root_bound, bound, leaf, expand, cutoff)
+//   skip_walk(count, skip, visit)                                 visit(i, leaf) -> Visit (no stack)
 //
 // The nearest-first walks are the bounded ones (distances): a node (pair) whose bound is not
 // below cutoff() is never entered, and of an entered node's children the nearest is walked
@@ -24,6 +25,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <utility>
 
 #include "bvh_collision/geometry/traversal_stack.h"
@@ -50,6 +52,20 @@ void depth_first_walk(const View& view, const typename View::Node& root, VisitFn
       continue;
     }
     view.children(n, [&](const Node& c) { stack.push(c); });
+  }
+}
+
+// Depth first without a stack, for a tree stored in depth-first order where node i knows
+// `skip(i)`, the index just past its subtree (a leaf: i + 1; the proxy sphere trees). `visit(i,
+// leaf)` decides for each node reached: kSkip jumps past its subtree, kEnter goes on to the next
+// node in order (into the subtree; for a leaf the same as kSkip), kStop ends the walk.
+template <class SkipFn, class VisitFn>
+void skip_walk(std::int32_t count, SkipFn&& skip, VisitFn&& visit) {
+  for (std::int32_t i = 0; i < count;) {
+    const std::int32_t past = skip(i);
+    const Visit v = visit(i, past == i + 1);
+    if (v == Visit::kStop) return;
+    i = v == Visit::kSkip ? past : i + 1;
   }
 }
 

@@ -31,6 +31,7 @@
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/tree_walk.h"
 #include "bvh_collision/geometry/types.h"
 #include "bvh_collision/narrowphase/shape.h"
 
@@ -98,7 +99,8 @@ inline double proxy_pose_margin(const LinkProxy& proxy, const Transform& pose) {
 
 // The link (its proxy posed at `pose`) against one obstacle, through a test of a ball against it.
 // Every sphere contains its subtree, so a ball that misses the obstacle prunes its subtree; the
-// spheres are stored depth first with `skip` past each subtree, so the walk needs no stack.
+// spheres are stored depth first with `skip` past each subtree, so the walk needs no stack
+// (geometry/tree_walk.h's skip_walk).
 //
 // proxy_meets_obstacle: does some leaf sphere, grown by `padding`, meet the obstacle?
 // `meets(centre, radius, leaf)` must answer true whenever the ball meets it; for a ball that is
@@ -109,17 +111,13 @@ bool proxy_meets_obstacle(const LinkProxy& proxy, const Transform& pose, double 
   if (proxy.empty()) return false;
   const std::vector<ProxySphere>& s = proxy.spheres();
   const double grow = padding + proxy_pose_margin(proxy, pose);
-  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
-    const bool leaf = s[i].skip == i + 1;
-    if (!meets(Vec3(pose * s[i].center), s[i].radius + grow, leaf)) {
-      i = s[i].skip;
-    } else if (leaf) {
-      return true;
-    } else {
-      ++i;
-    }
-  }
-  return false;
+  bool hit = false;
+  skip_walk(static_cast<std::int32_t>(s.size()), [&](std::int32_t i) { return s[i].skip; }, [&](std::int32_t i, bool leaf) {
+    if (!meets(Vec3(pose * s[i].center), s[i].radius + grow, leaf)) return Visit::kSkip;
+    hit = leaf;
+    return leaf ? Visit::kStop : Visit::kEnter;
+  });
+  return hit;
 }
 
 // proxy_obstacle_distance: min(best, the smallest `distance(centre, radius, best)` over the leaf
@@ -134,21 +132,19 @@ double proxy_obstacle_distance(const LinkProxy& proxy, const Transform& pose, do
   const std::vector<ProxySphere>& s = proxy.spheres();
   const double grow = proxy_pose_margin(proxy, pose);
   double unopened = best;
-  for (std::int32_t i = 0, n = static_cast<std::int32_t>(s.size()); i < n;) {
+  skip_walk(static_cast<std::int32_t>(s.size()), [&](std::int32_t i) { return s[i].skip; }, [&](std::int32_t i, bool leaf) {
     const double d = distance(Vec3(pose * s[i].center), s[i].radius + grow, best);
-    const bool leaf = s[i].skip == i + 1;
-    if (d >= best) {
-      i = s[i].skip;
-    } else if (leaf) {
+    if (d >= best) return Visit::kSkip;
+    if (leaf) {
       best = d;
-      ++i;
-    } else if (slack.leaves(d, best)) {
-      unopened = std::min(unopened, d);
-      i = s[i].skip;
-    } else {
-      ++i;
+      return Visit::kSkip;
     }
-  }
+    if (slack.leaves(d, best)) {
+      unopened = std::min(unopened, d);
+      return Visit::kSkip;
+    }
+    return Visit::kEnter;
+  });
   return std::min(best, unopened);
 }
 

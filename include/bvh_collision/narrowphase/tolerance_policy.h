@@ -1,0 +1,54 @@
+// The tolerance policy, in one place: which method may answer a component of a query (a link
+// against another link, an object or the octree) at tolerance eps, by DESIGN.md section 2: report
+// collision whenever d <= padding, free whenever d > padding + eps, and "a tolerance may be
+// served by a coarser model of a link (a proxy) only when that model's error is proven at build
+// time to be within the tolerance".
+//
+// The methods and their error:
+// - exact (shape_pairs.h, shape_octree.h): none; a distance query at eps may stop within eps
+//   above the true distance, a BVH x octree walk may settle a cube within eps (its slack).
+// - clearance grids (checker/pair_clearance.h) and the octree's distance field
+//   (octree/distance_field.h): proven lower bounds, so they only ever prove "free": used at every
+//   tolerance, eps = 0 included.
+// - a proxy level e (link_proxy.h): its leaf spheres hold the link and lie within e/2 of it. So
+//   proxies apart prove free at every tolerance (they prune, eps = 0 included), and proxies that
+//   meet put the link within padding + error of the counterpart, the error being e against
+//   another link's proxies (e/2 on each side) and e/2 against an exact obstacle. A level may
+//   answer "collision" alone where that error fits eps: e <= eps against a link, e <= 2 eps
+//   against an obstacle. Only for boolean questions (no distance, no contacts to report) on
+//   solids (the proxies cover a closed mesh's solid; without solids a link inside another is
+//   free, which they cannot tell), and against the octree only with its distance field (the
+//   proxies' leaf test reads the field's occupancy grid).
+// - a certified motion (checker/scene_checker.h, motion_check.cpp) grows each interval's proxies
+//   by how far the links move in it; an interval that still fails counts as colliding once growth
+//   and proxy error fit eps. So it prefers the coarsest level up to eps / 2 (the other half is the
+//   room the growth needs, which keeps the intervals near a contact long), else up to eps.
+#pragma once
+
+namespace bvh_collision {
+
+// The other side of a link in a component.
+enum class Counterpart { kLink, kObject, kOctree };
+
+// How far an answer from proxy level `level` can be off against `other`: the level against a
+// link's proxies, half of it against an exact obstacle.
+double proxy_error(double level, Counterpart other);
+
+struct ToleranceQuestion {
+  double tolerance = 0.0;  // eps, finite and >= 0
+  Counterpart other = Counterpart::kLink;
+  bool boolean = true;        // only collision or not: no distance, no contacts asked for
+  bool solids = true;         // closed meshes are solids (the default)
+  bool motion = false;        // the intervals of a certified motion, not one state
+  bool octree_field = false;  // against the octree: its distance field is there
+};
+
+// How proxy levels may serve the question (RobotAccelerators::proxies_for takes these bounds;
+// 0: no level).
+struct ProxyUse {
+  double decide_up_to = 0.0;  // a level e <= this may answer alone: its overlap counts as collision
+  double prefer_up_to = 0.0;  // a certified motion takes the coarsest level up to this first
+};
+ProxyUse proxy_use(const ToleranceQuestion& question);
+
+}  // namespace bvh_collision

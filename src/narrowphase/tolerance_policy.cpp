@@ -1,0 +1,18 @@
+// The tolerance policy (narrowphase/tolerance_policy.h).
+#include "bvh_collision/narrowphase/tolerance_policy.h"
+
+namespace bvh_collision {
+
+double proxy_error(double level, Counterpart other) { return other == Counterpart::kLink ? level : level / 2; }
+
+ProxyUse proxy_use(const ToleranceQuestion& q) {
+  ProxyUse use;
+  if (!(q.tolerance > 0.0) || !q.boolean || !q.solids) return use;  // exact: the proxies only prune
+  if (q.other == Counterpart::kOctree && !q.octree_field) return use;
+  // The largest level whose error against the counterpart fits the tolerance.
+  use.decide_up_to = q.other == Counterpart::kLink ? q.tolerance : 2.0 * q.tolerance;
+  use.prefer_up_to = q.motion ? q.tolerance / 2 : use.decide_up_to;
+  return use;
+}
+
+}  // namespace bvh_collision

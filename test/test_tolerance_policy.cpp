@@ -1,0 +1,191 @@
+// The tolerance policy (narrowphase/tolerance_policy.h): the table of which method may answer,
+// for every kind of counterpart and tolerance class, and on a robot that the level it picks keeps
+// DESIGN.md section 2's contract (collision whenever d <= padding, free whenever d > padding + eps)
+// for every kind pair: link x link, link x object, link x octree.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
+#include "bvh_collision/octree/scan.h"
+#include "checker_fixtures.h"
+#include "robot_data.h"
+
+namespace bvh_collision {
+namespace {
+
+constexpr double kRounding = 1e-9;
+
+struct Row {
+  Counterpart other;
+  bool boolean, solids, motion, field;
+  double tolerance;
+  double decide, prefer;  // expected ProxyUse
+};
+
+// The policy as a table, written out: read it as the documentation of the header.
+const Row kTable[] = {
+    // Exact (tolerance 0): the proxies only prune, whatever the question.
+    {Counterpart::kLink, true, true, false, false, 0.0, 0.0, 0.0},
+    {Counterpart::kObject, true, true, false, false, 0.0, 0.0, 0.0},
+    {Counterpart::kOctree, true, true, false, true, 0.0, 0.0, 0.0},
+    {Counterpart::kLink, true, true, true, false, 0.0, 0.0, 0.0},
+    // A boolean question on solids at 1 cm: a level's error is e against a link, e / 2 against
+    // an obstacle.
+    {Counterpart::kLink, true, true, false, false, 0.01, 0.01, 0.01},
+    {Counterpart::kObject, true, true, false, false, 0.01, 0.02, 0.02},
+    {Counterpart::kOctree, true, true, false, true, 0.01, 0.02, 0.02},
+    // The octree without its distance field: exact (the proxies' leaf test reads the field).
+    {Counterpart::kOctree, true, true, false, false, 0.01, 0.0, 0.0},
+    // Distances and contacts, and surfaces only: exact.
+    {Counterpart::kLink, false, true, false, false, 0.01, 0.0, 0.0},
+    {Counterpart::kObject, false, true, false, false, 0.01, 0.0, 0.0},
+    {Counterpart::kOctree, false, true, false, true, 0.01, 0.0, 0.0},
+    {Counterpart::kLink, true, false, false, false, 0.01, 0.0, 0.0},
+    {Counterpart::kOctree, true, false, false, true, 0.01, 0.0, 0.0},
+    // Certified motions: the coarsest level up to half the tolerance first.
+    {Counterpart::kLink, true, true, true, false, 0.01, 0.01, 0.005},
+    {Counterpart::kObject, true, true, true, false, 0.01, 0.02, 0.005},
+    {Counterpart::kOctree, true, true, true, true, 0.01, 0.02, 0.005},
+};
+
+ToleranceQuestion question_of(const Row& r) {
+  ToleranceQuestion q{r.tolerance, r.other};
+  q.boolean = r.boolean;
+  q.solids = r.solids;
+  q.motion = r.motion;
+  q.octree_field = r.field;
+  return q;
+}
+
+TEST(TolerancePolicy, TheTable) {
+  for (const Row& r : kTable) {
+    const ProxyUse use = proxy_use(question_of(r));
+    EXPECT_EQ(use.decide_up_to, r.decide) << "row " << (&r - kTable);
+    EXPECT_EQ(use.prefer_up_to, r.prefer) << "row " << (&r - kTable);
+  }
+}
+
+// Every combination of the question at every tolerance class: a level allowed to decide errs by
+// at most the tolerance, and is the largest that does; a motion prefers a level that leaves half.
+TEST(TolerancePolicy, EveryLevelAllowedToDecideFitsTheTolerance) {
+  int deciding = 0;
+  for (const Counterpart other : {Counterpart::kLink, Counterpart::kObject, Counterpart::kOctree}) {
+    for (const double t : {0.0, 1e-4, 0.003, 0.01, 0.05}) {
+      for (int bits = 0; bits < 16; ++bits) {
+        ToleranceQuestion q{t, other};
+        q.boolean = bits & 1, q.solids = bits & 2, q.motion = bits & 4, q.octree_field = bits & 8;
+        const ProxyUse use = proxy_use(q);
+        const bool exact = t == 0.0 || !q.boolean || !q.solids || (other == Counterpart::kOctree && !q.octree_field);
+        if (exact) {
+          EXPECT_EQ(use.decide_up_to, 0.0);
+          EXPECT_EQ(use.prefer_up_to, 0.0);
+          continue;
+        }
+        ++deciding;
+        EXPECT_LE(proxy_error(use.decide_up_to, other), t);
+        EXPECT_GT(proxy_error(use.decide_up_to * (1 + 1e-12), other), t) << "not the largest level that fits";
+        EXPECT_LE(use.prefer_up_to, use.decide_up_to);
+        if (q.motion) {
+          EXPECT_LE(proxy_error(use.prefer_up_to, Counterpart::kLink), t / 2);
+        }
+      }
+    }
+  }
+  // Four tolerances above 0; per counterpart the boolean questions on solids, state or motion,
+  // with or without a field (the octree's only with it).
+  EXPECT_EQ(deciding, 4 * (4 + 4 + 2));
+}
+
+// The demo arm's obstacles: a pillar of voxels (the octree), or a box and a cylinder (objects).
+Environment demo_environment(bool octree) {
+  Environment env(0.02);
+  if (octree) {
+    std::vector<ScanPoint> pillar;
+    for (double x = 0.39; x <= 0.51 + 1e-9; x += 0.01) {
+      for (double y = 0.29; y <= 0.41 + 1e-9; y += 0.01) {
+        for (double z = 0.0; z <= 0.8 + 1e-9; z += 0.01) pillar.emplace_back(float(x), float(y), float(z));
+      }
+    }
+    insert_points(env.octree(), pillar);
+    return env;
+  }
+  env.add_object("shelf", ObjectShape::box(Vec3(0.5, 0.1, 0.04)), Transform::Translation(Vec3(-0.3, -0.35, 0.5)));
+  env.add_object("post", ObjectShape::cylinder(0.04, 0.8), Transform::Translation(Vec3(-0.3, 0.35, 0.4)));
+  return env;
+}
+
+// The exact distance from the robot to the environment (0 in collision).
+double exact_distance(const CollisionChecker& checker, const double* q, const Environment& env) {
+  EnvironmentRequest exact;
+  exact.distance = true;
+  exact.distance_field = EnvironmentRequest::DistanceField::kOff;
+  const EnvironmentResult truth = checker.check_environment(q, env, exact);
+  return truth.collision ? 0.0 : truth.min_distance;
+}
+
+// The level each tolerance class gets, and that every kind pair keeps the contract with it.
+TEST(TolerancePolicy, EachToleranceClassKeepsTheContractOnEveryKindPair) {
+  CheckerOptions options;
+  options.proxy_levels = {0.005, 0.01, 0.02};
+  const CollisionChecker checker = test::demo_arm_checker(options);
+  const Environment voxels = demo_environment(true);
+  ASSERT_NE(checker.prepare_distance_field(voxels), nullptr);
+  const auto objects = std::make_shared<const Environment>(demo_environment(false));
+  struct Class {
+    double tolerance, self_level, obstacle_level;  // the levels that may decide (0: none)
+  };
+  const Class classes[] = {{0.0, 0.0, 0.0}, {0.003, 0.0, 0.005}, {0.006, 0.005, 0.01}, {0.012, 0.01, 0.02}, {0.03, 0.02, 0.02}};
+  std::mt19937_64 rng(41);
+  int near_hits = 0;  // answers of collision at d > 0: the proxies decided
+  for (const Class& c : classes) {
+    const ProxyLevel* self = checker.accelerators().proxies_for(proxy_use({c.tolerance, Counterpart::kLink}).decide_up_to);
+    ToleranceQuestion octree{c.tolerance, Counterpart::kOctree};
+    octree.octree_field = true;
+    const ProxyLevel* obstacle = checker.accelerators().proxies_for(proxy_use(octree).decide_up_to);
+    EXPECT_EQ(self ? self->level : 0.0, c.self_level) << c.tolerance;
+    EXPECT_EQ(obstacle ? obstacle->level : 0.0, c.obstacle_level) << c.tolerance;
+    SceneCheckOptions scene_options;
+    scene_options.tolerance = c.tolerance;
+    scene_options.states_at_tolerance = true;
+    scene_options.self = false;
+    const SceneChecker against_objects(checker, objects, scene_options);
+    for (int i = 0; i < test::sized(600); ++i) {
+      const std::vector<double> q = random_configuration(checker.model(), rng);
+      // Link x link.
+      SelfCollisionRequest exact_self;
+      exact_self.distance = true;
+      const SelfCollisionResult ts = checker.check_self(q.data(), exact_self);
+      const double ds = ts.collision ? 0.0 : ts.min_distance;
+      SelfCollisionRequest self_request;
+      self_request.tolerance = c.tolerance;
+      const bool self_hit = checker.check_self(q.data(), self_request).collision;
+      // Link x octree (its field kept).
+      const double dv = exact_distance(checker, q.data(), voxels);
+      EnvironmentRequest request;
+      request.tolerance = c.tolerance;
+      const bool voxel_hit = checker.check_environment(q.data(), voxels, request).collision;
+      // Link x object.
+      const double dobj = exact_distance(checker, q.data(), *objects);
+      const bool object_hit = against_objects.collides(q.data());
+      for (const auto& [kind, d, hit] : {std::tuple{"self", ds, self_hit}, std::tuple{"octree", dv, voxel_hit},
+                                         std::tuple{"objects", dobj, object_hit}}) {
+        if (d == 0.0) {
+          ASSERT_TRUE(hit) << kind << ", tolerance " << c.tolerance << ", state " << i;
+        }
+        if (hit) {
+          ASSERT_LE(d, c.tolerance + kRounding) << kind << ", tolerance " << c.tolerance << ", state " << i;
+        }
+        near_hits += hit && d > 0.0;
+      }
+    }
+  }
+  EXPECT_GT(near_hits, 0) << "no answer came from the proxies";
+}
+
+}  // namespace
+}  // namespace bvh_collision
