@@ -11,16 +11,19 @@
 //
 // Floating point: no fused multiply-add (the units are built with -ffp-contract=off and without
 // -mfma), so the two builds round alike and answer alike. The sphere tests are those of
-// proxies_overlap (checker/link_proxy.cpp) with its margin, kPoseMargin of the poses' magnitude,
+// proxies_overlap (narrowphase/link_proxy_pairs.cpp) with its margin, kPoseMargin of the poses' magnitude,
 // which covers the rounding of poses carried down a chain of ~100 joints at a few units in the
 // last place each; the sine and cosine below are within 1e-15 of exact (bound below), so the
 // poses they give round like those of the C library's and the same margin covers them.
 //
 // Everything here has internal linkage, and only plain types and builtins are used (see
-// proxy_batch_plan.h on why).
+// proxy_batch_plan.h on why); the traversal core's templates (geometry/tree_walk.h) are
+// instantiated here only with this unit's own types and lambdas, so their code has internal
+// linkage too and is never shared with the other build of the kernel.
 #include <cstring>
 
 #include "bvh_collision/checker/detail/proxy_batch_plan.h"
+#include "bvh_collision/geometry/tree_walk.h"
 
 #if !defined(PROXY_BATCH_ISA) || !defined(PROXY_BATCH_WIDTH)
 #error "define PROXY_BATCH_ISA and PROXY_BATCH_WIDTH before including proxy_batch_kernel.h"
@@ -184,6 +187,41 @@ void forward_kinematics(const Plan& plan, const double* const* lanes, Pose* pose
   }
 }
 
+// A proxy sphere tree as the traversal core walks it (geometry/tree_walk.h): stored depth first,
+// each sphere knowing the index past its subtree. a's side carries, with each sphere, the lanes
+// still to test below it.
+struct LaneSphere {
+  std::int32_t index;
+  unsigned lanes;
+};
+struct SphereTree {
+  using Node = std::int32_t;
+  const Sphere* s;
+  bool is_leaf(std::int32_t i) const { return s[i].skip == i + 1; }
+  bool is_leaf(const LaneSphere& x) const { return is_leaf(x.index); }
+  template <class F>
+  void children(std::int32_t i, F&& f) const {
+    for (std::int32_t k = i + 1; k < s[i].skip; k = s[k].skip) f(k);
+  }
+};
+struct LaneSphereTree : SphereTree {
+  using Node = LaneSphere;
+};
+// The walk's stack on the scratch memory (three words an entry; Plan::stack_capacity entries).
+struct ScratchStack {
+  std::int32_t* words;
+  int top = 0;
+  bool empty() const { return top == 0; }
+  void push(const NodePair<LaneSphere, std::int32_t>& p) {
+    words[3 * top] = p.a.index, words[3 * top + 1] = p.b, words[3 * top + 2] = static_cast<std::int32_t>(p.a.lanes);
+    ++top;
+  }
+  NodePair<LaneSphere, std::int32_t> pop() {
+    --top;
+    return {{words[3 * top], static_cast<unsigned>(words[3 * top + 2])}, words[3 * top + 1]};
+  }
+};
+
 // b's proxy spheres tested against a's in the lanes of `live`: the lanes where some pair of leaf
 // spheres comes within padding (plus the pose margin), as proxies_overlap decides one state.
 unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const Pose& pb, unsigned live,
@@ -206,39 +244,35 @@ unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const
   const V slack = splat(pair.padding) +
                   splat(plan.pose_margin) * (splat(1.0) + (norm_a + norm_b + splat(la.extent + lb.extent)));
   unsigned hits = 0;
-  int top = 0;
-  stack[0] = 0, stack[1] = 0, stack[2] = static_cast<std::int32_t>(live);
-  top = 1;
-  while (top > 0) {
-    --top;
-    const std::int32_t i = stack[3 * top], j = stack[3 * top + 1];
-    const unsigned mask = static_cast<unsigned>(stack[3 * top + 2]) & ~hits;
-    if (mask == 0) continue;
-    const Sphere& a = sa[i];
+  unsigned near = 0;  // the lanes where the pair just visited came within reach
+  ScratchStack walk_stack{stack};
+  const LaneSphereTree ta{{sa}};
+  const SphereTree tb{sb};
+  depth_first_pair_walk_on(walk_stack, ta, tb, LaneSphere{0, live}, 0, [&](const LaneSphere& x, std::int32_t j) {
+    const unsigned mask = x.lanes & ~hits;
+    if (mask == 0) return Visit::kSkip;
+    const Sphere& a = sa[x.index];
     const Sphere& b = sb[j];
     const V dx = splat(a.c[0]) - (r[0] * b.c[0] + r[1] * b.c[1] + r[2] * b.c[2] + t[0]);
     const V dy = splat(a.c[1]) - (r[3] * b.c[0] + r[4] * b.c[1] + r[5] * b.c[2] + t[1]);
     const V dz = splat(a.c[2]) - (r[6] * b.c[0] + r[7] * b.c[1] + r[8] * b.c[2] + t[2]);
     const V reach = splat(a.r + b.r) + slack;
     // Not "apart" (a NaN stays in, as in proxies_overlap).
-    const unsigned near = mask & ~lane_bits(dx * dx + dy * dy + dz * dz > reach * reach);
-    if (near == 0) continue;
-    const bool leaf_a = a.skip == i + 1, leaf_b = b.skip == j + 1;
-    if (leaf_a && leaf_b) {
-      hits |= near;
-      if (hits == live) break;
-      continue;
-    }
-    auto push = [&](std::int32_t x, std::int32_t y) {
-      stack[3 * top] = x, stack[3 * top + 1] = y, stack[3 * top + 2] = static_cast<std::int32_t>(near);
-      ++top;
-    };
-    if (!leaf_a && (leaf_b || a.r >= b.r)) {
-      for (std::int32_t k = i + 1; k < a.skip; k = sa[k].skip) push(k, j);
+    near = mask & ~lane_bits(dx * dx + dy * dy + dz * dz > reach * reach);
+    return near == 0 ? Visit::kSkip : Visit::kEnter;
+  }, [&](const LaneSphere&, std::int32_t) {
+    hits |= near;
+    return hits == live;
+  }, [&](const LaneSphere& x, std::int32_t j, auto&& push) {
+    // The larger sphere is opened (a leaf never); its children carry the lanes still in.
+    const Sphere& a = sa[x.index];
+    const Sphere& b = sb[j];
+    if (!ta.is_leaf(x) && (tb.is_leaf(j) || a.r >= b.r)) {
+      ta.children(x.index, [&](std::int32_t k) { push(LaneSphere{k, near}, j); });
     } else {
-      for (std::int32_t k = j + 1; k < b.skip; k = sb[k].skip) push(i, k);
+      tb.children(j, [&](std::int32_t k) { push(LaneSphere{x.index, near}, k); });
     }
-  }
+  });
   return hits;
 }
 

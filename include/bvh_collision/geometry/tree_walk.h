@@ -69,18 +69,22 @@ void skip_walk(std::int32_t count, SkipFn&& skip, VisitFn&& visit) {
   }
 }
 
+// A pair of nodes of two trees, as the pair walks keep them.
+template <class A, class B>
+struct NodePair {
+  A a;
+  B b;
+};
+
 // Depth first over pairs of nodes of two trees from (ra, rb). `visit(a, b)` decides for every
 // pair reached; an entered pair of leaves goes to `leaf(a, b)`, which returns true to stop; any
 // other entered pair is opened by `expand(a, b, push)`, which pushes the pairs to walk next.
-template <template <class> class Stack = DefaultTraversalStack, class ViewA, class ViewB, class VisitFn, class LeafFn,
-          class ExpandFn>
-void depth_first_pair_walk(const ViewA& va, const ViewB& vb, const typename ViewA::Node& ra, const typename ViewB::Node& rb,
-                           VisitFn&& visit, LeafFn&& leaf, ExpandFn&& expand) {
-  struct Pair {
-    typename ViewA::Node a;
-    typename ViewB::Node b;
-  };
-  Stack<Pair> stack;
+// depth_first_pair_walk_on walks on a stack the caller holds (push, pop, empty over
+// NodePair<ViewA::Node, ViewB::Node>: memory it already has, as the SIMD batch kernel's).
+template <class StackT, class ViewA, class ViewB, class VisitFn, class LeafFn, class ExpandFn>
+void depth_first_pair_walk_on(StackT& stack, const ViewA& va, const ViewB& vb, const typename ViewA::Node& ra,
+                              const typename ViewB::Node& rb, VisitFn&& visit, LeafFn&& leaf, ExpandFn&& expand) {
+  using Pair = NodePair<typename ViewA::Node, typename ViewB::Node>;
   stack.push(Pair{ra, rb});
   while (!stack.empty()) {
     const Pair p = stack.pop();
@@ -93,6 +97,15 @@ void depth_first_pair_walk(const ViewA& va, const ViewB& vb, const typename View
     }
     expand(p.a, p.b, [&](const typename ViewA::Node& a, const typename ViewB::Node& b) { stack.push(Pair{a, b}); });
   }
+}
+
+template <template <class> class Stack = DefaultTraversalStack, class ViewA, class ViewB, class VisitFn, class LeafFn,
+          class ExpandFn>
+void depth_first_pair_walk(const ViewA& va, const ViewB& vb, const typename ViewA::Node& ra, const typename ViewB::Node& rb,
+                           VisitFn&& visit, LeafFn&& leaf, ExpandFn&& expand) {
+  Stack<NodePair<typename ViewA::Node, typename ViewB::Node>> stack;
+  depth_first_pair_walk_on(stack, va, vb, ra, rb, std::forward<VisitFn>(visit), std::forward<LeafFn>(leaf),
+                           std::forward<ExpandFn>(expand));
 }
 
 namespace detail {
