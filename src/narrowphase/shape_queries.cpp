@@ -10,12 +10,16 @@
 namespace bvh_collision {
 
 bool shape_holds_point(const ShapeRef& shape, const Transform& pose, const Vec3& p, double padding) {
-  const Vec3 local = pose.R.transpose() * (p - pose.t);
-  if (shape.mesh == nullptr) return (closest_point(shape.primitive, local) - local).norm() <= padding;
+  const auto local = [&] { return Vec3(pose.R.transpose() * (p - pose.t)); };
+  if (shape.mesh == nullptr) {
+    const Vec3 q = local();
+    return (closest_point(shape.primitive, q) - q).norm() <= padding;
+  }
   // The distance query stops beyond its bound: one step above the padding keeps "exactly at".
+  // (The point goes to the mesh frame only for the containment test, as the self filter did.)
   const double reach = std::nextafter(padding, std::numeric_limits<double>::infinity());
   if (point_distance(*shape.mesh, pose, p, reach).distance <= padding) return true;
-  return shape.mesh->closed() && contains_point(*shape.mesh, local);
+  return shape.mesh->closed() && contains_point(*shape.mesh, local());
 }
 
 double shape_ray_entry(const ShapeRef& shape, const Transform& pose, const Vec3& origin, const Vec3& unit, double length) {
