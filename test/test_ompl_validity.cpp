@@ -80,7 +80,12 @@ TEST(OmplValidity, RrtConnectPlansAroundThePillarAndEverySegmentIsFree) {
   // The straight motion runs into the pillar: planning is needed.
   ASSERT_FALSE(setup.getSpaceInformation()->checkMotion(start.get(), goal.get()));
   ASSERT_FALSE(dense_sweep_free(*context, kStart, kGoal, 1e-3));
+  // Untimed by default: the checks are counted, no clock is read.
+  ASSERT_TRUE(setup.getSpaceInformation()->isValid(start.get()));
+  EXPECT_GT(context->counters->states.load(), 0u);
+  EXPECT_EQ(context->counters->seconds(), 0.0);
   context->counters->reset();
+  context->counters->timed = true;
   // Bounded by work, not time (a seeded RRTConnect does the same work on any machine): it solves
   // this in well under a hundred checks.
   const auto checks = [&] { return context->counters->states.load() + context->counters->motions.load(); };

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"
@@ -34,7 +35,7 @@ CollisionChecker demo_checker(const CheckerOptions& options) {
   return CollisionChecker(std::move(m), std::move(acm), options);
 }
 
-TEST(ProxyBatch, SineAndCosineMatchTheCLibrary) {
+TEST(ProxyBatch, SineAndCosineMatchTheCLibraryAndTheOneValueForm) {
   std::mt19937_64 rng(3);
   std::vector<double> xs = {0.0, -0.0, M_PI / 4, -M_PI / 4, M_PI / 2, M_PI, 1.5 * M_PI, 2 * M_PI, 1e-300, 5e-324,
                             1.6e6, -1.6e6, 1.7e6, 1e22, std::numeric_limits<double>::infinity(),
@@ -58,6 +59,11 @@ TEST(ProxyBatch, SineAndCosineMatchTheCLibrary) {
         ASSERT_EQ(std::memcmp(&s[0][l], &s[1][l], sizeof(double)), 0) << x;
         ASSERT_EQ(std::memcmp(&c[0][l], &c[1][l], sizeof(double)), 0) << x;
       }
+      // The one-value form (geometry/sin_cos.h, KinematicsPlan's) gives the lanes' bits.
+      double one_s = 0.0, one_c = 0.0;
+      sin_cos(x, one_s, one_c);
+      ASSERT_EQ(std::memcmp(&s[0][l], &one_s, sizeof(double)), 0) << x;
+      ASSERT_EQ(std::memcmp(&c[0][l], &one_c, sizeof(double)), 0) << x;
       if (!std::isfinite(x)) {
         EXPECT_TRUE(std::isnan(s[0][l]) && std::isnan(c[0][l])) << x;
         continue;

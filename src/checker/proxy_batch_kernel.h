@@ -23,6 +23,7 @@
 #include <cstring>
 
 #include "bvh_collision/checker/detail/proxy_batch_plan.h"
+#include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/geometry/tree_walk.h"
 
 #if !defined(PROXY_BATCH_ISA) || !defined(PROXY_BATCH_WIDTH)
@@ -70,32 +71,17 @@ inline V select(M m, V a, V b) {
 }
 constexpr unsigned kAllLanes = (1u << W) - 1;
 
-// sin and cos of four values. x = k pi/2 + r with k = round(2x/pi) and |r| <= pi/4 (+ rounding);
-// pi/2 in three parts: hi (26 significant bits) and mid (27) sum to the double nearest pi/2, and
-// lo = pi/2 - (hi + mid) to double precision. For |k| <= 2^20, k hi and k mid are exact, x - k hi
-// is exact (Sterbenz), and r carries at most ~3 ulp of r plus |k| 1e-32. Taylor series through
-// r^17 (sine) and r^18 (cosine): the first omitted terms are below 1e-19 at |r| = 0.786, and
-// Horner's rounding adds a few ulp. So each result is within ~5e-16 of exact for |x| <= 1.6e6;
-// lanes beyond that (or not finite) take the C library's.
-constexpr double kTwoOverPi = 0.6366197723675814;
-constexpr double kPiOver2Hi = 1.5707963109016418;
-constexpr double kPiOver2Mid = 1.5893254712295857e-08;
-constexpr double kPiOver2Lo = 6.123233995736766e-17;
-constexpr double kRoundShift = 6755399441055744.0;  // 1.5 * 2^52: y + shift holds round(y) in its low bits
-constexpr double kReducedRange = 1.6e6;
-
+// sin and cos of W values: geometry/sin_cos.h's operations and constants (its bound: within
+// ~5e-16 of exact for |x| <= 1.6e6), lane by lane; lanes beyond that (or not finite) take the C
+// library's.
 inline void sincos_lanes(V x, V& s, V& c) {
+  using namespace sin_cos_constants;
   const V shifted = x * splat(kTwoOverPi) + splat(kRoundShift);
   M quadrant;
   std::memcpy(&quadrant, &shifted, sizeof quadrant);
   const V k = shifted - splat(kRoundShift);
   const V r = ((x - k * splat(kPiOver2Hi)) - k * splat(kPiOver2Mid)) - k * splat(kPiOver2Lo);
   const V r2 = r * r;
-  // Horner over 1/n!, signs alternating: sine n = 17, 15, ..., 3, cosine n = 18, 16, ..., 2.
-  constexpr double kSine[] = {1.0 / 355687428096000.0, -1.0 / 1307674368000.0, 1.0 / 6227020800.0, -1.0 / 39916800.0,
-                              1.0 / 362880.0, -1.0 / 5040.0, 1.0 / 120.0, -1.0 / 6.0};
-  constexpr double kCosine[] = {1.0 / 6402373705728000.0, -1.0 / 20922789888000.0, 1.0 / 87178291200.0,
-                                -1.0 / 479001600.0, 1.0 / 3628800.0, -1.0 / 40320.0, 1.0 / 720.0, -1.0 / 24.0, 0.5};
   V ps = splat(kSine[0]);
   for (int i = 1; i < 8; ++i) ps = ps * r2 + splat(kSine[i]);
   const V sin_r = r + r * r2 * ps;

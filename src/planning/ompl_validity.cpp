@@ -41,6 +41,7 @@ std::shared_ptr<ompl::base::RealVectorStateSpace> JointGroup::make_space() const
 }
 
 ValidityTimer::~ValidityTimer() {
+  if (!counters_->timed) return;
   const auto spent = std::chrono::steady_clock::now() - start_;
   const auto ns = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(spent).count());
   counters_->nanoseconds += ns;

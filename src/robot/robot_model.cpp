@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/urdf_validation.h"
 
@@ -222,13 +223,27 @@ int RobotModel::joint_index(const std::string& name) const {
 
 namespace {
 
-// parent * origin * motion, written out: at -O2 GCC leaves Eigen's small products as calls.
+// out = a * b, written out: at -O2 GCC leaves Eigen's small products as calls and keeps loops
+// over three rows, at twice the instructions. `out` must not be `a` or `b`.
+inline void compose_into(const Transform& a, const Transform& b, Transform& out) {
+  const double a00 = a.R(0, 0), a01 = a.R(0, 1), a02 = a.R(0, 2);
+  const double a10 = a.R(1, 0), a11 = a.R(1, 1), a12 = a.R(1, 2);
+  const double a20 = a.R(2, 0), a21 = a.R(2, 1), a22 = a.R(2, 2);
+  auto column = [&](const double b0, const double b1, const double b2, double* o) {
+    o[0] = a00 * b0 + a01 * b1 + a02 * b2;
+    o[1] = a10 * b0 + a11 * b1 + a12 * b2;
+    o[2] = a20 * b0 + a21 * b1 + a22 * b2;
+  };
+  column(b.R(0, 0), b.R(1, 0), b.R(2, 0), out.R.col(0).data());
+  column(b.R(0, 1), b.R(1, 1), b.R(2, 1), out.R.col(1).data());
+  column(b.R(0, 2), b.R(1, 2), b.R(2, 2), out.R.col(2).data());
+  column(b.t[0], b.t[1], b.t[2], out.t.data());
+  for (int i = 0; i < 3; ++i) out.t[i] += a.t[i];
+}
+
 inline Transform compose(const Transform& a, const Transform& b) {
   Transform out;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out.R(i, j) = a.R(i, 0) * b.R(0, j) + a.R(i, 1) * b.R(1, j) + a.R(i, 2) * b.R(2, j);
-    out.t[i] = a.R(i, 0) * b.t[0] + a.R(i, 1) * b.t[1] + a.R(i, 2) * b.t[2] + a.t[i];
-  }
+  compose_into(a, b, out);
   return out;
 }
 
@@ -343,16 +358,32 @@ KinematicsPlan::KinematicsPlan(const RobotModel& model, const std::vector<bool>&
 
 namespace {
 
-// parent * fixed * (rotation by q about +-unit axis k): the rotation mixes only two columns.
-void compose_axis_rotation(const Transform& parent, const Transform& fixed, int k, double sign, double q,
-                           Transform& out) {
-  out = compose(parent, fixed);
-  const double c = std::cos(q), s = sign * std::sin(q);
+// parent * fixed * (rotation about +-unit axis k with cosine c and sine s, the sign applied):
+// the rotation mixes only two columns.
+void compose_axis_rotation(const Transform& parent, const Transform& fixed, int k, double c, double s, Transform& out) {
+  compose_into(parent, fixed, out);
   const int i = (k + 1) % 3, j = (k + 2) % 3;  // R_k(q) maps e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j
   for (int r = 0; r < 3; ++r) {
     const double a = out.R(r, i), b = out.R(r, j);
     out.R(r, i) = c * a + s * b;
     out.R(r, j) = c * b - s * a;
+  }
+}
+
+bool about_unit_axis(const KinematicsPlan::Step& step) {
+  return (step.type == JointType::kRevolute || step.type == JointType::kContinuous) && step.axis >= 0;
+}
+
+// The sines and cosines of steps [first, first + count) that rotate about a unit axis, before
+// the chain of products that needs them: independent of one another, they overlap in the
+// processor instead of waiting on each parent's pose.
+void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, std::size_t first, std::size_t count,
+                  const double* state, double* s, double* c) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const KinematicsPlan::Step& step = steps[first + i];
+    if (!about_unit_axis(step)) continue;
+    sin_cos(step.multiplier * state[step.variable] + step.offset, s[i], c[i]);
+    s[i] *= step.axis_vector[step.axis];
   }
 }
 
@@ -362,31 +393,39 @@ void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
                              const std::vector<Transform>* free_joint_poses) const {
   poses.resize(links_);
   poses[root_] = Transform();
-  for (const Step& step : steps_) {
-    const double q = step.variable >= 0 ? step.multiplier * state[step.variable] + step.offset : 0.0;
-    const Transform& parent = poses[step.parent];
-    Transform& child = poses[step.link];
-    switch (step.type) {
-      case JointType::kRevolute:
-      case JointType::kContinuous:
-        if (step.axis >= 0) {
-          compose_axis_rotation(parent, step.fixed, step.axis, step.axis_vector[step.axis], q, child);
-        } else {
-          child = compose(compose(parent, step.fixed), Transform{axis_rotation(step.axis_vector, q), Vec3::Zero()});
+  constexpr std::size_t kBlock = 32;  // steps per block of sines and cosines (on the stack)
+  double sines[kBlock], cosines[kBlock];
+  for (std::size_t first = 0; first < steps_.size(); first += kBlock) {
+    const std::size_t count = std::min(kBlock, steps_.size() - first);
+    step_sin_cos(steps_, first, count, state, sines, cosines);
+    for (std::size_t i = 0; i < count; ++i) {
+      const Step& step = steps_[first + i];
+      const double q = step.variable >= 0 ? step.multiplier * state[step.variable] + step.offset : 0.0;
+      const Transform& parent = poses[step.parent];
+      Transform& child = poses[step.link];
+      switch (step.type) {
+        case JointType::kRevolute:
+        case JointType::kContinuous:
+          if (step.axis >= 0) {
+            compose_axis_rotation(parent, step.fixed, step.axis, cosines[i], sines[i], child);
+          } else {
+            child = compose(compose(parent, step.fixed), Transform{axis_rotation(step.axis_vector, q), Vec3::Zero()});
+          }
+          break;
+        case JointType::kPrismatic:
+          compose_into(parent, step.fixed, child);
+          child.t += child.R * (q * step.axis_vector);
+          break;
+        case JointType::kFloating:
+        case JointType::kPlanar: {
+          const bool given = free_joint_poses != nullptr && static_cast<std::size_t>(step.joint) < free_joint_poses->size();
+          child = given ? compose(compose(parent, step.fixed), (*free_joint_poses)[step.joint]) : compose(parent, step.fixed);
+          break;
         }
-        break;
-      case JointType::kPrismatic:
-        child = compose(parent, compose(step.fixed, Transform::Translation(q * step.axis_vector)));
-        break;
-      case JointType::kFloating:
-      case JointType::kPlanar: {
-        const bool given = free_joint_poses != nullptr && static_cast<std::size_t>(step.joint) < free_joint_poses->size();
-        child = given ? compose(compose(parent, step.fixed), (*free_joint_poses)[step.joint]) : compose(parent, step.fixed);
-        break;
+        case JointType::kFixed:
+          compose_into(parent, step.fixed, child);
+          break;
       }
-      case JointType::kFixed:
-        child = compose(parent, step.fixed);
-        break;
     }
   }
 }
