@@ -2,7 +2,7 @@
 # make test-busy: the Release unit tests and the launch tests (no sanitizer pass) with two busy
 # loops at normal priority beside them, as on a robot computer that runs drivers, a planner and
 # perception beside the node. A test that fails here depends on the machine's speed: it must
-# bound work or wait for events, not time (README, Tests). The last line is the same
+# bound work or wait for events, not time (docs/testing.md). The last line is the same
 # `N passed, N failed, N skipped` as make test's; the exit status is non-zero on any failure.
 set -uo pipefail
 cd "$(dirname "$0")/.."

@@ -41,7 +41,7 @@ std::size_t replay(const std::string& name, Target target) {
     if (seconds > slowest) slowest = seconds, slowest_file = file.filename();
   }
   // A hang would show here. A deadline, not a speed claim: the slowest input (a 16k-point cloud)
-  // takes about 2 s in Release and 10 s under the sanitizers (README, Tests); ten times that.
+  // takes about 2 s in Release and 10 s under the sanitizers (docs/testing.md); ten times that.
   EXPECT_LT(slowest, 120.0) << slowest_file;
   std::printf("%s: %zu inputs, slowest %.3f s (%s)\n", name.c_str(), files.size(), slowest, slowest_file.c_str());
   return files.size();

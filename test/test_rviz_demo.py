@@ -6,7 +6,7 @@ that each thing is drawn in the colours config/demo.rviz gives it: the cloud (ma
 occupied voxels (height colours, half transparent: green at mid height) and the planned path
 (yellow); that rviz subscribes to the contacts, whose latched message holds the spheres of the
 colliding query (they lie where the arm would cut into the pillar, inside its voxels, so the
-pixels cannot tell them apart); and that rviz logged no error (/rosout) and is still running. The screenshot goes to ~screenshot (README's docs/demo_rviz.png when
+pixels cannot tell them apart); and that rviz logged no error (/rosout) and is still running. The screenshot goes to ~screenshot (docs/rviz.md shows docs/demo_rviz.png when
 regenerated with BVH_COLLISION_SCREENSHOT)."""
 import os
 import subprocess
