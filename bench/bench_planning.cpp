@@ -73,8 +73,8 @@ class FclPanda {
         links_.push_back({static_cast<int>(l), e.origin, std::make_unique<fcl::CollisionObjectd>(models[k++])});
       }
     }
-    for (const test::SceneObject& o : scene.objects) {
-      for (const test::SceneShape& s : o.shapes) world_.push_back(std::make_unique<fcl::CollisionObjectd>(geometry(s.shape), test::fcl_transform(s.pose)));
+    for (const SceneObject& o : scene.objects) {
+      for (const SceneShape& s : o.shapes) world_.push_back(std::make_unique<fcl::CollisionObjectd>(geometry(s.shape), test::fcl_transform(o.pose * s.pose)));
     }
     for (auto& w : world_) {
       w->computeAABB();
@@ -363,7 +363,7 @@ void write_problems(const std::string& dir, const std::vector<Problem>& problems
   nlohmann::json out = nlohmann::json::array();
   for (const Problem& p : problems) {
     std::ofstream scene(dir + "/panda_scene_" + std::to_string(p.scene) + ".scene");
-    test::write_scene_file(test::generate_scene(seed, p.scene), scene);
+    write_scene_text(test::generate_scene(seed, p.scene), scene);
     out.push_back({{"scene", "panda_scene_" + std::to_string(p.scene) + ".scene"}, {"start", p.start}, {"goal", p.goal},
                    {"goal_within_5mm", p.near}, {"goal_clearance", p.goal_clearance}});
   }

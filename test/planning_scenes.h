@@ -2,7 +2,8 @@
 // boards, boxes open on one side, cages of bars, and loose clutter, placed at random around the
 // robot (never on its base), each built from shape_msgs-like boxes, cylinders and spheres. What
 // the planning benchmark (bench/bench_planning.cpp) and the planning fast-path tests use; each
-// scene can be written as MoveIt `.scene` text so other tools can read the same problems.
+// scene is a SceneFile (checker/scene_file.h), written as MoveIt `.scene` text so that other
+// tools can read the same problems.
 #pragma once
 
 #include <cmath>
@@ -12,39 +13,13 @@
 #include <string>
 #include <vector>
 
-#include "bvh_collision/checker/environment.h"
+#include "bvh_collision/checker/scene_file.h"
 
 namespace bvh_collision::test {
 
-struct SceneShape {
-  ObjectShape shape;
-  Transform pose;  // world frame (the robot's root at the origin)
-};
-
-// One object as MoveIt keeps it: an id and its shapes (a table is one object of five boxes).
-struct SceneObject {
-  std::string id;
-  std::vector<SceneShape> shapes;
-};
-
-struct PlanningScene {
-  std::string name;
-  std::vector<SceneObject> objects;
-
-  std::size_t shape_count() const {
-    std::size_t n = 0;
-    for (const SceneObject& o : objects) n += o.shapes.size();
-    return n;
-  }
-  // The shapes as the checker's collision objects (`id#k` for the k-th shape of an object).
-  Environment environment(double octree_resolution = 0.05) const {
-    Environment env(octree_resolution);
-    for (const SceneObject& o : objects) {
-      for (std::size_t k = 0; k < o.shapes.size(); ++k) env.add_object(o.id + "#" + std::to_string(k), o.shapes[k].shape, o.shapes[k].pose);
-    }
-    return env;
-  }
-};
+// A generated scene: its objects' shapes posed in the world (each object at the identity), as
+// MoveIt keeps them; checker/scene_file.h writes it as `.scene` text.
+using PlanningScene = SceneFile;
 
 namespace scene_detail {
 
@@ -78,7 +53,7 @@ class Generator {
   SceneObject table(const std::string& id) {
     const double w = uniform(0.4, 0.8), d = uniform(0.4, 0.7), h = uniform(-0.3, 0.35), top = uniform(0.02, 0.05);
     const Transform f = around(uniform(0.45, 0.75) + d / 2, h);
-    SceneObject o{id, {placed(f, ObjectShape::box({d, w, top}), {0, 0, -top / 2})}};
+    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, top}), {0, 0, -top / 2})}};
     const double leg = 0.04, height = h + 0.6;  // legs to 0.6 m below the base
     for (const int sx : {-1, 1}) {
       for (const int sy : {-1, 1}) {
@@ -94,7 +69,7 @@ class Generator {
     const double gap = uniform(0.22, 0.35), bottom = uniform(-0.2, 0.3);
     const double height = boards * gap;
     const Transform f = around(uniform(0.5, 0.8) + d / 2, bottom);
-    SceneObject o{id, {}};
+    SceneObject o{id, Transform(), {}};
     for (int b = 0; b <= boards; ++b) o.shapes.push_back(placed(f, ObjectShape::box({d, w, board}), {0, 0, b * gap}));
     for (const int s : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::box({d, board, height}), {0, s * (w / 2 + board / 2), height / 2}));
     o.shapes.push_back(placed(f, ObjectShape::box({board, w, height}), {d / 2 + board / 2, 0, height / 2}));  // the back
@@ -106,7 +81,7 @@ class Generator {
     const double w = uniform(0.2, 0.45), d = uniform(0.2, 0.4), h = uniform(0.15, 0.35), t = uniform(0.01, 0.02);
     const Transform f = around(uniform(0.4, 0.7) + d / 2, uniform(-0.1, 0.45));
     const bool open_top = integer(0, 1) == 0;
-    SceneObject o{id, {placed(f, ObjectShape::box({d, w, t}), {0, 0, t / 2})}};
+    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, t}), {0, 0, t / 2})}};
     for (const int s : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::box({d, t, h}), {0, s * (w / 2 - t / 2), h / 2}));
     o.shapes.push_back(placed(f, ObjectShape::box({t, w, h}), {d / 2 - t / 2, 0, h / 2}));
     if (open_top) {
@@ -123,7 +98,7 @@ class Generator {
     const double w = uniform(0.3, 0.6), d = uniform(0.25, 0.5), h = uniform(0.3, 0.7), r = uniform(0.005, 0.015);
     const Transform f = around(uniform(0.4, 0.75) + d / 2, uniform(-0.2, 0.2));
     const int per_side = integer(2, 4);
-    SceneObject o{id, {}};
+    SceneObject o{id, Transform(), {}};
     for (int i = 0; i < per_side; ++i) {
       const double y = -w / 2 + w * i / (per_side - 1);
       for (const int sx : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::cylinder(r, h), {sx * d / 2, y, h / 2}));
@@ -141,9 +116,9 @@ class Generator {
   SceneObject clutter(const std::string& id) {
     const Transform f = around(uniform(0.35, 0.8), uniform(-0.1, 0.8));
     switch (integer(0, 2)) {
-      case 0: return {id, {placed(f, ObjectShape::sphere(uniform(0.02, 0.08)), Vec3::Zero())}};
-      case 1: return {id, {placed(f, ObjectShape::cylinder(uniform(0.01, 0.05), uniform(0.05, 0.3)), Vec3::Zero())}};
-      default: return {id, {placed(f, ObjectShape::box({uniform(0.03, 0.15), uniform(0.03, 0.15), uniform(0.03, 0.15)}), Vec3::Zero())}};
+      case 0: return {id, Transform(), {placed(f, ObjectShape::sphere(uniform(0.02, 0.08)), Vec3::Zero())}};
+      case 1: return {id, Transform(), {placed(f, ObjectShape::cylinder(uniform(0.01, 0.05), uniform(0.05, 0.3)), Vec3::Zero())}};
+      default: return {id, Transform(), {placed(f, ObjectShape::box({uniform(0.03, 0.15), uniform(0.03, 0.15), uniform(0.03, 0.15)}), Vec3::Zero())}};
     }
   }
 
@@ -171,35 +146,6 @@ inline PlanningScene generate_scene(std::uint64_t seed, int index) {
   }
   while (scene.shape_count() > 60) scene.objects.pop_back();
   return scene;
-}
-
-// MoveIt's `.scene` text (what "export scene" writes, MoveIt 1 format with object poses): the
-// name, then per object `* id`, its pose, its shape count, and per shape its type, dimensions,
-// pose and colour; `.` ends the file.
-inline void write_scene_file(const PlanningScene& scene, std::ostream& out) {
-  auto pose_lines = [&](const Transform& t) {
-    const Eigen::Quaterniond q(t.R);
-    char line[256];
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n%.9g %.9g %.9g %.9g\n", t.t.x(), t.t.y(), t.t.z(), q.x(), q.y(), q.z(), q.w());
-    out << line;
-  };
-  out << scene.name << "\n";
-  for (const SceneObject& o : scene.objects) {
-    out << "* " << o.id << "\n";
-    pose_lines(Transform::Identity());
-    out << o.shapes.size() << "\n";
-    for (const SceneShape& s : o.shapes) {
-      switch (s.shape.kind) {
-        case ObjectShape::Kind::kBox: out << "box\n" << s.shape.size.x() << " " << s.shape.size.y() << " " << s.shape.size.z() << "\n"; break;
-        case ObjectShape::Kind::kSphere: out << "sphere\n" << s.shape.radius << "\n"; break;
-        case ObjectShape::Kind::kCylinder: out << "cylinder\n" << s.shape.length << " " << s.shape.radius << "\n"; break;
-        default: out << "unsupported\n"; break;  // the generator makes none
-      }
-      pose_lines(s.pose);
-      out << "0 0 0 0\n";
-    }
-  }
-  out << ".\n";
 }
 
 }  // namespace bvh_collision::test

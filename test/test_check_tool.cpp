@@ -34,15 +34,22 @@ std::string write_states(const std::string& text) {
 
 const std::string kUrdf = test::source_dir() + "/urdf/demo_arm.urdf";
 
+// The lines of a run that succeeded.
+std::vector<std::string> output_lines(const ToolRun& r) {
+  EXPECT_EQ(r.code, 0) << r.err;
+  std::vector<std::string> lines;
+  std::istringstream in(r.out);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
 TEST(CheckTool, FreeAndFoldedConfigurations) {
   const std::string states = write_states(
       "joints: joint2 joint3\n# comment line\n\n0 0\n1.2 2.6\n");
-  const ToolRun r = run({"--urdf", kUrdf, "--states", states, "--distance"});
-  ASSERT_EQ(r.code, 0) << r.err;
-  std::istringstream lines(r.out);
-  std::string first, second;
-  std::getline(lines, first);
-  std::getline(lines, second);
+  const std::vector<std::string> lines = output_lines(run({"--urdf", kUrdf, "--states", states, "--distance"}));
+  ASSERT_EQ(lines.size(), 2u);
+  const std::string& first = lines[0];
+  const std::string& second = lines[1];
   EXPECT_EQ(first.rfind("0 free distance=", 0), 0u) << first;
   EXPECT_NE(first.find(" pair="), std::string::npos) << first;
   EXPECT_EQ(second.rfind("1 collision ", 0), 0u) << second;
@@ -58,6 +65,35 @@ TEST(CheckTool, FreeAndFoldedConfigurations) {
   }
   EXPECT_FALSE(split.empty());
   EXPECT_TRUE(std::is_sorted(split.begin(), split.end()));
+}
+
+// --scene: the demo arm against a MoveIt .scene of the demo's pillar (as a box) and a ball of two
+// shapes; upright it is free of both, leaning it hits the pillar (joint1 0.66, joint2 1.0).
+TEST(CheckTool, StatesAgainstASceneFile) {
+  const std::string scene = write_states(
+      "pillar scene\n"
+      "* pillar\n0.45 0.35 0.4\n0 0 0 1\n1\nbox\n0.12 0.12 0.8\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n"
+      "* balls\n0 -0.6 0.3\n0 0 0 1\n2\nsphere\n0.05\n0 0 0\n0 0 0 1\n0 0 0 0\nsphere\n0.05\n0 0 0.2\n0 0 0 1\n0 0 0 0\n0\n"
+      ".\n");
+  const std::string states = write_states("joints: joint1 joint2\n0 0\n0.66 1.0\n");
+  const std::vector<std::string> lines = output_lines(run({"--urdf", kUrdf, "--states", states, "--scene", scene, "--distance"}));
+  ASSERT_EQ(lines.size(), 2u);
+  const std::string& upright = lines[0];
+  const std::string& leaning = lines[1];
+  EXPECT_EQ(upright.rfind("0 free distance=", 0), 0u) << upright;
+  EXPECT_EQ(leaning.rfind("1 collision ", 0), 0u) << leaning;
+  EXPECT_NE(leaning.find(":pillar"), std::string::npos) << leaning;
+  // Without the scene the same state is free: the pillar is what it hits.
+  const ToolRun alone = run({"--urdf", kUrdf, "--states", states});
+  EXPECT_NE(alone.out.find("1 free"), std::string::npos) << alone.out;
+  // Upright, the nearest of the self pairs and the scene's objects is at a positive distance.
+  EXPECT_GT(std::stod(upright.substr(upright.find("distance=") + 9)), 0.0) << upright;
+  // A malformed scene: exit 1, the file, line and field named, nothing printed.
+  const std::string bad = write_states("s\n* pillar\n0 0 0\n0 0 0 1\n1\nbox\n0.1 0 0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n.\n");
+  const ToolRun refused = run({"--urdf", kUrdf, "--states", states, "--scene", bad});
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_TRUE(refused.out.empty()) << refused.out;
+  EXPECT_NE(refused.err.find(bad + ":7: object 'pillar' shape 1 (box) size 2 is not a positive number"), std::string::npos) << refused.err;
 }
 
 TEST(CheckTool, PrintsTheMatrix) {

@@ -12,6 +12,7 @@
 
 #include "bvh_collision/checker/acm_sampling.h"
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/robot/link_solidity.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/robot/urdf_validation.h"
@@ -20,7 +21,7 @@ namespace bvh_collision {
 namespace {
 
 struct Options {
-  std::string urdf, srdf, states, package_path, acm_cache;
+  std::string urdf, srdf, states, package_path, acm_cache, scene;
   std::size_t sample_acm = 0;
   bool distance = false, print_acm = false;
   double tolerance = 0.0, padding = 0.0;
@@ -60,6 +61,7 @@ Options parse_args(const std::vector<std::string>& args) {
     if (a == "--urdf") o.urdf = value(i);
     else if (a == "--srdf") o.srdf = value(i);
     else if (a == "--states") o.states = value(i);
+    else if (a == "--scene") o.scene = value(i);
     else if (a == "--package-path") o.package_path = value(i);
     else if (a == "--distance") o.distance = true;
     else if (a == "--print-acm") o.print_acm = true;
@@ -178,7 +180,44 @@ AllowedCollisionMatrix with_sampled_pairs(const Options& o, const std::string& s
   return acm;
 }
 
+// One configuration's line: `INDEX free` or `INDEX collision A:B,...` (link pairs and, with a
+// scene, link:object pairs, name-sorted), then with --distance the nearest pair of either kind.
+void print_state(const Options& o, const CollisionChecker& checker, const Environment* world,
+                 const std::vector<double>& state, std::size_t index, std::ostream& out) {
+  const RobotModel& m = checker.model();
+  SelfCollisionRequest request;
+  request.all_pairs = true;
+  request.distance = o.distance;
+  request.tolerance = o.tolerance;
+  const SelfCollisionResult r = checker.check_self(state.data(), request);
+  std::vector<std::string> pairs;
+  for (const auto& [a, b] : r.colliding_pairs) pairs.push_back(pair_name(m, a, b));
+  bool collision = r.collision;
+  double distance = r.min_distance;
+  std::string nearest = r.closest_a >= 0 ? pair_name(m, r.closest_a, r.closest_b) : "-";
+  if (world != nullptr) {
+    EnvironmentRequest er;
+    er.all_links = true;
+    er.distance = o.distance;
+    er.tolerance = o.tolerance;
+    const EnvironmentResult e = checker.check_environment(state.data(), *world, er);
+    for (const EnvironmentContact& c : e.contacts) pairs.push_back(m.links()[c.link].name + ":" + c.object);
+    collision = collision || e.collision;
+    if (o.distance && e.min_distance < distance && e.closest_link >= 0) {
+      distance = e.min_distance;
+      nearest = m.links()[e.closest_link].name + ":" + e.closest_object;
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  out << index << (collision ? " collision " : " free");
+  for (std::size_t p = 0; p < pairs.size(); ++p) out << (p ? "," : "") << pairs[p];
+  if (o.distance) out << " distance=" << std::setprecision(9) << (collision ? 0.0 : distance) << " pair=" << nearest;
+  out << "\n";
+}
+
 }  // namespace
+
 
 int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
@@ -212,23 +251,12 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
       const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
       if (j.bounded) state[v] = std::clamp(0.0, j.lower, j.upper);
     }
-    SelfCollisionRequest request;
-    request.all_pairs = true;
-    request.distance = o.distance;
-    request.tolerance = o.tolerance;
+    // The scene's objects (MoveIt .scene text), checked with the robot's own pairs.
+    const std::optional<Environment> world =
+        o.scene.empty() ? std::nullopt : std::optional<Environment>(read_scene_file(o.scene).environment());
     for (std::size_t i = 0; i < states.rows.size(); ++i) {
       for (std::size_t k = 0; k < states.variables.size(); ++k) state[states.variables[k]] = states.rows[i][k];
-      const SelfCollisionResult r = checker.check_self(state.data(), request);
-      std::vector<std::string> pairs;
-      for (const auto& [a, b] : r.colliding_pairs) pairs.push_back(pair_name(m, a, b));
-      std::sort(pairs.begin(), pairs.end());
-      out << i << (r.collision ? " collision " : " free");
-      for (std::size_t p = 0; p < pairs.size(); ++p) out << (p ? "," : "") << pairs[p];
-      if (o.distance) {
-        out << " distance=" << std::setprecision(9) << r.min_distance
-            << " pair=" << (r.closest_a >= 0 ? pair_name(m, r.closest_a, r.closest_b) : "-");
-      }
-      out << "\n";
+      print_state(o, checker, world ? &*world : nullptr, state, i, out);
     }
     return 0;
   } catch (const std::exception& e) {
