@@ -21,7 +21,7 @@ import time
 
 import rospy
 from bvh_collision.srv import (CastRay, CheckMotion, CheckMotions, CheckState, CheckStateRequest, CheckStates, ClearBox,
-                               RemoveCollisionObject, SaveOctree, SetCollisionObject)
+                               LoadScene, RemoveCollisionObject, SaveOctree, SaveScene, SetCollisionObject)
 from geometry_msgs.msg import Point, Pose, Vector3
 from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
@@ -48,7 +48,7 @@ class CollisionClient:
                 "check_motions": CheckMotions,
                 "cast_ray": CastRay, "clear_box": ClearBox, "set_collision_object": SetCollisionObject,
                 "remove_collision_object": RemoveCollisionObject, "save_octree": SaveOctree,
-                "clear_environment": Empty}
+                "load_scene": LoadScene, "save_scene": SaveScene, "clear_environment": Empty}
 
     def __init__(self, node="/collision_checker", timeout=30.0):
         """Waits up to `timeout` s for the node's ~ready (its robot summary ~robot is set and every
@@ -64,10 +64,10 @@ class CollisionClient:
             rospy.wait_for_service(node + "/" + name, timeout=timeout)
             self._proxies[name] = rospy.ServiceProxy(node + "/" + name, kind, persistent=True)
 
-    def _call(self, name, *args, **kwargs):
-        response = self._proxies[name](*args, **kwargs)
+    def _call(self, service, *args, **kwargs):
+        response = self._proxies[service](*args, **kwargs)
         if getattr(response, "error", ""):
-            raise CheckerError("%s: %s" % (name, response.error))
+            raise CheckerError("%s: %s" % (service, response.error))
         return response
 
     def check_state(self, names, positions, checks=BOTH, distance=False, max_contacts=0, tolerance=0.0):
@@ -110,6 +110,13 @@ class CollisionClient:
 
     def save_octree(self, path):
         return self._call("save_octree", path=path)
+
+    def load_scene(self, path, merge=False):
+        """A MoveIt .scene file's objects (merge: added to the others); the response has name, objects, shapes."""
+        return self._call("load_scene", path=path, merge=merge)
+
+    def save_scene(self, path, name=""):
+        return self._call("save_scene", path=path, name=name)
 
     def clear_environment(self):
         return self._proxies["clear_environment"]()

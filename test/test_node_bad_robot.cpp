@@ -70,6 +70,11 @@ TEST(NodeBadRobot, UnreadableOctreeFile) {
   expect_startup_failure("bad_octree", "cannot open octree file '/nonexistent/start.bt'");
 }
 
+TEST(NodeBadRobot, MalformedSceneFile) {
+  expect_startup_failure("bad_scene", "/test/data/malformed.scene:7: object 'thing' shape 1 (sphere) radius is not a positive number");
+  expect_startup_failure("bad_scene", "parameter ~scene_file: ");
+}
+
 TEST(NodeBadRobot, SensorModelHitBelowHalf) { expect_startup_failure("bad_sensor_model", "hit must be above 0.5"); }
 
 TEST(NodeBadRobot, WorkspaceWithOneCorner) {

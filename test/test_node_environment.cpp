@@ -1,7 +1,10 @@
 // Launch test: the node's environment through tf2, as a robot's drivers feed it. The node runs
 // with world_frame "world"; this test is the robot's tf (world -> base_link, which it moves) and a
 // camera (world -> camera, static) that publishes obstacle clouds in its own frame.
+#include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <random>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -13,7 +16,9 @@
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/ClearBox.h"
+#include "bvh_collision/LoadScene.h"
 #include "bvh_collision/RemoveCollisionObject.h"
+#include "bvh_collision/SaveScene.h"
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/ros/conversions.h"
 #include "node_test_client.h"
@@ -68,6 +73,16 @@ class NodeEnvironment : public testing::Test {
     ASSERT_TRUE(ros::param::get("~urdf_file", urdf));
     checker_ = new CollisionChecker(library_checker(urdf));
     ASSERT_TRUE(wait_for_node());
+    // Before any test clears it: the node started with ~scene_file's box at (0, 1.2, 0.3).
+    CastRay::Request ray;
+    ray.origin.y = 2.0, ray.origin.z = 0.3;
+    ray.direction.y = -1.0;
+    // (Once the base's transform has reached the node: a deadline for that event.)
+    for (const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(60.0); ros::WallTime::now() < end;) {
+      start_scene_hit_ = call<CastRay>("cast_ray", ray).response;
+      if (start_scene_hit_.error.empty()) break;
+      ros::WallDuration(0.05).sleep();
+    }
   }
   void SetUp() override {
     std_srvs::Empty empty;
@@ -88,10 +103,12 @@ class NodeEnvironment : public testing::Test {
   }
 
   static BaseBroadcaster* base_;
+  static CastRay::Response start_scene_hit_;
   static tf2_ros::StaticTransformBroadcaster* camera_tf_;
   static CollisionChecker* checker_;
 };
 BaseBroadcaster* NodeEnvironment::base_ = nullptr;
+CastRay::Response NodeEnvironment::start_scene_hit_;
 tf2_ros::StaticTransformBroadcaster* NodeEnvironment::camera_tf_ = nullptr;
 CollisionChecker* NodeEnvironment::checker_ = nullptr;
 
@@ -310,18 +327,25 @@ TEST_F(NodeEnvironment, CastRayHitsLinksObjectsAndVoxels) {
   EXPECT_EQ(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
 }
 
+// A post at (0.6, 0, 0.5): a cone (height 0.4, base radius 0.1: radius 0.05 at mid height) over a
+// box plinth below it.
+SetCollisionObject::Request cone_on_plinth() {
+  using shape_msgs::SolidPrimitive;
+  SetCollisionObject::Request object;
+  object.id = "post";
+  object.pose = pose_at(Vec3(0.6, 0.0, 0.5));
+  object.primitives = {solid(SolidPrimitive::CONE, {0.4, 0.1}), solid(SolidPrimitive::BOX, {0.3, 0.3, 0.1})};
+  object.primitive_poses = {pose_at(Vec3::Zero()), pose_at(Vec3(0.0, 0.0, -0.25))};
+  return object;
+}
+
 // shape_msgs as MoveIt's CollisionObject carries them: an object of several shapes, each at its
 // own pose, its parts named id#k; a cone is exact (a ray meets its slanted side where the
 // cone's radius puts it, not where a faceted cone would), and replacing or removing the object
 // takes every part.
 TEST_F(NodeEnvironment, ShapeMsgsObjectsWithExactConesAndSeveralShapes) {
   using shape_msgs::SolidPrimitive;
-  SetCollisionObject::Request object;
-  object.id = "post";
-  object.pose = pose_at(Vec3(0.6, 0.0, 0.5));
-  // A cone (height 0.4, base radius 0.1: radius 0.05 at mid height) over a box plinth below it.
-  object.primitives = {solid(SolidPrimitive::CONE, {0.4, 0.1}), solid(SolidPrimitive::BOX, {0.3, 0.3, 0.1})};
-  object.primitive_poses = {pose_at(Vec3::Zero()), pose_at(Vec3(0.0, 0.0, -0.25))};
+  SetCollisionObject::Request object = cone_on_plinth();
   ASSERT_EQ(call<SetCollisionObject>("set_collision_object", object).response.error, "");
   CastRay::Request ray;
   ray.origin.x = 1.0, ray.origin.y = 0.0, ray.origin.z = 0.5;
@@ -365,6 +389,136 @@ TEST_F(NodeEnvironment, ShapeMsgsObjectsWithExactConesAndSeveralShapes) {
     EXPECT_TRUE(!r.hit || r.body.rfind("post", 0) != 0) << "removed, still hit " << r.body << " at z " << z;
   }
   EXPECT_NE(call<RemoveCollisionObject>("remove_collision_object", remove).response.error, "");
+}
+
+TEST_F(NodeEnvironment, StartsWithTheObjectsOfItsSceneFile) {
+  ASSERT_EQ(start_scene_hit_.error, "");
+  EXPECT_TRUE(start_scene_hit_.hit);
+  EXPECT_EQ(start_scene_hit_.body, "start_box");
+  EXPECT_NEAR(start_scene_hit_.distance, 0.75, 1e-9);
+}
+
+// A MoveIt .scene file (every primitive kind, a mesh, an object of three shapes, a rotated pose)
+// loaded through load_scene answers exactly as the same objects set through
+// set_collision_object; save_scene writes them back so that loading that file answers alike; a
+// malformed file changes nothing; merge keeps the objects already there.
+TEST_F(NodeEnvironment, ScenesLoadAsSetCollisionObjectMakesThemAndSaveBack) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("bvh_scenes_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string tetra = "mesh\n4 4\n0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n0 2 1\n0 1 3\n0 3 2\n1 2 3\n";
+  std::ofstream((dir / "two_ways.scene").string())
+      << "two ways\n"
+      << "* post\n0.6 0 0.5\n0 0 0 1\n3\n"
+      << "cone\n0.1 0.4\n0 0 0\n0 0 0 1\n0 0 0 0\n"
+      << "box\n0.3 0.3 0.1\n0 0 -0.25\n0 0 0 1\n0 0 0 0\n"
+      << tetra << "0 0.3 0.1\n0 0 0 1\n0 0 0 0\n0\n"
+      << "* ball\n0 -0.5 0.6\n0 0 0 1\n1\nsphere\n0.08\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n"
+      << "* pole\n-0.4 0.3 0.5\n0 0 0 1\n1\ncylinder\n0.03 0.6\n0 0 0\n0.38268343236508978 0 0 0.92387953251128674\n0 0 0 0\n0\n"
+      << ".\n";
+  LoadScene::Request load;
+  load.path = (dir / "two_ways.scene").string();
+  const LoadScene::Response loaded = call<LoadScene>("load_scene", load).response;
+  ASSERT_EQ(loaded.error, "");
+  EXPECT_EQ(loaded.name, "two ways");
+  EXPECT_EQ(loaded.objects, 3u);
+  EXPECT_EQ(loaded.shapes, 5u);
+
+  // Answers over random states: validity, the nearest distance, the first contact's object.
+  std::mt19937_64 rng(17);
+  std::vector<std::vector<double>> states;
+  for (int i = 0; i < 150; ++i) states.push_back(random_configuration(checker().model(), rng));
+  auto answers = [&] {
+    std::vector<std::string> out;
+    for (const auto& q : states) {
+      CheckState::Request r = state_request(checker(), q);
+      r.checks = CheckState::Request::ENVIRONMENT;
+      r.max_contacts = 1;
+      r.distance = true;
+      const CheckState::Response a = call<CheckState>("check_state", r).response;
+      std::ostringstream line;
+      line << static_cast<int>(a.valid) << " " << std::setprecision(12) << a.min_distance << " " << (a.contacts.empty() ? "-" : a.contacts[0].body_b);
+      out.push_back(line.str() + a.error);
+    }
+    return out;
+  };
+  const std::vector<std::string> from_scene = answers();
+  EXPECT_GT(std::count_if(from_scene.begin(), from_scene.end(), [](const std::string& a) { return a[0] == '0'; }), 5)
+      << "the scene should touch the arm in some states";
+
+  // The same objects through set_collision_object.
+  std_srvs::Empty empty;
+  ASSERT_TRUE(ros::service::call(node_service("clear_environment"), empty));
+  using shape_msgs::SolidPrimitive;
+  SetCollisionObject::Request post = cone_on_plinth();
+  shape_msgs::Mesh mesh;
+  for (const Vec3& v : {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.1, 0), Vec3(0, 0, 0.1)}) {
+    geometry_msgs::Point p;
+    p.x = v.x(), p.y = v.y(), p.z = v.z();
+    mesh.vertices.push_back(p);
+  }
+  for (const auto& t : std::vector<std::array<std::uint32_t, 3>>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}) {
+    shape_msgs::MeshTriangle tri;
+    tri.vertex_indices = {t[0], t[1], t[2]};
+    mesh.triangles.push_back(tri);
+  }
+  post.meshes = {mesh};
+  post.mesh_poses = {pose_at(Vec3(0.0, 0.3, 0.1))};
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", post).response.error, "");
+  SetCollisionObject::Request ball;
+  ball.id = "ball";
+  ball.pose = pose_at(Vec3(0.0, -0.5, 0.6));
+  ball.primitives = {solid(SolidPrimitive::SPHERE, {0.08})};
+  ball.primitive_poses = {pose_at(Vec3::Zero())};
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", ball).response.error, "");
+  SetCollisionObject::Request pole;
+  pole.id = "pole";
+  pole.pose = pose_at(Vec3(-0.4, 0.3, 0.5));
+  pole.primitives = {solid(SolidPrimitive::CYLINDER, {0.6, 0.03})};
+  geometry_msgs::Pose tilted = pose_at(Vec3::Zero());
+  tilted.orientation.x = 0.38268343236508978, tilted.orientation.w = 0.92387953251128674;
+  pole.primitive_poses = {tilted};
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", pole).response.error, "");
+  EXPECT_EQ(answers(), from_scene);
+
+  // Saved and loaded back (replacing): the same answers.
+  SaveScene::Request save;
+  save.path = (dir / "saved.scene").string();
+  save.name = "saved";
+  ASSERT_EQ(call<SaveScene>("save_scene", save).response.error, "");
+  ASSERT_TRUE(ros::service::call(node_service("clear_environment"), empty));
+  load.path = save.path;
+  const LoadScene::Response reloaded = call<LoadScene>("load_scene", load).response;
+  ASSERT_EQ(reloaded.error, "");
+  EXPECT_EQ(reloaded.name, "saved");
+  EXPECT_EQ(reloaded.objects, 3u);
+  EXPECT_EQ(answers(), from_scene);
+
+  // A malformed file: refused by file, line and field; nothing changed.
+  std::ofstream((dir / "bad.scene").string()) << "bad\n* thing\n0 0 0\n0 0 0 1\n1\nsphere\n-1\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n.\n";
+  load.path = (dir / "bad.scene").string();
+  const std::string refused = call<LoadScene>("load_scene", load).response.error;
+  EXPECT_NE(refused.find(load.path + ":7: object 'thing' shape 1 (sphere) radius is not a positive number"), std::string::npos) << refused;
+  load.path = (dir / "missing.scene").string();
+  EXPECT_NE(call<LoadScene>("load_scene", load).response.error.find("no such file"), std::string::npos);
+  EXPECT_EQ(answers(), from_scene);
+
+  // Merged: a new object joins the others; replaced (no merge): only it is left.
+  std::ofstream((dir / "extra.scene").string()) << "extra\n* extra\n1\nbox\n0.1 0.1 0.1\n0 0.9 0.4\n0 0 0 1\n0 0 0 0\n.\n";
+  load.path = (dir / "extra.scene").string();
+  load.merge = true;
+  ASSERT_EQ(call<LoadScene>("load_scene", load).response.error, "");
+  CastRay::Request ray;
+  ray.origin.x = 0.0, ray.origin.y = 1.5, ray.origin.z = 0.4;
+  ray.direction.y = -1.0;
+  EXPECT_EQ(call<CastRay>("cast_ray", ray).response.body, "extra");
+  ray.origin.x = 1.5, ray.origin.y = 0.0, ray.origin.z = 0.5, ray.direction.x = -1.0, ray.direction.y = 0.0;
+  EXPECT_EQ(call<CastRay>("cast_ray", ray).response.body, "post#0");
+  load.merge = false;
+  ASSERT_EQ(call<LoadScene>("load_scene", load).response.error, "");
+  const CastRay::Response after = call<CastRay>("cast_ray", ray).response;
+  EXPECT_TRUE(!after.hit || after.body.rfind("post", 0) != 0) << after.body;
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -70,6 +70,21 @@ class PythonClient(unittest.TestCase):
             self.client.check_state(["no_such_joint"], [0.0], checks=SELF | ENVIRONMENT)
         self.assertEqual(BOTH, SELF | ENVIRONMENT)
 
+    def test_scenes(self):
+        # An object saved as a .scene file and loaded back (merged with what is there).
+        self.client.set_primitives("py_box", [(SolidPrimitive.BOX, [0.1, 0.1, 0.1], pose())], object_pose=pose((1.0, -0.5, 0.5)))
+        path = "/tmp/bvh_python_client_%d.scene" % os.getpid()
+        self.client.save_scene(path, name="from python")
+        self.client.remove_object("py_box")
+        loaded = self.client.load_scene(path, merge=True)
+        os.remove(path)
+        self.assertEqual(loaded.name, "from python")
+        self.assertGreaterEqual(loaded.objects, 1)
+        self.assertEqual(self.client.cast_ray((1.0, 0.5, 0.5), (0.0, -1.0, 0.0)).body, "py_box")
+        self.client.remove_object("py_box")
+        with self.assertRaises(CheckerError):
+            self.client.load_scene("/nonexistent/x.scene")
+
 
 if __name__ == "__main__":
     rostest.rosrun("bvh_collision", "python_client", PythonClient)

@@ -13,8 +13,10 @@
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
 #include "bvh_collision/ClearBox.h"
+#include "bvh_collision/LoadScene.h"
 #include "bvh_collision/RemoveCollisionObject.h"
 #include "bvh_collision/SaveOctree.h"
+#include "bvh_collision/SaveScene.h"
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/ros/readiness.h"
 
@@ -174,10 +176,20 @@ int main(int argc, char** argv) {
   box.request.pose.orientation.w = 1.0;
   simple("set_collision_object", "a 0.6 x 1.0 x 0.04 m table 'table' behind the robot at z = 0.5", box);
   check_state("leaning back onto the table", {0.0, -1.2}, 2, 1);
+  SaveScene save_scene;
+  save_scene.request.path = "/tmp/bvh_collision_demo.scene";
+  save_scene.request.name = "demo table";
+  simple("save_scene", save_scene.request.path + " (MoveIt .scene text: the table)", save_scene);
   RemoveCollisionObject remove;
   remove.request.id = "table";
   simple("remove_collision_object", "'table'", remove);
   check_state("leaning back again", {0.0, -1.2}, 2, 0);
+  LoadScene load_scene;
+  load_scene.request.path = save_scene.request.path;
+  load_scene.request.merge = true;
+  simple("load_scene", load_scene.request.path + ", merged with what is there", load_scene);
+  check_state("leaning back onto the table read back", {0.0, -1.2}, 2, 1);
+  simple("remove_collision_object", "'table'", remove);
 
   ClearBox clear;
   clear.request.min.x = 0.3, clear.request.min.y = 0.2, clear.request.min.z = 0.0;

@@ -9,6 +9,7 @@
 #include <ros/console.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/robot/link_solidity.h"
 
@@ -17,7 +18,8 @@ namespace bvh_collision {
 namespace {
 
 const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
-                                 "clear_box", "set_collision_object", "remove_collision_object", "save_octree"};
+                                 "clear_box", "set_collision_object", "remove_collision_object", "save_octree",
+                                 "load_scene", "save_scene"};
 
 }  // namespace
 
@@ -145,7 +147,7 @@ void CollisionCheckerNode::load_robot() {
   joint_map_ = std::make_unique<const JointValueMap>(checker()->model());
 }
 
-Environment CollisionCheckerNode::initial_environment() const {
+Environment CollisionCheckerNode::initial_octree() const {
   const OccupancyModel model = params_.occupancy_model();
   Environment env(params_.resolution, model);
   if (params_.octree_file.empty()) return env;
@@ -171,6 +173,22 @@ Environment CollisionCheckerNode::initial_environment() const {
   return from_file;
 }
 
+// The octree to start from, with the collision objects of ~scene_file (a malformed file stops the
+// node with a message naming its line and field).
+Environment CollisionCheckerNode::initial_environment() const {
+  Environment env = initial_octree();
+  if (params_.scene_file.empty()) return env;
+  try {
+    const SceneFile scene = read_scene_file(params_.scene_file);
+    for (CollisionObject& o : scene.collision_objects()) env.add_object(std::move(o));
+    ROS_INFO_STREAM("collision_checker: started with the " << scene.objects.size() << " objects (" << scene.shape_count()
+                                                           << " shapes) of scene '" << scene.name << "'");
+  } catch (const std::exception& e) {
+    throw NodeStartupError(std::string("parameter ~scene_file: ") + e.what());
+  }
+  return env;
+}
+
 void CollisionCheckerNode::advertise() {
   services_.push_back(private_nh_.advertiseService("check_state", &CollisionCheckerNode::check_state, this));
   services_.push_back(private_nh_.advertiseService("check_states", &CollisionCheckerNode::check_states, this));
@@ -185,6 +203,8 @@ void CollisionCheckerNode::advertise() {
   services_.push_back(private_nh_.advertiseService("remove_collision_object",
                                                    &CollisionCheckerNode::remove_collision_object, this));
   services_.push_back(private_nh_.advertiseService("save_octree", &CollisionCheckerNode::save_octree, this));
+  services_.push_back(private_nh_.advertiseService("load_scene", &CollisionCheckerNode::load_scene, this));
+  services_.push_back(private_nh_.advertiseService("save_scene", &CollisionCheckerNode::save_scene, this));
 
   joint_state_sub_ = nh_.subscribe("joint_states", 10, &CollisionCheckerNode::on_joint_state, this,
                                    ros::TransportHints().tcpNoDelay());

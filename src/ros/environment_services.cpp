@@ -2,7 +2,11 @@
 // services that change or save it.
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
 
+#include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/ros/collision_checker_node.h"
 
@@ -23,6 +27,29 @@ bool remove_object_shapes(Environment& env, const std::string& id) {
   }
   for (const std::string& name : names) env.remove_object(name);
   return !names.empty();
+}
+
+// The collision objects as a scene: the shapes id#0, id#1, ... of an object of several back into
+// one object `id` (in the order of k), posed in the world.
+SceneFile scene_of(const Environment& env, const std::string& name) {
+  SceneFile scene;
+  scene.name = name.empty() ? "(noname)+" : name;
+  std::map<std::string, std::map<std::size_t, SceneShape>> parts;
+  std::vector<std::string> order;  // objects in the order their first shape comes
+  for (const CollisionObject& o : env.objects()) {
+    const auto hash = o.id.rfind('#');
+    const bool part = hash != std::string::npos && hash + 1 < o.id.size() &&
+                      o.id.find_first_not_of("0123456789", hash + 1) == std::string::npos;
+    const std::string id = part ? o.id.substr(0, hash) : o.id;
+    if (parts.find(id) == parts.end()) order.push_back(id);
+    parts[id][part ? std::stoul(o.id.substr(hash + 1)) : 0] = SceneShape{o.shape, o.pose};
+  }
+  for (const std::string& id : order) {
+    SceneObject object{id, Transform(), {}};
+    for (auto& [k, shape] : parts[id]) object.shapes.push_back(std::move(shape));
+    scene.objects.push_back(std::move(object));
+  }
+  return scene;
 }
 
 }  // namespace
@@ -186,6 +213,51 @@ bool CollisionCheckerNode::save_octree(SaveOctree::Request& req, SaveOctree::Res
     } catch (const std::runtime_error& e) {
       throw RequestError(e.what());
     }
+  });
+}
+
+bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Response& res) {
+  return serve("load_scene", res, [&] {
+    if (req.path.empty()) throw RequestError("path is empty");
+    // Read and built (meshes, hierarchies, hulls) before the environment is locked.
+    const SceneFile scene = [&] {
+      try {
+        return read_scene_file(req.path);
+      } catch (const SceneFileError& e) {
+        throw RequestError(e.what());
+      }
+    }();
+    for (const SceneObject& o : scene.objects) {
+      if (o.id == "octree") throw RequestError(req.path + ": object id 'octree' is reserved: it names the obstacle octree in contacts");
+      double triangles = 0.0;
+      for (const SceneShape& s : o.shapes) triangles += static_cast<double>(s.shape.triangle_count());
+      check_limit("collision object '" + o.id + "' with its triangles", triangles, params_.limits.object_triangles,
+                  "max_object_triangles");
+    }
+    std::vector<CollisionObject> parts = scene.collision_objects();
+    store_->modify([&](Environment& env) {
+      if (!req.merge) env.clear_objects();
+      for (const SceneObject& o : scene.objects) remove_object_shapes(env, o.id);
+      for (CollisionObject& part : parts) env.add_object(std::move(part));
+    });
+    res.name = scene.name;
+    res.objects = static_cast<std::uint32_t>(scene.objects.size());
+    res.shapes = static_cast<std::uint32_t>(scene.shape_count());
+  });
+}
+
+bool CollisionCheckerNode::save_scene(SaveScene::Request& req, SaveScene::Response& res) {
+  return serve("save_scene", res, [&] {
+    if (req.path.empty()) throw RequestError("path is empty");
+    const SceneFile scene = scene_of(*store_->snapshot(), req.name);
+    std::ostringstream text;
+    try {
+      write_scene_text(scene, text);
+    } catch (const std::invalid_argument& e) {
+      throw RequestError(std::string("the scene cannot be written: ") + e.what());
+    }
+    std::ofstream out(req.path, std::ios::binary | std::ios::trunc);
+    if (!out || !(out << text.str()) || !out.flush()) throw RequestError("cannot write '" + req.path + "'");
   });
 }
 

@@ -154,6 +154,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
         "parameters ~sensor_model: hit must be above 0.5, miss below 0.5, and min below max");
   }
   read(nh, "octree_file", p.octree_file, "a string (a .bt or .ot path)");
+  read(nh, "scene_file", p.scene_file, "a string (a MoveIt .scene path)");
   p.cloud_transform_timeout = read_number(nh, "cloud_transform_timeout", p.cloud_transform_timeout, false);
   p.joint_state_history = read_number(nh, "joint_state_history", p.joint_state_history, false);
   p.joint_state_lead = read_number(nh, "joint_state_lead", p.joint_state_lead, false);

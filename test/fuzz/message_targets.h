@@ -21,8 +21,9 @@ std::string check_point_cloud(const std::uint8_t* data, std::size_t size);
 // fills its request field by field (bytes left after a check_motion request make a check_motions
 // request with the same joint names). The service handler must return (no exception escapes it)
 // with either an error message or an answer whose numbers are finite where they must be, and the
-// node must still answer a plain check_state afterwards. save_octree is left out: it writes to the
-// path the request names. Needs a ROS master (ROS_MASTER_URI): the node advertises its services.
+// node must still answer a plain check_state afterwards. save_octree, load_scene and save_scene
+// are left out: they read or write the file the request names (load_scene's reader is
+// test_scene_file's, fed every malformed form it refuses). Needs a ROS master (ROS_MASTER_URI): the node advertises its services.
 std::string check_service_request(const std::uint8_t* data, std::size_t size);
 
 }  // namespace bvh_collision::fuzz

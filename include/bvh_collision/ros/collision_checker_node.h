@@ -40,7 +40,9 @@
 #include "bvh_collision/CheckStates.h"
 #include "bvh_collision/ClearBox.h"
 #include "bvh_collision/RemoveCollisionObject.h"
+#include "bvh_collision/LoadScene.h"
 #include "bvh_collision/SaveOctree.h"
+#include "bvh_collision/SaveScene.h"
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/checker/environment_store.h"
@@ -85,6 +87,7 @@ struct NodeParameters {
   // Probabilities, as octomap_server takes them (OctoMap's defaults).
   double sensor_hit = 0.7, sensor_miss = 0.4, sensor_min = 0.1192, sensor_max = 0.971;
   std::string octree_file;
+  std::string scene_file;  // a MoveIt .scene file of collision objects to start with (load_scene's)
   // ---
   double cloud_transform_timeout = 0.2;  // s to wait for a cloud's transform at its stamp
   // The self filter places the robot at a cloud's stamp from the joint states of the last
@@ -135,7 +138,8 @@ class CollisionCheckerNode {
 
   // Start-up (collision_checker_node.cpp).
   void load_robot();
-  Environment initial_environment() const;
+  Environment initial_octree() const;       // ~octree_file's, or an empty one
+  Environment initial_environment() const;  // that, with ~scene_file's objects
   void advertise();
   void publish_status();
   void log_solidity();
@@ -195,6 +199,8 @@ class CollisionCheckerNode {
   bool set_collision_object(SetCollisionObject::Request& req, SetCollisionObject::Response& res);
   bool remove_collision_object(RemoveCollisionObject::Request& req, RemoveCollisionObject::Response& res);
   bool save_octree(SaveOctree::Request& req, SaveOctree::Response& res);
+  bool load_scene(LoadScene::Request& req, LoadScene::Response& res);
+  bool save_scene(SaveScene::Request& req, SaveScene::Response& res);
 
   // Output (node_output.cpp).
   void publish_occupied_cells(const ros::WallTimerEvent&);
