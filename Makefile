@@ -27,7 +27,7 @@ DEB_PACKAGES := \
   libdiagnostic-msgs-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev ros-robot-state-publisher \
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev libtinyxml2-dev libeigen3-dev libassimp-dev liboctomap-dev \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
-  libkdl-parser-dev liborocos-kdl-dev python3-matplotlib \
+  libkdl-parser-dev liborocos-kdl-dev python3-matplotlib libyaml-cpp-dev \
   libompl-dev \
   python3-rospy python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-shape-msgs \
   python3-diagnostic-msgs python3-visualization-msgs \

@@ -96,6 +96,28 @@ TEST(CheckTool, StatesAgainstASceneFile) {
   EXPECT_NE(refused.err.find(bad + ":7: object 'pillar' shape 1 (box) size 2 is not a positive number"), std::string::npos) << refused.err;
 }
 
+// A PlanningScene in YAML: its objects, and its robot state for the joints the states file leaves
+// out (joint2 at 1.0 leans the arm into the pillar once joint1 turns it there).
+TEST(CheckTool, StatesAgainstAYamlScene) {
+  const std::string scene = write_states("") + ".yaml";
+  std::ofstream(scene) << "name: pillar\n"
+                          "robot_state:\n  joint_state: {name: [joint2, no_such_joint], position: [1.0, 3.0]}\n"
+                          "world:\n  collision_objects:\n    - id: pillar\n      header: {frame_id: world}\n"
+                          "      primitives: [{type: 1, dimensions: [0.12, 0.12, 0.8]}]\n"
+                          "      primitive_poses: [{position: {x: 0.45, y: 0.35, z: 0.4}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n"
+                          "allowed_collision_matrix: {entry_names: [pillar, hand], entry_values: [{enabled: [false, true]}, {enabled: [true, false]}]}\n";
+  const std::string states = write_states("joints: joint1\n0\n0.66\n");
+  const ToolRun r = run({"--urdf", kUrdf, "--states", states, "--scene", scene});
+  const std::vector<std::string> lines = output_lines(r);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].rfind("0 free", 0), 0u) << lines[0];
+  EXPECT_EQ(lines[1].rfind("1 collision ", 0), 0u) << lines[1];
+  EXPECT_NE(lines[1].find(":pillar"), std::string::npos) << lines[1];
+  EXPECT_NE(r.err.find("warning: the scene's robot state names 'no_such_joint'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("warning: the scene's 1 allowed-collision entries are not applied"), std::string::npos) << r.err;
+  std::filesystem::remove(scene);
+}
+
 TEST(CheckTool, PrintsTheMatrix) {
   const ToolRun r = run({"--urdf", kUrdf, "--print-acm"});
   ASSERT_EQ(r.code, 0) << r.err;

@@ -518,6 +518,26 @@ TEST_F(NodeEnvironment, ScenesLoadAsSetCollisionObjectMakesThemAndSaveBack) {
   ASSERT_EQ(call<LoadScene>("load_scene", load).response.error, "");
   const CastRay::Response after = call<CastRay>("cast_ray", ray).response;
   EXPECT_TRUE(!after.hit || after.body.rfind("post", 0) != 0) << after.body;
+
+  // A PlanningScene in YAML with its object in the camera's frame: placed through tf2 (the
+  // camera at (1.5, -0.5, 0.8)); its robot state and matrix are not applied, and it says so.
+  std::ofstream((dir / "camera.yaml").string())
+      << "name: seen by the camera\n"
+      << "robot_state: {joint_state: {name: [joint1], position: [0.5]}}\n"
+      << "world:\n  collision_objects:\n    - id: crate\n      header: {frame_id: camera}\n"
+      << "      primitives: [{type: 1, dimensions: [0.2, 0.2, 0.2]}]\n"
+      << "      primitive_poses: [{position: {x: -1.0, y: 1.5, z: -0.3}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n"
+      << "allowed_collision_matrix: {entry_names: [crate, hand], entry_values: [{enabled: [false, true]}, {enabled: [true, false]}]}\n";
+  load.path = (dir / "camera.yaml").string();
+  const LoadScene::Response yaml = call<LoadScene>("load_scene", load).response;
+  ASSERT_EQ(yaml.error, "");
+  EXPECT_EQ(yaml.name, "seen by the camera");
+  EXPECT_NE(yaml.warning.find("not applied: its robot state (1 joints"), std::string::npos) << yaml.warning;
+  EXPECT_NE(yaml.warning.find("its allowed-collision matrix (1 pairs)"), std::string::npos) << yaml.warning;
+  ray.origin.x = 0.5, ray.origin.y = 2.0, ray.origin.z = 0.5, ray.direction.x = 0.0, ray.direction.y = -1.0;
+  const CastRay::Response crate = call<CastRay>("cast_ray", ray).response;
+  EXPECT_EQ(crate.body, "crate");
+  EXPECT_NEAR(crate.distance, 2.0 - 1.1, 1e-9) << "the crate's near face at y = 1.1 in the world";
   fs::remove_all(dir);
 }
 

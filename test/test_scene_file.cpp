@@ -201,6 +201,18 @@ TEST(SceneFile, ChecksAsTheSameObjectsAddedOneByOne) {
   EXPECT_GT(colliding, 0) << "the scene never touched the arm: the comparison shows nothing";
 }
 
+// Each (input, message): refused with a SceneFileError whose message holds the expected text.
+void expect_refusals(const std::vector<std::pair<std::string, std::string>>& cases, SceneFile (*read)(const std::string&)) {
+  for (const auto& [text, expected] : cases) {
+    try {
+      read(text);
+      ADD_FAILURE() << "accepted:\n" << text;
+    } catch (const SceneFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what() << "\nexpected: " << expected;
+    }
+  }
+}
+
 // Each malformed input: refused naming the file, the line and the field.
 TEST(SceneFile, RefusesMalformedInputByFileLineAndField) {
   const std::string head = "scene\n* thing\n0 0 0\n0 0 0 1\n1\n";  // newer format, one shape
@@ -227,16 +239,151 @@ TEST(SceneFile, RefusesMalformedInputByFileLineAndField) {
       {"scene\n+ thing\n.\n", "test.scene:2: '+' where an object"},
       {"scene\n* thing\n0 0 0\n0 0 0 1\n1\nsphere\n1\n0 0 0\n0 0 0 1\n0 0 zero 0\n0\n.\n", "test.scene:10: object 'thing' shape 1 colour b: 'zero' is not a number"},
   };
-  for (const auto& [text, expected] : cases) {
-    try {
-      read_text(text);
-      ADD_FAILURE() << "accepted:\n" << text;
-    } catch (const SceneFileError& e) {
-      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what() << "\nexpected: " << expected;
-    }
-  }
+  expect_refusals(cases, read_text);
   EXPECT_THROW(read_scene_file("/nonexistent/x.scene"), SceneFileError);
   EXPECT_THROW(read_scene_file("/dev/zero"), SceneFileError);
+}
+
+// The same scene as every_kind(), as `rostopic echo` prints a moveit_msgs/PlanningScene (a
+// cylinder's and a cone's dimensions height first, as SolidPrimitive orders them), with a robot
+// state and an allowed-collision matrix.
+const char* const kEveryKindYaml = R"(name: "every kind"
+robot_model_name: "demo_arm"
+robot_state:
+  joint_state:
+    header: {seq: 0, stamp: {secs: 0, nsecs: 0}, frame_id: ''}
+    name: [joint1, joint2]
+    position: [0.25, -0.5]
+    velocity: []
+    effort: []
+  multi_dof_joint_state: {joint_names: [], transforms: [], twist: [], wrench: []}
+  attached_collision_objects: []
+  is_diff: false
+world:
+  collision_objects:
+    - header: {frame_id: "world"}
+      id: "table"
+      pose:
+        position: {x: 0.6, y: 0.1, z: 0.0}
+        orientation: {x: 0.0, y: 0.0, z: 0.14943813247359922, w: 0.98877107793604228}
+      primitives:
+        - {type: 1, dimensions: [0.5, 0.8, 0.03]}
+        - {type: 3, dimensions: [0.4, 0.02]}
+        - {type: 4, dimensions: [0.1, 0.05]}
+      primitive_poses:
+        - {position: {x: 0, y: 0, z: 0.4}, orientation: {x: 0, y: 0, z: 0, w: 1}}
+        - {position: {x: 0.2, y: 0.35, z: 0.2}, orientation: {x: 0, y: 0, z: 0, w: 1}}
+        - position: {x: -0.1, y: 0.0, z: 0.46}
+          orientation: {x: 0.24246536490574877, y: 0.24246536490574877, z: 0.0, w: 0.93937271284737889}
+      meshes: []
+      mesh_poses: []
+      planes: []
+      plane_poses: []
+      operation: 0
+    - id: "ball"
+      primitives: [{type: 2, dimensions: [0.07]}]
+      primitive_poses: [{position: {x: 0.3, y: -0.4, z: 0.6}, orientation: {x: 0, y: 0, z: 0, w: 1}}]
+    - id: "part with spaces"
+      pose:
+        position: {x: 0.4, y: 0.4, z: 0.7}
+        orientation: {x: 0.0, y: 0.3695956840164745, z: 0.3695956840164745, w: 0.8525245220595057}
+      meshes:
+        - vertices: [{x: 0, y: 0, z: 0}, {x: 0.1, y: 0, z: 0}, {x: 0, y: 0.1, z: 0}, {x: 0, y: 0, z: 0.1}]
+          triangles: [{vertex_indices: [0, 2, 1]}, {vertex_indices: [0, 1, 3]}, {vertex_indices: [0, 3, 2]}, {vertex_indices: [1, 2, 3]}]
+      mesh_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]
+  octomap:
+    header: {frame_id: ''}
+    origin: {position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}
+    octomap: {header: {frame_id: ''}, binary: false, id: '', resolution: 0.0, data: []}
+allowed_collision_matrix:
+  entry_names: [ball, hand, table]
+  entry_values:
+    - enabled: [false, true, false]
+    - enabled: [true, false, false]
+    - enabled: [false, false, false]
+  default_entry_names: []
+  default_entry_values: []
+object_colors: []
+is_diff: false
+)";
+
+SceneFile read_yaml(const std::string& text) {
+  std::istringstream in(text);
+  return read_scene_yaml(in, "test.yaml");
+}
+
+TEST(SceneFile, ReadsAPlanningSceneInYaml) {
+  const SceneFile yaml = read_yaml(kEveryKindYaml);
+  const SceneFile text = every_kind();
+  ASSERT_EQ(yaml.objects.size(), text.objects.size());
+  EXPECT_EQ(yaml.name, "every kind");
+  EXPECT_EQ(yaml.objects[0].frame_id, "world");
+  for (std::size_t i = 0; i < yaml.objects.size(); ++i) {
+    EXPECT_EQ(yaml.objects[i].id, text.objects[i].id);
+    EXPECT_TRUE(yaml.objects[i].pose.R.isApprox(text.objects[i].pose.R, 1e-12)) << yaml.objects[i].id;
+    ASSERT_EQ(yaml.objects[i].shapes.size(), text.objects[i].shapes.size());
+    for (std::size_t k = 0; k < yaml.objects[i].shapes.size(); ++k) {
+      const ObjectShape& a = yaml.objects[i].shapes[k].shape;
+      const ObjectShape& b = text.objects[i].shapes[k].shape;
+      EXPECT_EQ(a.kind, b.kind);
+      EXPECT_EQ(a.size, b.size);
+      EXPECT_EQ(a.radius, b.radius) << yaml.objects[i].id << " shape " << k;
+      EXPECT_EQ(a.length, b.length) << yaml.objects[i].id << " shape " << k;
+      EXPECT_TRUE(yaml.objects[i].shapes[k].pose.t.isApprox(text.objects[i].shapes[k].pose.t, 1e-15));
+    }
+  }
+  // The same answers as the .scene form of the same objects.
+  const CollisionChecker checker = test::demo_arm_checker();
+  const Environment a = yaml.environment(), b = text.environment();
+  std::mt19937_64 rng(9);
+  EnvironmentRequest request;
+  request.distance = true;
+  for (int i = 0; i < test::sized(200); ++i) {
+    const std::vector<double> q = random_configuration(checker.model(), rng);
+    const EnvironmentResult x = checker.check_environment(q.data(), a, request), y = checker.check_environment(q.data(), b, request);
+    ASSERT_EQ(x.collision, y.collision) << i;
+    if (!x.collision) EXPECT_NEAR(x.min_distance, y.min_distance, 1e-9) << i;
+  }
+  // The robot state and the matrix, as pairs.
+  ASSERT_EQ(yaml.joint_values.size(), 2u);
+  EXPECT_EQ(yaml.joint_values[1].first, "joint2");
+  EXPECT_EQ(yaml.joint_values[1].second, -0.5);
+  ASSERT_EQ(yaml.allowed_collisions.size(), 3u);
+  EXPECT_EQ(yaml.allowed_collisions[0].a, "ball");
+  EXPECT_EQ(yaml.allowed_collisions[0].b, "hand");
+  EXPECT_TRUE(yaml.allowed_collisions[0].allowed);
+  EXPECT_FALSE(yaml.allowed_collisions[1].allowed);
+}
+
+TEST(SceneFile, RefusesMalformedYamlByLineAndField) {
+  const std::string object = "world:\n  collision_objects:\n    - id: box\n";
+  const std::string pose = "      primitive_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"world: [unclosed\n", "test.yaml:2: not YAML"},
+      {"- a list\n", "test.yaml:1: the document: not a PlanningScene"},
+      {object + "      primitives: [{type: 1, dimensions: [0.1, 0.2]}]\n" + pose,
+       "test.yaml:4: world.collision_objects[0] ('box').primitives[0].dimensions: 3 needed, 2 given"},
+      {object + "      primitives: [{type: 1, dimensions: [0.1, -0.2, 0.3]}]\n" + pose, "dimensions[1]: not a positive number"},
+      {object + "      primitives: [{type: 5, dimensions: [0.1]}]\n" + pose, "type 5 is not BOX (1), SPHERE (2), CYLINDER (3) or CONE (4)"},
+      {object + "      primitives: [{type: 2, dimensions: [nan]}]\n" + pose, "dimensions[0]: 'nan' is not a number"},
+      {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n", "1 primitives but 0 primitive_poses"},
+      {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n      primitive_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 3}}]\n",
+       "test.yaml:5: world.collision_objects[0] ('box').primitive_poses[0].orientation: not a unit quaternion (norm 3)"},
+      {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n      primitive_poses: [{position: {x: 0, y: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n",
+       "primitive_poses[0].position.z: missing"},
+      {object + "      operation: 1\n      primitives: [{type: 2, dimensions: [0.1]}]\n" + pose, "('box').operation: only ADD (0)"},
+      {object + "      planes: [{coef: [0, 0, 1, 0]}]\n", "('box').planes: a plane (infinite) is not supported"},
+      {object, "world.collision_objects[0] ('box'): no shape"},
+      {object + "      meshes: [{vertices: [{x: 0, y: 0, z: 0}], triangles: [{vertex_indices: [0, 0, 1]}]}]\n      mesh_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n",
+       "meshes[0].triangles[0].vertex_indices: vertex 1 of 1"},
+      {"world:\n  collision_objects:\n    - id: 'a#2'\n", "id: 'a#2' contains '#'"},
+      {"robot_state:\n  joint_state: {name: [a, b], position: [1]}\n", "robot_state.joint_state: 2 names but 1 positions"},
+      {"robot_state:\n  attached_collision_objects: [{link_name: hand}]\n", "robot_state.attached_collision_objects: attached objects are not supported yet"},
+      {"allowed_collision_matrix:\n  entry_names: [a, b]\n  entry_values: [{enabled: [false, maybe]}, {enabled: [false, false]}]\n",
+       "allowed_collision_matrix.entry_values[0].enabled: 'maybe' is not true or false"},
+      {"world:\n  octomap: {octomap: {data: [1, 2, 3]}}\n", "world.octomap: an octomap in a scene is not read"},
+  };
+  expect_refusals(cases, read_yaml);
 }
 
 }  // namespace

@@ -269,7 +269,8 @@ SceneFile read_scene_file(const std::string& path) {
   if (std::filesystem::file_size(path, ec) > kLargestFile) throw SceneFileError(path + ": over 64 MiB");
   std::ifstream in(path);
   if (!in) throw SceneFileError(path + ": cannot be read");
-  return read_scene_text(in, path);
+  const std::string ext = std::filesystem::path(path).extension().string();
+  return ext == ".yaml" || ext == ".yml" ? read_scene_yaml(in, path) : read_scene_text(in, path);
 }
 
 void write_scene_text(const SceneFile& scene, std::ostream& out) {

@@ -180,6 +180,24 @@ AllowedCollisionMatrix with_sampled_pairs(const Options& o, const std::string& s
   return acm;
 }
 
+// A YAML scene's robot state into `state` (the joints a states file leaves out keep these); what
+// it names that the robot lacks, and allowed-collision entries (not applied here), are warned of.
+void apply_scene_state(const SceneFile& scene, const RobotModel& m, std::vector<double>& state, std::ostream& err) {
+  for (const auto& [name, value] : scene.joint_values) {
+    const auto& names = m.variable_names();
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+      err << "warning: the scene's robot state names '" << name << "', which is not a joint variable of the robot\n";
+      continue;
+    }
+    state[static_cast<std::size_t>(it - names.begin())] = value;
+  }
+  if (!scene.allowed_collisions.empty()) {
+    err << "warning: the scene's " << scene.allowed_collisions.size()
+        << " allowed-collision entries are not applied (use --srdf for the robot's own pairs)\n";
+  }
+}
+
 // One configuration's line: `INDEX free` or `INDEX collision A:B,...` (link pairs and, with a
 // scene, link:object pairs, name-sorted), then with --distance the nearest pair of either kind.
 void print_state(const Options& o, const CollisionChecker& checker, const Environment* world,
@@ -251,9 +269,11 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
       const RobotJoint& j = m.joints()[m.joint_index(m.variable_names()[v])];
       if (j.bounded) state[v] = std::clamp(0.0, j.lower, j.upper);
     }
-    // The scene's objects (MoveIt .scene text), checked with the robot's own pairs.
-    const std::optional<Environment> world =
-        o.scene.empty() ? std::nullopt : std::optional<Environment>(read_scene_file(o.scene).environment());
+    // The scene's objects (MoveIt .scene text or PlanningScene YAML), checked with the robot's own
+    // pairs; a YAML scene's robot state gives the joints the states file leaves out.
+    const std::optional<SceneFile> scene = o.scene.empty() ? std::nullopt : std::optional<SceneFile>(read_scene_file(o.scene));
+    if (scene) apply_scene_state(*scene, m, state, err);
+    const std::optional<Environment> world = scene ? std::optional<Environment>(scene->environment()) : std::nullopt;
     for (std::size_t i = 0; i < states.rows.size(); ++i) {
       for (std::size_t k = 0; k < states.variables.size(); ++k) state[states.variables[k]] = states.rows[i][k];
       print_state(o, checker, world ? &*world : nullptr, state, i, out);

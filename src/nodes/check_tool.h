@@ -9,9 +9,11 @@
 // that order (blank lines and lines starting with '#' ignored). Joints not named sit at 0,
 // clamped into their limits. Output: `INDEX free` or `INDEX collision A:B,C:D` (0-based index,
 // names sorted within and across pairs), followed with --distance by ` distance=D pair=A:B`.
-// --scene FILE (MoveIt .scene text, checker/scene_file.h) also checks each configuration against
-// the scene's objects: a link touching one adds `LINK:OBJECT` to the pairs (an object of several
-// shapes as `id#k`), and the distance is the nearest of either kind.
+// --scene FILE (MoveIt .scene text, or PlanningScene YAML when it ends in .yaml or .yml;
+// checker/scene_file.h) also checks each configuration against the scene's objects: a link
+// touching one adds `LINK:OBJECT` to the pairs (an object of several shapes as `id#k`), and the
+// distance is the nearest of either kind. A YAML scene's robot state sets the joints the states
+// file leaves out; its allowed-collision entries are not applied (a warning says so).
 // --print-acm first prints `check A:B` or `skip A:B REASON` for every pair of links with
 // geometry. --sample-acm N also skips pairs that N random configurations show never or always
 // colliding, read from --acm-cache FILE when it holds them for this URDF, SRDF and N (and

@@ -220,13 +220,18 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
   return serve("load_scene", res, [&] {
     if (req.path.empty()) throw RequestError("path is empty");
     // Read and built (meshes, hierarchies, hulls) before the environment is locked.
-    const SceneFile scene = [&] {
+    SceneFile scene = [&] {
       try {
         return read_scene_file(req.path);
       } catch (const SceneFileError& e) {
         throw RequestError(e.what());
       }
     }();
+    // A YAML object in a named frame: placed in world_frame through tf2, as set_collision_object's.
+    for (SceneObject& o : scene.objects) {
+      o.pose = frame_to_world(o.frame_id) * o.pose;
+      o.frame_id.clear();
+    }
     for (const SceneObject& o : scene.objects) {
       if (o.id == "octree") throw RequestError(req.path + ": object id 'octree' is reserved: it names the obstacle octree in contacts");
       double triangles = 0.0;
@@ -243,6 +248,10 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
     res.name = scene.name;
     res.objects = static_cast<std::uint32_t>(scene.objects.size());
     res.shapes = static_cast<std::uint32_t>(scene.shape_count());
+    std::vector<std::string> unused;
+    if (!scene.joint_values.empty()) unused.push_back("its robot state (" + std::to_string(scene.joint_values.size()) + " joints: the node's come from joint_states)");
+    if (!scene.allowed_collisions.empty()) unused.push_back("its allowed-collision matrix (" + std::to_string(scene.allowed_collisions.size()) + " pairs)");
+    if (!unused.empty()) res.warning = "not applied: " + unused[0] + (unused.size() > 1 ? " and " + unused[1] : "");
   });
 }
 
