@@ -493,6 +493,13 @@ TEST_F(NodeEnvironment, ScenesLoadAsSetCollisionObjectMakesThemAndSaveBack) {
   EXPECT_EQ(reloaded.name, "saved");
   EXPECT_EQ(reloaded.objects, 3u);
   EXPECT_EQ(answers(), from_scene);
+  // And as PlanningScene YAML.
+  save.path = (dir / "saved.yaml").string();
+  ASSERT_EQ(call<SaveScene>("save_scene", save).response.error, "");
+  ASSERT_TRUE(ros::service::call(node_service("clear_environment"), empty));
+  load.path = save.path;
+  ASSERT_EQ(call<LoadScene>("load_scene", load).response.error, "");
+  EXPECT_EQ(answers(), from_scene);
 
   // A malformed file: refused by file, line and field; nothing changed.
   std::ofstream((dir / "bad.scene").string()) << "bad\n* thing\n0 0 0\n0 0 0 1\n1\nsphere\n-1\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n.\n";

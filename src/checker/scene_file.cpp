@@ -273,6 +273,18 @@ SceneFile read_scene_file(const std::string& path) {
   return ext == ".yaml" || ext == ".yml" ? read_scene_yaml(in, path) : read_scene_text(in, path);
 }
 
+void write_scene_file(const SceneFile& scene, const std::string& path) {
+  std::ostringstream text;  // written whole, or not at all
+  const std::string ext = std::filesystem::path(path).extension().string();
+  try {
+    ext == ".yaml" || ext == ".yml" ? write_scene_yaml(scene, text) : write_scene_text(scene, text);
+  } catch (const std::invalid_argument& e) {
+    throw SceneFileError(path + ": the scene cannot be written: " + e.what());
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out || !(out << text.str()) || !out.flush()) throw SceneFileError("cannot write '" + path + "'");
+}
+
 void write_scene_text(const SceneFile& scene, std::ostream& out) {
   std::ostringstream text;  // nothing reaches `out` if a shape cannot be written
   text << std::setprecision(17);

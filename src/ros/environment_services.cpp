@@ -2,9 +2,7 @@
 // services that change or save it.
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
@@ -258,15 +256,11 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
 bool CollisionCheckerNode::save_scene(SaveScene::Request& req, SaveScene::Response& res) {
   return serve("save_scene", res, [&] {
     if (req.path.empty()) throw RequestError("path is empty");
-    const SceneFile scene = scene_of(*store_->snapshot(), req.name);
-    std::ostringstream text;
     try {
-      write_scene_text(scene, text);
-    } catch (const std::invalid_argument& e) {
-      throw RequestError(std::string("the scene cannot be written: ") + e.what());
+      write_scene_file(scene_of(*store_->snapshot(), req.name), req.path);
+    } catch (const SceneFileError& e) {
+      throw RequestError(e.what());
     }
-    std::ofstream out(req.path, std::ios::binary | std::ios::trunc);
-    if (!out || !(out << text.str()) || !out.flush()) throw RequestError("cannot write '" + req.path + "'");
   });
 }
 

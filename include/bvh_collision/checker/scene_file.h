@@ -71,10 +71,15 @@ SceneFile read_scene_text(std::istream& in, const std::string& source);
 // objects, multi-DOF joint states, an octomap with data (use octree_file), and any malformed
 // field. Fields the checker has no use for (colours, padding, fixed frames) are left alone.
 SceneFile read_scene_yaml(std::istream& in, const std::string& source);
+// The scene as such YAML (what read_scene_yaml reads back to the same doubles): an object's
+// primitives are written before its meshes, as the message holds them.
+void write_scene_yaml(const SceneFile& scene, std::ostream& out);
 // A regular file of at most 64 MiB: YAML when its name ends in .yaml or .yml, else .scene text.
 SceneFile read_scene_file(const std::string& path);
 // MoveIt's newer format (object poses and subframe counts), every number to 17 digits so that
 // reading it back gives the same doubles.
 void write_scene_text(const SceneFile& scene, std::ostream& out);
+// By the path's extension, as read_scene_file reads it; throws SceneFileError when it cannot write.
+void write_scene_file(const SceneFile& scene, const std::string& path);
 
 }  // namespace bvh_collision
