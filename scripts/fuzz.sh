@@ -11,7 +11,7 @@ export PATH="/usr/bin:$PATH"
 FUZZ_BUILD=${FUZZ_BUILD:-build-fuzz}
 SECONDS_PER_TARGET=${FUZZ_SECONDS:-60}
 JOBS=${JOBS:-2}
-TARGETS=${FUZZ_TARGETS:-"robot_description mesh srdf octree_file point_cloud service_request"}
+TARGETS=${FUZZ_TARGETS:-"robot_description mesh srdf octree_file scene_file point_cloud service_request"}
 
 CC=clang CXX=clang++ cmake -S . -B "$FUZZ_BUILD" -DBVH_COLLISION_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCATKIN_ENABLE_TESTING=OFF > "$FUZZ_BUILD.configure.log" 2>&1 || { tail -20 "$FUZZ_BUILD.configure.log"; exit 1; }

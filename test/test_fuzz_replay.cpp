@@ -53,6 +53,7 @@ TEST(FuzzReplay, RobotDescriptions) { EXPECT_GE(replay("robot_description", fuzz
 TEST(FuzzReplay, Meshes) { EXPECT_GE(replay("mesh", fuzz::check_mesh), 120u); }
 TEST(FuzzReplay, Srdf) { EXPECT_GE(replay("srdf", fuzz::check_srdf), 20u); }
 TEST(FuzzReplay, OctreeFiles) { EXPECT_GE(replay("octree_file", fuzz::check_octree_file), 30u); }
+TEST(FuzzReplay, SceneFiles) { EXPECT_GE(replay("scene_file", fuzz::check_scene_file), 30u); }
 TEST(FuzzReplay, PointClouds) { EXPECT_GE(replay("point_cloud", fuzz::check_point_cloud), 20u); }
 
 // Run last (gtest keeps declaration order): the whole replay's peak memory.

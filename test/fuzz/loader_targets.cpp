@@ -3,6 +3,7 @@
 #include <tinyxml2.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include "bvh_collision/bvh/bounding_volumes.h"
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/mesh_loader.h"
@@ -285,6 +287,67 @@ std::string check_octree(const Octree& tree) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string shape_problem(const SceneObject& o, const SceneShape& s) {
+  if (!is_rigid(s.pose) || !is_rigid(o.pose)) return "object '" + o.id + "': a pose that is not rigid";
+  const ObjectShape& d = s.shape;
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  bool ok = false;
+  switch (d.kind) {
+    case ObjectShape::Kind::kBox: ok = positive(d.size.x()) && positive(d.size.y()) && positive(d.size.z()); break;
+    case ObjectShape::Kind::kSphere: ok = positive(d.radius); break;
+    case ObjectShape::Kind::kCylinder:
+    case ObjectShape::Kind::kCone:
+    case ObjectShape::Kind::kCapsule: ok = positive(d.radius) && positive(d.length); break;
+    case ObjectShape::Kind::kMesh:
+      ok = d.mesh != nullptr && !d.mesh->triangles.empty() &&
+           std::all_of(d.mesh->vertices.begin(), d.mesh->vertices.end(), [](const Vec3& v) { return v.allFinite(); });
+      break;
+  }
+  return ok ? "" : "object '" + o.id + "': a dimension or vertex that is not positive and finite";
+}
+
+// The scene written in the form it came in and read back: the same objects and numbers.
+std::string round_trip_problem(const SceneFile& scene, bool yaml) {
+  std::ostringstream out;
+  yaml ? write_scene_yaml(scene, out) : write_scene_text(scene, out);
+  std::istringstream in(out.str());
+  const SceneFile back = yaml ? read_scene_yaml(in, "written") : read_scene_text(in, "written");
+  if (back.objects.size() != scene.objects.size()) return "written and read back, another object count";
+  for (std::size_t i = 0; i < back.objects.size(); ++i) {
+    const SceneObject& a = scene.objects[i];
+    const SceneObject& b = back.objects[i];
+    if (a.id != b.id || a.shapes.size() != b.shapes.size()) return "written and read back, object " + std::to_string(i) + " differs";
+    if (!a.pose.t.isApprox(b.pose.t, 1e-12) && (a.pose.t - b.pose.t).norm() > 1e-12) return "written and read back, '" + a.id + "' moved";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string check_scene_file(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return "";
+  const bool yaml = data[0] % 2 == 1;
+  std::istringstream in(std::string(reinterpret_cast<const char*>(data + 1), size - 1));
+  try {
+    const SceneFile scene = yaml ? read_scene_yaml(in, "fuzz input") : read_scene_text(in, "fuzz input");
+    for (const SceneObject& o : scene.objects) {
+      if (o.id.empty() || o.id.find('#') != std::string::npos) return "an object id '" + o.id + "' was accepted";
+      if (o.shapes.empty()) return "object '" + o.id + "' without a shape was accepted";
+      for (const SceneShape& s : o.shapes) {
+        if (std::string problem = shape_problem(o, s); !problem.empty()) return problem;
+      }
+    }
+    scene.environment();  // throws std::invalid_argument for a shape it does not take
+    return round_trip_problem(scene, yaml);
+  } catch (const SceneFileError& e) {
+    return refusal_problem(e.what());
+  } catch (const std::invalid_argument& e) {
+    return std::string("read, but the environment refused it: ") + e.what();
+  }
+}
 
 std::string check_octree_file(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return "";

@@ -40,4 +40,11 @@ std::string check_srdf(const std::uint8_t* data, std::size_t size);
 // std::invalid_argument with a message.
 std::string check_octree_file(const std::uint8_t* data, std::size_t size);
 
+// A scene file: the first byte picks the form (even: MoveIt .scene text, odd: PlanningScene
+// YAML), the rest is the file. Loaded: every object has an id without '#' and at least one
+// shape, every dimension positive and finite, every pose finite and rigid, the environment takes
+// every shape, and the scene written in its form reads back with the same ids, shapes and
+// numbers (to 1e-12). Refused: a SceneFileError with a message.
+std::string check_scene_file(const std::uint8_t* data, std::size_t size);
+
 }  // namespace bvh_collision::fuzz
