@@ -6,6 +6,7 @@
 
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/thread_pool.h"
+#include "bvh_collision/narrowphase/shape_pairs.h"
 
 namespace bvh_collision {
 namespace {
