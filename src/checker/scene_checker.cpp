@@ -173,7 +173,7 @@ bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double err
 SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const auto& bounds = m.bounds();
-  const auto [a, b] = m.checked_pairs()[p];
+  const int a = m.checked_pairs()[p].first, b = m.checked_pairs()[p].second;  // (named, not bound: a lambda below takes them)
   // Over an interval, the pair's proven clearance over the whole of it (a grid over the one or
   // two variables that move it) settles it with no growth at all.
   if (s.from != nullptr &&

@@ -29,11 +29,13 @@ class YamlScene {
     throw SceneFileError(source_ + ":" + (line > 0 ? std::to_string(line) : std::string("?")) + ": " + field + ": " + what);
   }
   YAML::Node required(const YAML::Node& parent, const std::string& key, const std::string& field) const {
+    if (!parent.IsMap()) fail(parent, field, "not a map (of " + key + " and more)");
     const YAML::Node n = parent[key];
     if (!n.IsDefined() || n.IsNull()) fail(parent, field + "." + key, "missing");
     return n;
   }
   YAML::Node sequence(const YAML::Node& parent, const std::string& key, const std::string& field) const {
+    if (!parent.IsMap()) fail(parent, field, "not a map (of " + key + " and more)");
     const YAML::Node n = parent[key];
     if (!n.IsDefined() || n.IsNull()) return YAML::Node(YAML::NodeType::Sequence);
     if (!n.IsSequence()) fail(n, field + "." + key, "not a list");
@@ -234,7 +236,13 @@ SceneFile read_scene_yaml(std::istream& in, const std::string& source) {
   } catch (const YAML::Exception& e) {
     throw SceneFileError(source + ":" + std::to_string(e.mark.line + 1) + ": not YAML: " + e.msg);
   }
-  return YamlScene(source).read(root);
+  try {
+    return YamlScene(source).read(root);
+  } catch (const YAML::Exception& e) {
+    // A node of another kind than its field needs (a scalar where a map belongs, say) that the
+    // checks above did not name: refused all the same, with its line.
+    throw SceneFileError(source + ":" + std::to_string(e.mark.line + 1) + ": malformed: " + e.msg);
+  }
 }
 
 }  // namespace bvh_collision
