@@ -55,6 +55,7 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     reach = std::max(reach, m.bounds()[l].radius + m.paddings()[l]);
   }
   relative_pair_rates();
+  interval_chains();
   root_at_origin_ = options.root_pose.R == Mat3::Identity() && options.root_pose.t == Vec3::Zero();
   // Self pairs first (a state's self collisions are the likelier), then each link's environment.
   for (std::size_t p = 0; p < pair_rates_.size() && options.self; ++p) components_.push_back(static_cast<int>(p));
@@ -118,21 +119,122 @@ void SceneChecker::relative_pair_rates() {
   }
 }
 
-double SceneChecker::link_growth(int link, const double* start, const double* goal, double half) const {
-  const double g = checker_.link_speed(link, start, goal) * half;
-  return g * (1.0 + 1e-9) + pose_margin(g);
+// Per link with geometry, its moving joints from the link up (a joint's child link carries its
+// axis); per checked pair, how many of each side's joints lie below the part of the chain the
+// two share (those above move both links alike).
+void SceneChecker::interval_chains() {
+  const RobotModel& robot = checker_.model();
+  const std::size_t links = robot.links().size();
+  chain_first_.assign(links, 0);
+  chain_count_.assign(links, 0);
+  for (const int l : links_) {
+    chain_first_[l] = chain_joints_.size();
+    for (int j = robot.links()[l].parent_joint; j >= 0; j = robot.links()[robot.joints()[j].parent_link].parent_joint) {
+      const RobotJoint& joint = robot.joints()[j];
+      const bool turns = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous;
+      if (!turns && joint.type != JointType::kPrismatic) continue;  // fixed, or posed from outside the state
+      ChainJoint c;
+      c.child = joint.child_link;
+      c.variable = joint.mimic >= 0 ? robot.joints()[joint.mimic].variable : joint.variable;
+      c.multiplier = joint.mimic >= 0 ? joint.multiplier : 1.0;
+      if (c.variable < 0) continue;
+      if (turns) {
+        const auto known = std::find_if(turning_joints_.begin(), turning_joints_.end(), [&](const auto& t) { return t.first == c.child; });
+        c.turning = static_cast<int>(known - turning_joints_.begin());
+        if (known == turning_joints_.end()) turning_joints_.emplace_back(c.child, joint.axis);
+      }
+      chain_joints_.push_back(c);
+    }
+    chain_count_[l] = chain_joints_.size() - chain_first_[l];
+  }
+  for (const auto& [a, b] : checker_.collision_model().checked_pairs()) {
+    auto below = [&](int link, int other) {
+      const auto first = chain_joints_.begin() + static_cast<std::ptrdiff_t>(chain_first_[link]);
+      const auto other_first = chain_joints_.begin() + static_cast<std::ptrdiff_t>(chain_first_[other]);
+      const auto other_end = other_first + static_cast<std::ptrdiff_t>(chain_count_[other]);
+      int n = 0;
+      for (auto it = first; it != first + static_cast<std::ptrdiff_t>(chain_count_[link]); ++it, ++n) {
+        if (std::any_of(other_first, other_end, [&](const ChainJoint& o) { return o.child == it->child; })) break;
+      }
+      return n;
+    };
+    pair_below_.push_back({below(a, b), below(b, a)});
+  }
 }
 
-double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double half) const {
-  const auto [a, b] = checker_.collision_model().checked_pairs()[pair];
-  double speed = 0.0;
-  if (!pair_rates_[pair].relative) {
-    speed = checker_.link_speed(a, start, goal) + checker_.link_speed(b, start, goal);
-  } else {
-    for (const auto& [v, w] : pair_rates_[pair].weights) speed += w * std::abs(goal[v] - start[v]);
+// A point p of the link moves at v_p = sum_j d_j w_j x (p - o_j) (a slide: d_j u_j), d_j the
+// joint's rate (its variable's change over the motion), w_j its axis through o_j. Two bounds on
+// |v_p| over the interval, the smaller taken, joint by joint from the link up (each prefix bounds
+// the speed the joints so far give the link in the frame above them, which a self pair needs):
+// - levers: |d_j| times p's distance from axis j, which is at most its value at the midpoint plus
+//   `half` times the speed the joints below j give p (turning about j keeps it);
+// - velocity: at the midpoint |v_c| + |W| r for the link's ball (centre c, radius r; W = sum
+//   d_j w_j), plus how much each term can change within the interval: its frame turns by at most
+//   half * sum of |d_k| above j, and p moves in j's frame by at most half times the speed the
+//   joints from j down give it.
+double SceneChecker::chain_speed(int l, const Posed& mid, double half, const IntervalRates& rates) const {
+  const RobotCollisionModel& m = checker_.collision_model();
+  const Vec3& c = mid.centres[l];
+  const double reach = m.bounds()[l].radius + m.paddings()[l] + pose_margin(mid.centre_norms[l]);
+  const std::size_t first = chain_first_[l], end = first + chain_count_[l];
+  double turning_above = 0.0;  // sum of |d_k| over the turning joints above the current one
+  for (std::size_t i = first; i < end; ++i) {
+    if (chain_joints_[i].turning >= 0) turning_above += std::abs(chain_joints_[i].multiplier * rates.delta[chain_joints_[i].variable]);
   }
-  const double g = speed * half;
-  return g * (1.0 + 1e-9) + pose_margin(g);
+  std::vector<double>& sums = *rates.sums;
+  const std::vector<Vec3>& axes = *rates.axes;
+  double below = 0.0, slides = 0.0, change = 0.0;
+  Vec3 velocity = Vec3::Zero(), spin = Vec3::Zero();
+  for (std::size_t i = first; i < end; ++i) {
+    const ChainJoint& j = chain_joints_[i];
+    const double d = j.multiplier * rates.delta[j.variable], rate = std::abs(d);
+    if (rate > 0.0 && j.turning < 0) {
+      slides += rate;
+      below += rate;
+      change += rate * half * turning_above;  // the slide's direction turns with the frames above
+    } else if (rate > 0.0) {
+      turning_above -= rate;
+      const Vec3& o = mid.poses[j.child].t;
+      const Vec3& w = axes[j.turning];
+      const Vec3 v = c - o;
+      const double along = v.dot(w);
+      const double lever = std::sqrt(std::max(0.0, v.squaredNorm() - along * along)) + reach + pose_margin(o.norm());
+      const double farthest = lever + half * below;  // p's distance from the axis within the interval
+      const double levers = below + rate * farthest;
+      velocity += d * w.cross(v);
+      spin += d * w;
+      change += rate * half * (std::max(turning_above, 0.0) * farthest + levers);
+      below = std::min(levers, velocity.norm() + spin.norm() * reach + slides + change);
+    }
+    sums[i] = below;
+  }
+  return std::min(rates.link_cap[l], below);
+}
+
+void SceneChecker::interval_speeds(const Posed& mid, double half, const int* components, std::size_t count,
+                                   const IntervalRates& rates) const {
+  rates.sums->resize(chain_joints_.size());
+  rates.axes->resize(turning_joints_.size());
+  for (std::size_t t = 0; t < turning_joints_.size(); ++t) (*rates.axes)[t] = mid.poses[turning_joints_[t].first].R * turning_joints_[t].second;
+  for (const int l : links_) rates.link_speed[l] = -1.0;
+  auto link = [&](int l) {
+    if (rates.link_speed[l] < 0.0) rates.link_speed[l] = chain_speed(l, mid, half, rates);
+  };
+  const auto& pairs = checker_.collision_model().checked_pairs();
+  const int pair_count = static_cast<int>(pairs.size());
+  for (std::size_t i = 0; i < count; ++i) {
+    const int k = components[i];
+    if (k >= pair_count) {
+      link(k - pair_count);
+      continue;
+    }
+    const auto [a, b] = pairs[k];
+    link(a), link(b);
+    const auto [na, nb] = pair_below_[k];
+    const std::vector<double>& sums = *rates.sums;
+    const double relative = (na > 0 ? sums[chain_first_[a] + na - 1] : 0.0) + (nb > 0 ? sums[chain_first_[b] + nb - 1] : 0.0);
+    rates.pair_speed[k] = std::min(rates.pair_cap[k], relative);
+  }
 }
 
 void SceneChecker::pose_links(const double* state, Posed& posed) const {
@@ -141,9 +243,11 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
   m.kinematics().compute(state, posed.poses);
   posed.centres.resize(posed.poses.size());
   posed.centre_norms.resize(posed.poses.size());
-  const bool moved = !root_at_origin_;
+  if (!root_at_origin_) {  // every computed link (the joints' axes too) into the environment's frame
+    for (const KinematicsPlan::Step& step : m.kinematics().step_list()) posed.poses[step.link] = options_.root_pose * posed.poses[step.link];
+    posed.poses[m.kinematics().root()] = options_.root_pose * posed.poses[m.kinematics().root()];
+  }
   for (const int l : links_) {
-    if (moved) posed.poses[l] = options_.root_pose * posed.poses[l];
     const Transform& pose = posed.poses[l];
     const Vec3& c = m.bounds()[l].center;
     for (int i = 0; i < 3; ++i) posed.centres[l][i] = pose.R(i, 0) * c[0] + pose.R(i, 1) * c[1] + pose.R(i, 2) * c[2] + pose.t[i];
@@ -360,25 +464,6 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
     if (const Answer a = component_check(k, s); a != Answer::kFree) return a;
   }
   return Answer::kFree;
-}
-
-// Marks (near[k] = 1) the components of `state` that the proxies cannot prove farther than the
-// tolerance beyond their padding: each grown by the tolerance, a component apart is clear of it.
-// (Not the tolerant state check: its "free" only says beyond padding.)
-void SceneChecker::mark_within_tolerance(const double* state, std::vector<char>& near) const {
-  thread_local Posed posed;
-  thread_local std::vector<double> growth, pair_growth;
-  growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
-  pair_growth.assign(pair_rates_.size(), options_.tolerance);
-  pose_links(state, posed);
-  posed.growth = growth.data();
-  posed.pair_growth = pair_growth.data();
-  posed.from = posed.to = nullptr;
-  posed.tolerant = true;  // no exact distances: the proxies decide or it is not clear
-  posed.half = 0.0;
-  for (const int k : components_) {
-    if (component_check(k, posed) != Answer::kFree) near[k] = 1;
-  }
 }
 
 bool SceneChecker::collides(const double* state) const {

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 
 #include "bvh_collision/geometry/safety_margin.h"
@@ -23,13 +24,17 @@ struct Interval {
 
 // A thread's working memory, kept between motions: a planner's millionth motion allocates nothing.
 struct Scratch {
-  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to;
+  // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
+  // current interval's (at most those); delta: goal - start.
+  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
+  std::vector<Vec3> axes;
   std::vector<Interval> done;   // certified intervals (check_motion)
   // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
   // (depth first).
   std::vector<Interval> todo;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
-  std::vector<char> tolerant, near;  // per component: may the tolerance's shortcut take it?
+  // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
+  std::vector<signed char> tolerant;
 };
 
 Scratch& scratch() {
@@ -56,21 +61,23 @@ double certified_prefix(std::vector<Interval>& done) {
 
 template <class At>
 SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
-                                                const std::vector<char>& tolerant) const {
+                                                Posed* ends) const {
   thread_local Posed posed;
   Scratch& s = scratch();
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   s.from.assign(at(lo), at(lo) + s.state.size());
   s.to.assign(at(hi), at(hi) + s.state.size());
   pose_links(at(mid), posed);
-  for (const int l : links_) {
-    const double g = s.speed[l] * half;
+  std::vector<int>& arena = s.pending;
+  IntervalRates rates{s.delta.data(), s.speed.data(), s.pair_speed.data(), s.interval_speed.data(), s.interval_pair_speed.data(),
+                      &s.sums, &s.axes};
+  interval_speeds(posed, half, arena.data() + first, count, rates);
+  const int pairs = static_cast<int>(pair_rates_.size());
+  for (std::size_t j = first; j < first + count; ++j) {
+    const int k = arena[j];
+    const double g = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
     // min_clearance on top: a certified interval stays that far from every collision.
-    s.growth[l] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
-  }
-  for (std::size_t p = 0; p < s.pair_speed.size(); ++p) {
-    const double g = s.pair_speed[p] * half;
-    s.pair_growth[p] = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
+    (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
   }
   posed.growth = s.growth.data();
   posed.pair_growth = s.pair_growth.data();
@@ -80,15 +87,16 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   // `largest`: the most any of them can move (or close) over half the interval.
   posed.half = half;
   posed.free_radius = std::numeric_limits<double>::infinity();
-  std::vector<int>& arena = s.pending;
   const std::size_t failing = arena.size();
   double largest = 0.0;
   bool all_tolerant = true;  // every failing component may take the tolerance's shortcut
-  const int pairs = static_cast<int>(pair_rates_.size());
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
-    posed.tolerant = tolerant[k] != 0;
+    // The shortcut needs to know only for growth within reach of the tolerance or the level.
+    const double moved = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
+    posed.tolerant = moved <= std::max(level_, options_.tolerance) && tolerant_component(k, ends);
     if (component_check(k, posed) == Answer::kFree) continue;
+    posed.tolerant = tolerant_component(k, ends);
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
     // collide, and mostly where the intervals first fail: that ends the motion at once.)
     posed.growth = posed.pair_growth = nullptr;
@@ -99,8 +107,8 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     // (What follows it inherits the whole pending list: the rest was not looked at.)
     if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
     arena.push_back(k);
-    all_tolerant = all_tolerant && tolerant[k] != 0;
-    largest = std::max(largest, (k < pairs ? s.pair_speed[k] : s.speed[k - pairs]) * half);
+    all_tolerant = all_tolerant && posed.tolerant;
+    largest = std::max(largest, (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half);
   }
   const std::size_t left = arena.size() - failing;
   if (left == 0) return {Step::kCertified};
@@ -129,19 +137,26 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
 // the environment) comes within the tolerance, unless that component already is at one of its
 // ends: a planner must be able to leave a state it accepted. (And only with a level of at most
 // half the tolerance: the rest is the room an interval's growth needs before the tolerance can
-// take the interval as colliding.) Per component: may the shortcut take it on this motion?
-const std::vector<char>& SceneChecker::tolerant_components(const double* start, const double* goal) const {
-  Scratch& s = scratch();
-  std::vector<char>& tolerant = s.tolerant;
-  tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), 0);
-  if (options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2) {
-    std::vector<char>& near = s.near;
-    near.assign(tolerant.size(), 0);
-    mark_within_tolerance(start, near);
-    mark_within_tolerance(goal, near);
-    for (const int k : components_) tolerant[k] = near[k] ? 0 : 1;
+// take the interval as colliding.) May the shortcut take component k on this motion? Asked only
+// of components that fail somewhere, and answered once per motion: the proxies grown by the
+// tolerance at both ends (`ends`, posed) must prove it clear of the tolerance there.
+bool SceneChecker::tolerant_component(int k, Posed* ends) const {
+  signed char& known = scratch().tolerant[k];
+  if (known >= 0) return known != 0;
+  thread_local std::vector<double> growth, pair_growth;
+  growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
+  pair_growth.assign(pair_rates_.size(), options_.tolerance);
+  known = 1;
+  for (int e = 0; e < 2 && known; ++e) {
+    Posed& end = ends[e];  // check_motion's own posed ends
+    end.growth = growth.data();
+    end.pair_growth = pair_growth.data();
+    end.from = end.to = nullptr;
+    end.tolerant = true;  // no exact distances: the proxies decide or it is not clear
+    end.half = 0.0;
+    if (component_check(k, end) != Answer::kFree) known = 0;
   }
-  return tolerant;
+  return known != 0;
 }
 
 // Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
@@ -150,6 +165,10 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
   const RobotCollisionModel& m = checker_.collision_model();
   s.speed.assign(m.shapes().size(), 0.0);
   for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
+  s.delta.resize(checker_.model().variable_count());
+  for (std::size_t j = 0; j < s.delta.size(); ++j) s.delta[j] = goal[j] - start[j];
+  s.interval_speed.assign(s.speed.size(), 0.0);
+  s.interval_pair_speed.assign(pair_rates_.size(), 0.0);
   s.growth.assign(m.shapes().size(), 0.0);
   s.pair_speed.assign(pair_rates_.size(), 0.0);
   s.pair_growth.assign(pair_rates_.size(), 0.0);
@@ -161,6 +180,36 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
     }
     for (const auto& [v, w] : pair_rates_[p].weights) s.pair_speed[p] += w * std::abs(goal[v] - start[v]);
   }
+}
+
+// The rates of the interval [lo, hi] of the segment into the scratch's interval speeds (every
+// component).
+void SceneChecker::speeds_over(const double* start, const double* goal, double lo, double hi) const {
+  thread_local Posed posed;
+  thread_local std::vector<double> mid;
+  Scratch& s = scratch();
+  motion_speeds(start, goal);
+  mid.resize(s.delta.size());
+  for (std::size_t j = 0; j < mid.size(); ++j) mid[j] = start[j] + 0.5 * (lo + hi) * s.delta[j];
+  pose_links(mid.data(), posed);
+  std::vector<int> every(pair_rates_.size());
+  std::iota(every.begin(), every.end(), 0);
+  for (const int l : links_) every.push_back(static_cast<int>(pair_rates_.size()) + l);
+  const IntervalRates rates{s.delta.data(), s.speed.data(), s.pair_speed.data(), s.interval_speed.data(), s.interval_pair_speed.data(),
+                            &s.sums, &s.axes};
+  interval_speeds(posed, 0.5 * (hi - lo), every.data(), every.size(), rates);
+}
+
+double SceneChecker::link_growth(int link, const double* start, const double* goal, double lo, double hi) const {
+  speeds_over(start, goal, lo, hi);
+  const double g = scratch().interval_speed[link] * 0.5 * (hi - lo);
+  return g * (1.0 + 1e-9) + pose_margin(g);
+}
+
+double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double lo, double hi) const {
+  speeds_over(start, goal, lo, hi);
+  const double g = scratch().interval_pair_speed[pair] * 0.5 * (hi - lo);
+  return g * (1.0 + 1e-9) + pose_margin(g);
 }
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
@@ -178,13 +227,20 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   // The ends first (a planner's goal state is often the colliding one); the start's collision is
   // the earliest there is.
   result.states_checked = 2;
-  double found = collides(at(0.0)) ? 0.0 : collides(at(1.0)) ? 1.0 : -1.0;  // the earliest collision known
+  thread_local Posed ends[2];
+  for (int e = 0; e < 2; ++e) {
+    pose_links(e == 0 ? start : goal, ends[e]);
+    ends[e].growth = ends[e].pair_growth = nullptr;
+    ends[e].tolerant = options_.states_at_tolerance;
+  }
+  double found = check_posed(ends[0]) != Answer::kFree ? 0.0 : check_posed(ends[1]) != Answer::kFree ? 1.0 : -1.0;  // the earliest collision known
   if (found == 0.0 || (found > 0.0 && !earliest)) {
     result.colliding_fraction = found;
     result.certified = true;
     return result;
   }
-  const std::vector<char>& tolerant = tolerant_components(start, goal);
+  s.tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(),
+                    options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2 ? -1 : 0);
   motion_speeds(start, goal);
   std::vector<int>& arena = s.pending;
   arena.assign(components_.begin(), components_.end());
@@ -204,7 +260,7 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
       result.last_valid_fraction = certified_prefix(done);
       return result;
     }
-    const Step step = check_interval(i.lo, i.hi, i.first, i.count, at, tolerant);
+    const Step step = check_interval(i.lo, i.hi, i.first, i.count, at, ends);
     if (step.outcome == Step::kCertified) {
       done.push_back(i);
     } else if (step.outcome == Step::kCollides) {

@@ -25,6 +25,7 @@
 //   every instant, farther than min_clearance from every collision, at any tolerance.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -69,12 +70,15 @@ class SceneChecker {
   // last decides or sends it to the exact test); empty when none is built: then only exact tests.
   const std::vector<const ProxyLevel*>& proxies() const { return proxies_; }
 
-  // How far any point of link `l` can move over an interval of half-width `half` of the segment
-  // (fractions), exported for the test that proves it against sampled motion.
-  double link_growth(int link, const double* start, const double* goal, double half) const;
+  // How far any point of link `l` can move over the interval [lo, hi] of the segment (fractions)
+  // from where it is at the interval's midpoint: each joint up the chain turns the link at its
+  // distance from the joint's axis at the midpoint, plus how far the joints below can carry it
+  // within the interval (never more than the chain's length bound). Exported for the test that
+  // proves it against sampled motion; the motions use the same bound.
+  double link_growth(int link, const double* start, const double* goal, double lo, double hi) const;
   // How far the distance between the links of checked pair `pair` can fall over such an
   // interval: only the joints on the path between the two links count (proven by a test the same way).
-  double pair_growth(std::size_t pair, const double* start, const double* goal, double half) const;
+  double pair_growth(std::size_t pair, const double* start, const double* goal, double lo, double hi) const;
 
  private:
   // kFree: free for every state whose links lie within their growth of these poses; kHit: the
@@ -131,13 +135,27 @@ class SceneChecker {
   };
   template <class At>
   Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
-                      const std::vector<char>& tolerant) const;
-  // Marks the components of the state not proven farther than the tolerance (by the proxies).
-  void mark_within_tolerance(const double* state, std::vector<char>& near) const;
-  const std::vector<char>& tolerant_components(const double* start, const double* goal) const;
+                      Posed* ends) const;
+  bool tolerant_component(int k, Posed* ends) const;
   void pose_links(const double* state, Posed& posed) const;
   void relative_pair_rates();
+  void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;
+  void speeds_over(const double* start, const double* goal, double lo, double hi) const;
+  // An interval's rates: per link and per checked pair, how fast they can move (close) per unit
+  // fraction over the interval of half-width `half` around `mid` (posed): the midpoint's levers,
+  // capped by the motion's chain-length rates. Computed for the components asked only.
+  struct IntervalRates {
+    const double* delta = nullptr;  // goal - start
+    const double* link_cap = nullptr;
+    const double* pair_cap = nullptr;
+    double* link_speed = nullptr;  // out (per link; links not asked for are left negative)
+    double* pair_speed = nullptr;  // out (per checked pair)
+    std::vector<double>* sums = nullptr;  // working memory: per chain joint
+    std::vector<Vec3>* axes = nullptr;    // working memory: per turning joint, its axis at `mid`
+  };
+  void interval_speeds(const Posed& mid, double half, const int* components, std::size_t count, const IntervalRates& rates) const;
+  double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
 
 
   CollisionChecker checker_;
@@ -159,6 +177,17 @@ class SceneChecker {
     std::vector<std::pair<int, double>> weights;  // (state variable, rate)
   };
   std::vector<PairRates> pair_rates_;  // per checked pair
+  // Per link with geometry, the moving joints above it, the link's own first: a joint turns
+  // (or slides) the link about the axis through its child link's origin.
+  struct ChainJoint {
+    int child = -1, variable = -1;
+    double multiplier = 1.0;
+    int turning = -1;  // its index in turning_joints_ (-1: a slide)
+  };
+  std::vector<ChainJoint> chain_joints_;
+  std::vector<std::pair<int, Vec3>> turning_joints_;  // each turning joint once: (child link, unit axis in its frame)
+  std::vector<std::size_t> chain_first_, chain_count_;  // per link: its run of chain_joints_ (and of sums)
+  std::vector<std::array<int, 2>> pair_below_;           // per checked pair: each side's joints below the common part
 };
 
 }  // namespace bvh_collision
