@@ -99,12 +99,13 @@ CollisionObject make_collision_object(const std::string& id, const ObjectShape& 
 Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
 
 Environment::Environment(const Environment& other)
-    : octree_(other.octree_), objects_(other.objects_), field_(std::atomic_load(&other.field_)) {}
+    : octree_(other.octree_), objects_(other.objects_), allowed_(other.allowed_), field_(std::atomic_load(&other.field_)) {}
 
 Environment& Environment::operator=(const Environment& other) {
   if (this == &other) return *this;
   octree_ = other.octree_;
   objects_ = other.objects_;
+  allowed_ = other.allowed_;
   std::atomic_store(&field_, std::atomic_load(&other.field_));
   return *this;
 }

@@ -169,7 +169,9 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
                (proxies != nullptr ? proxy_meets_octree(link, poses[l], proxies->links[l], env.octree(), *field,
                                                         request.contacts, result)
                                    : link_meets_octree(link, poses[l], env.octree(), request, result));
+    const std::string& name = m_->robot().links()[l].name;
     for (std::size_t o = 0; request.objects && o < env.objects().size() && !(hit && !request.all_links); ++o) {
+      if (env.object_allowed(name, o)) continue;
       hit = link_meets_object(link, poses[l], env.objects()[o], request, result) || hit;
     }
     result.collision = result.collision || hit;
@@ -181,6 +183,7 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
     const int link = static_cast<int>(l);
     if (use_octree) best = link_octree_distance(link, poses[l], env.octree(), best, request.solids, result);
     for (std::size_t o = 0; request.objects && o < env.objects().size(); ++o) {
+      if (env.object_allowed(m_->robot().links()[l].name, o)) continue;
       const CollisionObject& object = env.objects()[o];
       const double gap = (poses[l] * m_->bounds()[l].center - object.pose * object.bound_center).norm() -
                          m_->bounds()[l].radius - object.bound_radius;

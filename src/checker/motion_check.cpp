@@ -193,7 +193,9 @@ double CollisionChecker::proxy_clearance(const double* state, const Environment&
             }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
       if (gap <= stop) return gap;
     }
-    for (const CollisionObject& object : env.objects()) {
+    for (std::size_t o = 0; o < env.objects().size(); ++o) {
+      if (env.object_allowed(m_->robot().links()[l].name, o)) continue;
+      const CollisionObject& object = env.objects()[o];
       const double apart = (pose * m_->bounds()[l].center - object.pose * object.bound_center).norm() - radius -
                            object.bound_radius - padding;
       if (apart >= gap) continue;

@@ -67,6 +67,12 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     // 5 cm of growth use the cell's list.
     const Vec3 around = Vec3::Constant(checker_.reach() + 0.1);
     grid_ = ObjectGrid(env_->objects(), options.root_pose.t - around, options.root_pose.t + around, reach + 0.05, 0.1);
+    if (!env_->allowed_collisions().empty()) {  // per (link, object): allowed to touch, so not checked
+      allowed_.assign(m.shapes().size() * env_->objects().size(), 0);
+      for (const int l : links_) {
+        for (std::size_t o = 0; o < env_->objects().size(); ++o) allowed_[l * env_->objects().size() + o] = env_->object_allowed(checker_.model().links()[l].name, o);
+      }
+    }
   }
   if (options.environment && !env_->octree().empty()) {
     field_ = checker_.kept_distance_field(*env_, options.root_pose);
@@ -356,7 +362,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
     const double r = m.bounds()[l].radius + pad;
     Answer answer = Answer::kFree;
     grid_.for_each_near(c, r, [&](int o) {
-      if (answer != Answer::kFree || !grid_.ball_meets(o, c, r)) return;
+      if (answer != Answer::kFree || (!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
       // A leaf whose centre lies deeper inside the object than the leaf's proven distance from
       // the link (its level's Hausdorff bound) proves a point of the link inside: a hit with no
       // exact test (the state itself only).

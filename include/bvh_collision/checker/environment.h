@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bvh_collision/bvh/bvh.h"
+#include "bvh_collision/checker/named_allowed_collisions.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/narrowphase/shape.h"
@@ -89,6 +90,20 @@ class Environment {
   void clear_objects() { objects_ = std::make_shared<const std::vector<CollisionObject>>(); }
   const std::vector<CollisionObject>& objects() const { return *objects_; }
   const CollisionObject* find_object(const std::string& id) const;
+  // Allowed collisions that name objects (a link with an object, an object's default entry):
+  // the environment's checks skip the allowed (link, object) pairs. Kept by name, so an entry
+  // holds for an object added later, as MoveIt's do.
+  const NamedAllowedCollisions& allowed_collisions() const { return *allowed_; }
+  void set_allowed_collisions(NamedAllowedCollisions allowed) {
+    allowed_ = std::make_shared<const NamedAllowedCollisions>(std::move(allowed));
+  }
+  // Is link `link_name` allowed to touch object `o` (an index into objects())? The entries name
+  // whole objects: a shape "id#k" of a several-shape object answers as "id".
+  bool object_allowed(const std::string& link_name, std::size_t o) const {
+    if (allowed_->empty()) return false;
+    const std::string& id = (*objects_)[o].id;
+    return allowed_->allowed(link_name, id.substr(0, id.find('#')));
+  }
 
   // The octree's distance field (octree/distance_field.h) over at least [lo, hi] with at least
   // `cap`, built on the first call and kept until the octree changes (its revision) or a box or
@@ -108,6 +123,7 @@ class Environment {
   };
   Octree octree_;
   std::shared_ptr<const std::vector<CollisionObject>> objects_ = std::make_shared<const std::vector<CollisionObject>>();
+  std::shared_ptr<const NamedAllowedCollisions> allowed_ = std::make_shared<const NamedAllowedCollisions>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
 };
 

@@ -167,6 +167,7 @@ class SceneChecker {
   bool proxies_decide_objects_ = false;      // tolerance >= half of it
   std::shared_ptr<const OctreeDistanceField> field_;
   ObjectGrid grid_;
+  std::vector<char> allowed_;  // per link and object (link * objects + object): allowed to touch; empty: none is
   std::vector<int> links_;  // the links with geometry
   // What one check covers, in checking order: checked self pairs (their indices), then each
   // link's environment (the pair count plus the link).
