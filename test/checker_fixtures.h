@@ -43,4 +43,14 @@ inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) {
   return CollisionChecker(std::move(model), std::move(acm), options);
 }
 
+// Panda as above with the node's proxy levels (5, 10, 20 mm), built once per test binary.
+inline const CollisionChecker& panda_with_proxies() {
+  static const CollisionChecker checker = [] {
+    CheckerOptions options;
+    options.proxy_levels = {0.005, 0.01, 0.02};
+    return panda_as_moveit(options);
+  }();
+  return checker;
+}
+
 }  // namespace bvh_collision::test

@@ -36,14 +36,7 @@ TEST(NamedAllowedCollisions, AnswersAsMoveItDoes) {
   EXPECT_TRUE(acm.empty());
 }
 
-const CollisionChecker& panda() {
-  static const CollisionChecker checker = [] {
-    CheckerOptions options;
-    options.proxy_levels = {0.005, 0.01, 0.02};
-    return test::panda_as_moveit(options);
-  }();
-  return checker;
-}
+const CollisionChecker& panda() { return test::panda_with_proxies(); }
 
 // Per link, the objects it may not touch; the oracle's environment for that link.
 Environment without_allowed(const Environment& env, const std::string& link) {

@@ -22,14 +22,7 @@ namespace bvh_collision {
 namespace {
 
 // Panda as MoveIt sets it up, with the node's proxy levels.
-const CollisionChecker& panda() {
-  static const CollisionChecker checker = [] {
-    CheckerOptions options;
-    options.proxy_levels = {0.005, 0.01, 0.02};
-    return test::panda_as_moveit(options);
-  }();
-  return checker;
-}
+const CollisionChecker& panda() { return test::panda_with_proxies(); }
 
 // Panda as above with every link padded by `padding`, no proxy levels (exact booleans only).
 const CollisionChecker& padded(double padding) {
