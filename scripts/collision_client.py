@@ -21,7 +21,8 @@ import time
 
 import rospy
 from bvh_collision.srv import (CastRay, CheckMotion, CheckMotions, CheckState, CheckStateRequest, CheckStates, ClearBox,
-                               LoadScene, RemoveCollisionObject, SaveOctree, SaveScene, SetCollisionObject)
+                               LoadScene, RemoveCollisionObject, SaveOctree, SaveScene, SetAllowedCollisions,
+                               SetCollisionObject)
 from geometry_msgs.msg import Point, Pose, Vector3
 from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
@@ -48,7 +49,8 @@ class CollisionClient:
                 "check_motions": CheckMotions,
                 "cast_ray": CastRay, "clear_box": ClearBox, "set_collision_object": SetCollisionObject,
                 "remove_collision_object": RemoveCollisionObject, "save_octree": SaveOctree,
-                "load_scene": LoadScene, "save_scene": SaveScene, "clear_environment": Empty}
+                "load_scene": LoadScene, "save_scene": SaveScene, "clear_environment": Empty,
+                "set_allowed_collisions": SetAllowedCollisions}
 
     def __init__(self, node="/collision_checker", timeout=30.0):
         """Waits up to `timeout` s for the node's ~ready (its robot summary ~robot is set and every
@@ -70,10 +72,13 @@ class CollisionClient:
             raise CheckerError("%s: %s" % (service, response.error))
         return response
 
-    def check_state(self, names, positions, checks=BOTH, distance=False, max_contacts=0, tolerance=0.0):
-        """One configuration: joints not named keep their current joint_states values."""
+    def check_state(self, names, positions, checks=BOTH, distance=False, max_contacts=0, tolerance=0.0,
+                    report_allowed=False):
+        """One configuration: joints not named keep their current joint_states values. report_allowed:
+        also the allowed (link, object) pairs that touch (allowed_links[i] with allowed_objects[i])."""
         return self._call("check_state", state=JointState(name=list(names), position=list(positions)), checks=checks,
-                          max_contacts=max_contacts, distance=distance, tolerance=tolerance)
+                          max_contacts=max_contacts, distance=distance, tolerance=tolerance,
+                          report_allowed=report_allowed)
 
     def check_states(self, names, rows, checks=BOTH, tolerance=0.0):
         """Many configurations (rows of len(names) values) in one call; returns the list of valid flags."""
@@ -117,6 +122,12 @@ class CollisionClient:
 
     def save_scene(self, path, name=""):
         return self._call("save_scene", path=path, name=name)
+
+    def set_allowed_collisions(self, pairs=(), defaults=(), allowed=True, remove=False):
+        """MoveIt's allowed collisions with objects: pairs [(link or object, object), ...] and
+        names whose default entry is set; allowed=False checks them, remove=True drops the entries."""
+        return self._call("set_allowed_collisions", names_a=[a for a, _ in pairs], names_b=[b for _, b in pairs],
+                          default_names=list(defaults), allowed=allowed, remove=remove)
 
     def clear_environment(self):
         return self._proxies["clear_environment"]()

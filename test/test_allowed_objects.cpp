@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <random>
 
+#include "bvh_collision/checker/allowed_contacts.h"
 #include "bvh_collision/checker/scene_checker.h"
 #include "checker_fixtures.h"
 #include "planning_scenes.h"
@@ -111,7 +112,14 @@ TEST(AllowedObjects, EnvironmentChecksSkipAllowedPairs) {
       }
       if (!truth.collision) ASSERT_NEAR(r.min_distance, truth.distance, 1e-9) << "scene " << scene << " state " << i;
       colliding += truth.collision;
-      changed += truth.collision != checker.check_environment(q.data(), plain, EnvironmentRequest{}).collision;
+      const bool without = checker.check_environment(q.data(), plain, EnvironmentRequest{}).collision;
+      changed += truth.collision != without;
+      // What the checks skipped: allowed pairs only, some whenever the allowances freed the
+      // state, none when nothing touches at all.
+      const auto skipped = allowed_object_contacts(checker, q.data(), env);
+      for (const auto& [link, object] : skipped) ASSERT_TRUE(env.allowed_collisions().allowed(checker.model().links()[link].name, object));
+      if (without && !truth.collision) ASSERT_FALSE(skipped.empty()) << "scene " << scene << " state " << i;
+      if (!without) ASSERT_TRUE(skipped.empty()) << "scene " << scene << " state " << i;
     }
   }
   // The general certified motion (conservative advancement): one answered free is free by the

@@ -105,7 +105,8 @@ TEST(CheckTool, StatesAgainstAYamlScene) {
                           "world:\n  collision_objects:\n    - id: pillar\n      header: {frame_id: world}\n"
                           "      primitives: [{type: 1, dimensions: [0.12, 0.12, 0.8]}]\n"
                           "      primitive_poses: [{position: {x: 0.45, y: 0.35, z: 0.4}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n"
-                          "allowed_collision_matrix: {entry_names: [pillar, hand], entry_values: [{enabled: [false, true]}, {enabled: [true, false]}]}\n";
+                          "allowed_collision_matrix: {entry_names: [pillar, hand, link1], entry_values: [{enabled: [false, true, false]}, "
+                          "{enabled: [true, false, true]}, {enabled: [false, true, false]}]}\n";
   const std::string states = write_states("joints: joint1\n0\n0.66\n");
   const ToolRun r = run({"--urdf", kUrdf, "--states", states, "--scene", scene});
   const std::vector<std::string> lines = output_lines(r);
@@ -114,7 +115,10 @@ TEST(CheckTool, StatesAgainstAYamlScene) {
   EXPECT_EQ(lines[1].rfind("1 collision ", 0), 0u) << lines[1];
   EXPECT_NE(lines[1].find(":pillar"), std::string::npos) << lines[1];
   EXPECT_NE(r.err.find("warning: the scene's robot state names 'no_such_joint'"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("warning: the scene's 1 allowed-collision entries are not applied"), std::string::npos) << r.err;
+  // (pillar, hand) names an object: applied, the hand may touch the pillar; (hand, link1) is the
+  // robot's own pair: warned of.
+  EXPECT_EQ(lines[1].find("hand:pillar"), std::string::npos) << lines[1];
+  EXPECT_NE(r.err.find("warning: the scene's 1 allowed-collision entries for pairs of links are not applied"), std::string::npos) << r.err;
   std::filesystem::remove(scene);
 }
 

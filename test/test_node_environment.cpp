@@ -1,6 +1,7 @@
 // Launch test: the node's environment through tf2, as a robot's drivers feed it. The node runs
 // with world_frame "world"; this test is the robot's tf (world -> base_link, which it moves) and a
 // camera (world -> camera, static) that publishes obstacle clouds in its own frame.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -19,6 +20,7 @@
 #include "bvh_collision/LoadScene.h"
 #include "bvh_collision/RemoveCollisionObject.h"
 #include "bvh_collision/SaveScene.h"
+#include "bvh_collision/SetAllowedCollisions.h"
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/ros/conversions.h"
 #include "node_test_client.h"
@@ -540,12 +542,69 @@ TEST_F(NodeEnvironment, ScenesLoadAsSetCollisionObjectMakesThemAndSaveBack) {
   ASSERT_EQ(yaml.error, "");
   EXPECT_EQ(yaml.name, "seen by the camera");
   EXPECT_NE(yaml.warning.find("not applied: its robot state (1 joints"), std::string::npos) << yaml.warning;
-  EXPECT_NE(yaml.warning.find("its allowed-collision matrix (1 pairs)"), std::string::npos) << yaml.warning;
+  EXPECT_EQ(yaml.warning.find("allowed-collision"), std::string::npos) << "(crate, hand) names an object: applied; " << yaml.warning;
   ray.origin.x = 0.5, ray.origin.y = 2.0, ray.origin.z = 0.5, ray.direction.x = 0.0, ray.direction.y = -1.0;
   const CastRay::Response crate = call<CastRay>("cast_ray", ray).response;
   EXPECT_EQ(crate.body, "crate");
   EXPECT_NEAR(crate.distance, 2.0 - 1.1, 1e-9) << "the crate's near face at y = 1.1 in the world";
   fs::remove_all(dir);
+}
+
+// Allowed collisions with objects, MoveIt's way: an object's default entry lets every link touch
+// it (all its shapes), a pair entry wins over the default, removing entries checks it again;
+// check_state names the allowed pairs that touch when asked. Bad requests change nothing.
+TEST_F(NodeEnvironment, AllowedCollisionsLetLinksTouchAnObject) {
+  std_srvs::Empty empty;
+  ASSERT_TRUE(ros::service::call(node_service("clear_environment"), empty));
+  SetCollisionObject::Request wrapper = box_object("wrapper", Vec3(0.3, 0.3, 0.3), Vec3(0.0, 0.0, 0.6));
+  wrapper.primitives.push_back(wrapper.primitives[0]);  // two shapes: wrapper#0, wrapper#1
+  wrapper.primitive_poses.push_back(wrapper.primitive_poses[0]);
+  wrapper.primitive_poses[1].position.z += 0.1;
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", wrapper).response.error, "");
+  const auto home = arm(0.0, 0.0);
+  const CheckState::Response hit = check(home, 20);
+  ASSERT_FALSE(hit.valid);
+  ASSERT_FALSE(hit.contacts.empty());
+  const std::string toucher = hit.contacts[0].body_a;
+  auto set = [&](std::vector<std::string> a, std::vector<std::string> b, std::vector<std::string> defaults, bool allowed, bool remove) {
+    SetAllowedCollisions::Request r;
+    r.names_a = std::move(a), r.names_b = std::move(b), r.default_names = std::move(defaults);
+    r.allowed = allowed, r.remove = remove;
+    return call<SetAllowedCollisions>("set_allowed_collisions", r).response;
+  };
+  ASSERT_EQ(set({}, {}, {"wrapper"}, true, false).error, "");
+  CheckState::Request ask = state_request(checker(), home);
+  ask.report_allowed = true;
+  const CheckState::Response allowed = call<CheckState>("check_state", ask).response;
+  EXPECT_TRUE(allowed.valid) << "every link may touch the wrapper";
+  ASSERT_EQ(allowed.allowed_links.size(), allowed.allowed_objects.size());
+  ASSERT_FALSE(allowed.allowed_links.empty());
+  EXPECT_NE(std::find(allowed.allowed_links.begin(), allowed.allowed_links.end(), toucher), allowed.allowed_links.end());
+  for (const std::string& o : allowed.allowed_objects) EXPECT_EQ(o, "wrapper") << "the object by its name, not its shapes'";
+  // A pair entry wins over the default: that link is checked against it again.
+  ASSERT_EQ(set({toucher}, {"wrapper"}, {}, false, false).error, "");
+  const CheckState::Response entry = check(home, 20);
+  EXPECT_FALSE(entry.valid);
+  for (const auto& c : entry.contacts) EXPECT_EQ(c.body_a, toucher) << "only the link whose entry says so";
+  // Bad requests are refused by name and change nothing.
+  EXPECT_NE(set({"link1"}, {"hand"}, {}, true, false).error.find("names two links"), std::string::npos);
+  EXPECT_NE(set({"link1", "hand"}, {"wrapper"}, {}, true, false).error.find("2 names_a but 1 names_b"), std::string::npos);
+  EXPECT_NE(set({}, {}, {"wrapper#0"}, true, false).error.find("names a shape"), std::string::npos);
+  EXPECT_FALSE(check(home).valid);
+  // A name known neither as a link nor as an object is kept, with a warning.
+  const SetAllowedCollisions::Response later = set({"hand"}, {"not_yet"}, {}, true, false);
+  EXPECT_EQ(later.error, "");
+  EXPECT_NE(later.warning.find("'not_yet'"), std::string::npos) << later.warning;
+  // Removed: back to no entries, the wrapper collides.
+  ASSERT_EQ(set({toucher, "hand"}, {"wrapper", "not_yet"}, {"wrapper"}, false, true).error, "");
+  const CheckState::Response again = call<CheckState>("check_state", ask).response;
+  EXPECT_FALSE(again.valid);
+  EXPECT_TRUE(again.allowed_links.empty());
+  ASSERT_EQ(call<RemoveCollisionObject>("remove_collision_object", [] {
+              RemoveCollisionObject::Request r;
+              r.id = "wrapper";
+              return r;
+            }()).response.error, "");
 }
 
 }  // namespace

@@ -85,6 +85,24 @@ class PythonClient(unittest.TestCase):
         with self.assertRaises(CheckerError):
             self.client.load_scene("/nonexistent/x.scene")
 
+    def test_allowed_collisions(self):
+        # A box around the arm at HOME collides; its default entry lets every link touch it, and
+        # check_state names who does; removing the entry checks it again.
+        self.client.set_primitives("py_wrap", [(SolidPrimitive.BOX, [0.3, 0.3, 0.3], pose())], object_pose=pose((0.0, 0.0, 0.6)))
+        try:
+            self.assertFalse(self.client.check_state(ARM, HOME, checks=ENVIRONMENT).valid)
+            self.client.set_allowed_collisions(defaults=["py_wrap"])
+            allowed = self.client.check_state(ARM, HOME, checks=ENVIRONMENT, report_allowed=True)
+            self.assertTrue(allowed.valid)
+            self.assertGreater(len(allowed.allowed_links), 0)
+            self.assertEqual(set(allowed.allowed_objects), {"py_wrap"})
+            with self.assertRaises(CheckerError):
+                self.client.set_allowed_collisions(pairs=[("link1", "hand")])  # two links: the SRDF's
+            self.client.set_allowed_collisions(defaults=["py_wrap"], remove=True)
+            self.assertFalse(self.client.check_state(ARM, HOME, checks=ENVIRONMENT).valid)
+        finally:
+            self.client.remove_object("py_wrap")
+
 
 if __name__ == "__main__":
     rostest.rosrun("bvh_collision", "python_client", PythonClient)

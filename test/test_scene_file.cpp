@@ -334,9 +334,14 @@ TEST(SceneFile, ReadsAPlanningSceneInYaml) {
       EXPECT_TRUE(yaml.objects[i].shapes[k].pose.t.isApprox(text.objects[i].shapes[k].pose.t, 1e-15));
     }
   }
-  // The same answers as the .scene form of the same objects.
+  // The same answers as the .scene form of the same objects, with the same allowed collisions:
+  // the YAML's entries (the hand may touch the ball) come with its environment.
   const CollisionChecker checker = test::demo_arm_checker();
-  const Environment a = yaml.environment(), b = text.environment();
+  const Environment a = yaml.environment();
+  EXPECT_TRUE(a.allowed_collisions().allowed("hand", "ball"));
+  EXPECT_FALSE(a.allowed_collisions().allowed("hand", "table"));
+  Environment b = text.environment();
+  b.set_allowed_collisions(a.allowed_collisions());
   std::mt19937_64 rng(9);
   EnvironmentRequest request;
   request.distance = true;

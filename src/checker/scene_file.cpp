@@ -256,6 +256,11 @@ std::vector<CollisionObject> SceneFile::collision_objects() const {
 Environment SceneFile::environment(double octree_resolution) const {
   Environment env(octree_resolution);
   for (CollisionObject& o : collision_objects()) env.add_object(std::move(o));
+  // Every entry: the checks against objects read only those that name one (a pair of links is
+  // the robot's matrix, which this does not change).
+  NamedAllowedCollisions acm;
+  for (const AllowedCollision& e : allowed_collisions) acm.set_entry(e.a, e.b, e.allowed);
+  env.set_allowed_collisions(std::move(acm));
   return env;
 }
 

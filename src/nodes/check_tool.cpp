@@ -181,7 +181,8 @@ AllowedCollisionMatrix with_sampled_pairs(const Options& o, const std::string& s
 }
 
 // A YAML scene's robot state into `state` (the joints a states file leaves out keep these); what
-// it names that the robot lacks, and allowed-collision entries (not applied here), are warned of.
+// it names that the robot lacks, and its entries for pairs of links (not applied: the entries
+// that name an object are, by the scene's environment), are warned of.
 void apply_scene_state(const SceneFile& scene, const RobotModel& m, std::vector<double>& state, std::ostream& err) {
   for (const auto& [name, value] : scene.joint_values) {
     const auto& names = m.variable_names();
@@ -192,9 +193,12 @@ void apply_scene_state(const SceneFile& scene, const RobotModel& m, std::vector<
     }
     state[static_cast<std::size_t>(it - names.begin())] = value;
   }
-  if (!scene.allowed_collisions.empty()) {
-    err << "warning: the scene's " << scene.allowed_collisions.size()
-        << " allowed-collision entries are not applied (use --srdf for the robot's own pairs)\n";
+  const auto link_pairs = std::count_if(scene.allowed_collisions.begin(), scene.allowed_collisions.end(), [&](const AllowedCollision& e) {
+    return m.link_index(e.a) >= 0 && m.link_index(e.b) >= 0;
+  });
+  if (link_pairs > 0) {
+    err << "warning: the scene's " << link_pairs
+        << " allowed-collision entries for pairs of links are not applied (use --srdf for the robot's own pairs)\n";
   }
 }
 

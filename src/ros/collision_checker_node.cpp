@@ -19,7 +19,7 @@ namespace {
 
 const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree",
-                                 "load_scene", "save_scene"};
+                                 "load_scene", "save_scene", "set_allowed_collisions"};
 
 }  // namespace
 
@@ -204,6 +204,8 @@ void CollisionCheckerNode::advertise() {
                                                    &CollisionCheckerNode::remove_collision_object, this));
   services_.push_back(private_nh_.advertiseService("save_octree", &CollisionCheckerNode::save_octree, this));
   services_.push_back(private_nh_.advertiseService("load_scene", &CollisionCheckerNode::load_scene, this));
+  services_.push_back(
+      private_nh_.advertiseService("set_allowed_collisions", &CollisionCheckerNode::set_allowed_collisions, this));
   services_.push_back(private_nh_.advertiseService("save_scene", &CollisionCheckerNode::save_scene, this));
 
   joint_state_sub_ = nh_.subscribe("joint_states", 10, &CollisionCheckerNode::on_joint_state, this,

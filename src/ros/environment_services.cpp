@@ -2,6 +2,7 @@
 // services that change or save it.
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <map>
 
 #include "bvh_collision/checker/scene_file.h"
@@ -47,6 +48,8 @@ SceneFile scene_of(const Environment& env, const std::string& name) {
     for (auto& [k, shape] : parts[id]) object.shapes.push_back(std::move(shape));
     scene.objects.push_back(std::move(object));
   }
+  // The allowed-collision entries (YAML keeps them; the .scene text has no place for them).
+  for (const auto& [pair, allowed] : env.allowed_collisions().entries()) scene.allowed_collisions.push_back({pair.first, pair.second, allowed});
   return scene;
 }
 
@@ -238,18 +241,74 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
                   "max_object_triangles");
     }
     std::vector<CollisionObject> parts = scene.collision_objects();
+    // The file's allowed-collision entries that name an object (two links: the robot's SRDF's).
+    const RobotModel& model = checker()->model();
+    std::size_t link_pairs = 0;
+    NamedAllowedCollisions entries;
+    for (const AllowedCollision& e : scene.allowed_collisions) {
+      if (model.link_index(e.a) >= 0 && model.link_index(e.b) >= 0) ++link_pairs;
+      else entries.set_entry(e.a, e.b, e.allowed);
+    }
     store_->modify([&](Environment& env) {
       if (!req.merge) env.clear_objects();
       for (const SceneObject& o : scene.objects) remove_object_shapes(env, o.id);
       for (CollisionObject& part : parts) env.add_object(std::move(part));
+      NamedAllowedCollisions acm = req.merge ? env.allowed_collisions() : NamedAllowedCollisions{};
+      for (const auto& [pair, allowed] : entries.entries()) acm.set_entry(pair.first, pair.second, allowed);
+      env.set_allowed_collisions(std::move(acm));
     });
     res.name = scene.name;
     res.objects = static_cast<std::uint32_t>(scene.objects.size());
     res.shapes = static_cast<std::uint32_t>(scene.shape_count());
     std::vector<std::string> unused;
     if (!scene.joint_values.empty()) unused.push_back("its robot state (" + std::to_string(scene.joint_values.size()) + " joints: the node's come from joint_states)");
-    if (!scene.allowed_collisions.empty()) unused.push_back("its allowed-collision matrix (" + std::to_string(scene.allowed_collisions.size()) + " pairs)");
+    if (link_pairs > 0) unused.push_back("its allowed-collision entries for " + std::to_string(link_pairs) + " pairs of links (the robot's SRDF decides those)");
     if (!unused.empty()) res.warning = "not applied: " + unused[0] + (unused.size() > 1 ? " and " + unused[1] : "");
+  });
+}
+
+bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request& req, SetAllowedCollisions::Response& res) {
+  return serve("set_allowed_collisions", res, [&] {
+    if (req.names_a.size() != req.names_b.size()) {
+      throw RequestError(std::to_string(req.names_a.size()) + " names_a but " + std::to_string(req.names_b.size()) + " names_b");
+    }
+    const RobotModel& model = checker()->model();
+    const auto is_link = [&](const std::string& name) { return model.link_index(name) >= 0; };
+    std::vector<std::string> names(req.default_names);
+    for (std::size_t i = 0; i < req.names_a.size(); ++i) {
+      if (is_link(req.names_a[i]) && is_link(req.names_b[i])) {
+        throw RequestError("pair " + std::to_string(i) + " (" + req.names_a[i] + ", " + req.names_b[i] +
+                           ") names two links: the robot's own pairs come from its SRDF");
+      }
+      names.push_back(req.names_a[i]);
+      names.push_back(req.names_b[i]);
+    }
+    for (const std::string& name : names) {
+      if (name.empty() || name.find('#') != std::string::npos) throw RequestError("name '" + name + "' is empty or names a shape (id#k)");
+    }
+    std::vector<std::string> unknown;
+    store_->modify([&](Environment& env) {
+      NamedAllowedCollisions acm = env.allowed_collisions();
+      for (std::size_t i = 0; i < req.names_a.size(); ++i) {
+        if (req.remove) acm.remove_entry(req.names_a[i], req.names_b[i]);
+        else acm.set_entry(req.names_a[i], req.names_b[i], req.allowed);
+      }
+      for (const std::string& name : req.default_names) {
+        if (req.remove) acm.remove_default(name);
+        else acm.set_default(name, req.allowed);
+      }
+      env.set_allowed_collisions(std::move(acm));
+      for (const std::string& name : names) {
+        const bool object = std::any_of(env.objects().begin(), env.objects().end(), [&](const CollisionObject& o) {
+          return o.id.substr(0, o.id.find('#')) == name;
+        });
+        if (!object && !is_link(name) && std::find(unknown.begin(), unknown.end(), name) == unknown.end()) unknown.push_back(name);
+      }
+    });
+    if (!unknown.empty()) {
+      res.warning = "neither a link nor a collision object now (kept for one set later):";
+      for (const std::string& name : unknown) res.warning += " '" + name + "'";
+    }
   });
 }
 

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 
+#include "bvh_collision/checker/allowed_contacts.h"
 #include "bvh_collision/ros/collision_checker_node.h"
 
 namespace bvh_collision {
@@ -64,7 +65,15 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
   const Transform root = need_pose ? root_pose(ros::Time(0)) : Transform::Identity();
   res.min_distance = kNaN;
   if (checks.self) self_part(state.data(), req, tolerance, root, res);
-  if (checks.environment) environment_part(state.data(), *store_->snapshot(), req, tolerance, root, res);
+  const std::shared_ptr<const Environment> env = store_->snapshot();
+  if (checks.environment) environment_part(state.data(), *env, req, tolerance, root, res);
+  if (checks.environment && req.report_allowed) {
+    const std::shared_ptr<const CollisionChecker> checker = this->checker();
+    for (const auto& [link, object] : allowed_object_contacts(*checker, state.data(), *env, root)) {
+      res.allowed_links.push_back(checker->model().links()[link].name);
+      res.allowed_objects.push_back(object);
+    }
+  }
   res.valid = !res.self_collision && !res.environment_collision;
   ++states_checked_;
   res.warning = join_warnings(warnings);

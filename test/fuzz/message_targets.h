@@ -19,7 +19,8 @@ std::string check_point_cloud(const std::uint8_t* data, std::size_t size);
 // The first byte picks one of the node's services (check_state, check_states, check_motion,
 // cast_ray, clear_environment, clear_box, set_collision_object, remove_collision_object); the rest
 // fills its request field by field (bytes left after a check_motion request make a check_motions
-// request with the same joint names). The service handler must return (no exception escapes it)
+// request with the same joint names, after a remove_collision_object request a
+// set_allowed_collisions request). The service handler must return (no exception escapes it)
 // with either an error message or an answer whose numbers are finite where they must be, and the
 // node must still answer a plain check_state afterwards. save_octree, load_scene and save_scene
 // are left out: they read or write the file the request names (load_scene's reader is

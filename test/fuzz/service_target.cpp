@@ -30,6 +30,7 @@ struct NodeFuzzAccess {
     if constexpr (std::is_same_v<Request, ClearBox::Request>) return n.clear_box(req, res);
     if constexpr (std::is_same_v<Request, SetCollisionObject::Request>) return n.set_collision_object(req, res);
     if constexpr (std::is_same_v<Request, RemoveCollisionObject::Request>) return n.remove_collision_object(req, res);
+    if constexpr (std::is_same_v<Request, SetAllowedCollisions::Request>) return n.set_allowed_collisions(req, res);
   }
 };
 
@@ -137,6 +138,7 @@ std::string answer(ByteReader& in) {
       req.max_contacts = in.count(5);
       req.distance = in.byte() & 1;
       req.tolerance = in.number();
+      req.report_allowed = in.byte() & 1;
       CheckState::Response res;
       NodeFuzzAccess::call(req, res);
       if (res.error.empty() && req.distance && std::isnan(res.min_distance) && (req.checks & 3) != 0) {
@@ -236,7 +238,20 @@ std::string answer(ByteReader& in) {
       req.id = in.name(kNames);
       RemoveCollisionObject::Response res;
       NodeFuzzAccess::call(req, res);
-      return error_problem(res);
+      if (std::string problem = error_problem(res); !problem.empty() || in.remaining() == 0) return problem;
+      // Bytes left: allowed collisions from them (pairs, defaults, the flags).
+      SetAllowedCollisions::Request allow;
+      allow.names_a.resize(in.count(3));
+      for (auto& n : allow.names_a) n = in.name(kNames);
+      allow.names_b.resize(in.count(3));
+      for (auto& n : allow.names_b) n = in.name(kNames);
+      allow.default_names.resize(in.count(3));
+      for (auto& n : allow.default_names) n = in.name(kNames);
+      allow.allowed = in.byte() & 1;
+      allow.remove = in.byte() & 1;
+      SetAllowedCollisions::Response allowed;
+      NodeFuzzAccess::call(allow, allowed);
+      return error_problem(allowed);
     }
   }
 }

@@ -51,7 +51,8 @@ struct SceneFile {
   // Every shape as the checker's collision object (`id#k` as above), posed in the world taking
   // every frame_id as the world frame (the node places a named frame through tf2 first).
   std::vector<CollisionObject> collision_objects() const;
-  // An environment of those objects and an empty octree of `octree_resolution`.
+  // An environment of those objects, with the allowed-collision entries (those naming an object
+  // are the ones its checks read), and an empty octree of `octree_resolution`.
   Environment environment(double octree_resolution = 0.05) const;
 };
 

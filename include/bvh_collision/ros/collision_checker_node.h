@@ -43,6 +43,7 @@
 #include "bvh_collision/LoadScene.h"
 #include "bvh_collision/SaveOctree.h"
 #include "bvh_collision/SaveScene.h"
+#include "bvh_collision/SetAllowedCollisions.h"
 #include "bvh_collision/SetCollisionObject.h"
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/checker/environment_store.h"
@@ -201,6 +202,7 @@ class CollisionCheckerNode {
   bool save_octree(SaveOctree::Request& req, SaveOctree::Response& res);
   bool load_scene(LoadScene::Request& req, LoadScene::Response& res);
   bool save_scene(SaveScene::Request& req, SaveScene::Response& res);
+  bool set_allowed_collisions(SetAllowedCollisions::Request& req, SetAllowedCollisions::Response& res);
 
   // Output (node_output.cpp).
   void publish_occupied_cells(const ros::WallTimerEvent&);
