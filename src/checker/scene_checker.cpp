@@ -48,6 +48,7 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
   proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
   proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
+  tolerance_asked_ = options.tolerance > 0.0 && !proxies_.empty() && level_ <= options.tolerance / 2;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {
     if (m.shapes()[l].empty()) continue;
@@ -277,7 +278,7 @@ bool SceneChecker::worth(const ProxyLevel* level, double growth) const {
 // where halving the interval no longer helps them; always without proxies.
 bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double error) const {
   if (proxies_.empty()) return true;
-  return !s.tolerant && growth <= error;
+  return growth <= error && !s.tolerant();
 }
 
 SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) const {
@@ -320,9 +321,9 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
     s.note_free_radius(d - margin - (pads - grow) - options_.min_clearance, grow);
     return Answer::kNear;
   }
-  if (s.tolerant && proxies_decide_self_) return Answer::kHit;
+  if (proxies_decide_self_ && s.tolerant()) return Answer::kHit;
   SelfCollisionResult r;
-  const SelfCollisionRequest request{s.tolerant ? options_.tolerance : 0.0};
+  const SelfCollisionRequest request{s.tolerant() ? options_.tolerance : 0.0};
   return checker_.pair_collides(a, b, s.poses, request, r) ? Answer::kHit : Answer::kFree;
 }
 
@@ -393,8 +394,8 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
         if (d > limit) return;
         s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
         answer = Answer::kNear;
-      } else if ((s.tolerant && proxies_decide_objects_ && grid_.exact_ball_test(o)) ||
-                 link_meets_object_exact(l, s.poses[l], o, s.tolerant ? options_.tolerance : 0.0)) {
+      } else if ((proxies_decide_objects_ && grid_.exact_ball_test(o) && s.tolerant()) ||
+                 link_meets_object_exact(l, s.poses[l], o, s.tolerant() ? options_.tolerance : 0.0)) {
         answer = Answer::kHit;
       }
     });
@@ -448,9 +449,9 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
     return Answer::kNear;
   }
-  if (s.tolerant && proxies_decide_objects_) return Answer::kHit;
+  if (proxies_decide_objects_ && s.tolerant()) return Answer::kHit;
   EnvironmentRequest request;
-  request.tolerance = s.tolerant ? options_.tolerance : 0.0;
+  request.tolerance = s.tolerant() ? options_.tolerance : 0.0;
   request.contacts = false;
   return checker_.link_meets_octree(l, s.poses[l], tree, request, result) ? Answer::kHit : Answer::kFree;
 }
@@ -477,7 +478,8 @@ bool SceneChecker::collides(const double* state) const {
   pose_links(state, posed);
   posed.growth = nullptr;
   posed.pair_growth = nullptr;
-  posed.tolerant = options_.states_at_tolerance;
+  posed.tolerant_flag = options_.states_at_tolerance;
+  posed.ends = nullptr;
   return check_posed(posed) != Answer::kFree;
 }
 

@@ -89,14 +89,13 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   posed.free_radius = std::numeric_limits<double>::infinity();
   const std::size_t failing = arena.size();
   double largest = 0.0;
-  bool all_tolerant = true;  // every failing component may take the tolerance's shortcut
+  posed.checker = this;
+  posed.ends = tolerance_asked_ ? ends : nullptr;
+  posed.tolerant_flag = false;
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
-    // The shortcut needs to know only for growth within reach of the tolerance or the level.
-    const double moved = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
-    posed.tolerant = moved <= std::max(level_, options_.tolerance) && tolerant_component(k, ends);
+    posed.component = k;
     if (component_check(k, posed) == Answer::kFree) continue;
-    posed.tolerant = tolerant_component(k, ends);
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
     // collide, and mostly where the intervals first fail: that ends the motion at once.)
     posed.growth = posed.pair_growth = nullptr;
@@ -107,14 +106,15 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     // (What follows it inherits the whole pending list: the rest was not looked at.)
     if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
     arena.push_back(k);
-    all_tolerant = all_tolerant && posed.tolerant;
     largest = std::max(largest, (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half);
   }
   const std::size_t left = arena.size() - failing;
   if (left == 0) return {Step::kCertified};
   // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
   // link within level + 2 largest (a self pair) of a collision at its midpoint.
-  if (all_tolerant && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance) {
+  // (The room first: whether every failing component may take the shortcut costs end checks.)
+  if (tolerance_asked_ && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance &&
+      std::all_of(arena.begin() + static_cast<std::ptrdiff_t>(failing), arena.end(), [&](int k) { return tolerant_component(k, ends); })) {
     return {Step::kCollides, mid, failing, left};
   }
   // Growth below the level is tested by exact distances: a failure with the motion's own growth
@@ -152,7 +152,8 @@ bool SceneChecker::tolerant_component(int k, Posed* ends) const {
     end.growth = growth.data();
     end.pair_growth = pair_growth.data();
     end.from = end.to = nullptr;
-    end.tolerant = true;  // no exact distances: the proxies decide or it is not clear
+    end.tolerant_flag = true;  // no exact distances: the proxies decide or it is not clear
+    end.ends = nullptr;
     end.half = 0.0;
     if (component_check(k, end) != Answer::kFree) known = 0;
   }
@@ -231,7 +232,8 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   for (int e = 0; e < 2; ++e) {
     pose_links(e == 0 ? start : goal, ends[e]);
     ends[e].growth = ends[e].pair_growth = nullptr;
-    ends[e].tolerant = options_.states_at_tolerance;
+    ends[e].tolerant_flag = options_.states_at_tolerance;
+    ends[e].ends = nullptr;
   }
   double found = check_posed(ends[0]) != Answer::kFree ? 0.0 : check_posed(ends[1]) != Answer::kFree ? 1.0 : -1.0;  // the earliest collision known
   if (found == 0.0 || (found > 0.0 && !earliest)) {
@@ -239,8 +241,7 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
     result.certified = true;
     return result;
   }
-  s.tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(),
-                    options_.tolerance > 0.0 && !proxies_.empty() && level_ <= options_.tolerance / 2 ? -1 : 0);
+  s.tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), tolerance_asked_ ? -1 : 0);
   motion_speeds(start, goal);
   std::vector<int>& arena = s.pending;
   arena.assign(components_.begin(), components_.end());

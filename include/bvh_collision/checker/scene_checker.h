@@ -96,8 +96,14 @@ class SceneChecker {
     const double* from = nullptr;         // the interval's end states (with growth)
     const double* to = nullptr;
     // A hit within the tolerance may count (the state itself), or an interval is not to be
-    // settled by exact distances (growth: the tolerance will settle it).
-    bool tolerant = false;
+    // settled by exact distances (growth: the tolerance will settle it). Read only where the
+    // proxies could not prove the component apart; on a motion's interval it is asked of the
+    // motion's ends then, once per component (`ends` set: SceneChecker::tolerant_component).
+    bool tolerant_flag = false;
+    const SceneChecker* checker = nullptr;
+    Posed* ends = nullptr;
+    int component = -1;
+    bool tolerant() const { return ends != nullptr ? checker->tolerant_component(component, ends) : tolerant_flag; }
     double grow(int link) const { return growth != nullptr ? growth[link] : 0.0; }
     // An interval's half-width, and the stretch around its midpoint (fractions) over which every
     // component that failed on an exact distance stays free: a gap `gap` beyond padding and a
@@ -165,6 +171,9 @@ class SceneChecker {
   double level_ = 0.0;                       // the finest's
   bool proxies_decide_self_ = false;         // tolerance >= the finest level: overlap is an answer
   bool proxies_decide_objects_ = false;      // tolerance >= half of it
+  // A motion may take the tolerance's shortcut (a tolerance, with a level of at most half of it):
+  // then each component that fails is asked whether it is clear of the tolerance at both ends.
+  bool tolerance_asked_ = false;
   std::shared_ptr<const OctreeDistanceField> field_;
   ObjectGrid grid_;
   std::vector<char> allowed_;  // per link and object (link * objects + object): allowed to touch; empty: none is
