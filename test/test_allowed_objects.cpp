@@ -43,8 +43,7 @@ const CollisionChecker& panda() { return test::panda_with_proxies(); }
 Environment without_allowed(const Environment& env, const std::string& link) {
   Environment out(0.05);
   for (std::size_t o = 0; o < env.objects().size(); ++o) {
-    const std::string& id = env.objects()[o].id;
-    if (!env.allowed_collisions().allowed(link, id.substr(0, id.find('#')))) out.add_object(env.objects()[o]);
+    if (!env.allowed_collisions().allowed(link, object_name(env.objects()[o].id))) out.add_object(env.objects()[o]);
   }
   return out;
 }
@@ -79,7 +78,7 @@ Environment scene_with_allowances(int index) {
   NamedAllowedCollisions acm;
   std::vector<std::string> names;  // whole objects (a shape id#k belongs to id)
   for (const CollisionObject& o : env.objects()) {
-    const std::string name = o.id.substr(0, o.id.find('#'));
+    const std::string name = object_name(o.id);
     if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
   }
   EXPECT_GE(names.size(), 3u);
@@ -108,7 +107,7 @@ TEST(AllowedObjects, EnvironmentChecksSkipAllowedPairs) {
       const EnvironmentResult r = checker.check_environment(q.data(), env, request);
       ASSERT_EQ(r.collision, truth.collision) << "scene " << scene << " state " << i;
       for (const EnvironmentContact& c : r.contacts) {
-        ASSERT_FALSE(env.allowed_collisions().allowed(checker.model().links()[c.link].name, c.object.substr(0, c.object.find('#')))) << c.object;
+        ASSERT_FALSE(env.allowed_collisions().allowed(checker.model().links()[c.link].name, object_name(c.object))) << c.object;
       }
       if (!truth.collision) ASSERT_NEAR(r.min_distance, truth.distance, 1e-9) << "scene " << scene << " state " << i;
       colliding += truth.collision;

@@ -27,7 +27,7 @@ std::vector<std::pair<int, std::string>> allowed_object_contacts(const Collision
     request.root_pose = root_pose;
     request.only_links = &only;
     for (const EnvironmentContact& c : checker.check_environment(state, allowed, request).contacts) {
-      const std::pair<int, std::string> pair{static_cast<int>(l), c.object.substr(0, c.object.find('#'))};
+      const std::pair<int, std::string> pair{static_cast<int>(l), object_name(c.object)};
       if (std::find(out.begin(), out.end(), pair) == out.end()) out.push_back(pair);
     }
   }

@@ -13,7 +13,8 @@
 // checker/scene_file.h) also checks each configuration against the scene's objects: a link
 // touching one adds `LINK:OBJECT` to the pairs (an object of several shapes as `id#k`), and the
 // distance is the nearest of either kind. A YAML scene's robot state sets the joints the states
-// file leaves out; its allowed-collision entries are not applied (a warning says so).
+// file leaves out; its allowed-collision entries that name an object are applied, those for two
+// links are not (a warning says so).
 // --print-acm first prints `check A:B` or `skip A:B REASON` for every pair of links with
 // geometry. --sample-acm N also skips pairs that N random configurations show never or always
 // colliding, read from --acm-cache FILE when it holds them for this URDF, SRDF and N (and

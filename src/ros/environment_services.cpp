@@ -300,7 +300,7 @@ bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request&
       env.set_allowed_collisions(std::move(acm));
       for (const std::string& name : names) {
         const bool object = std::any_of(env.objects().begin(), env.objects().end(), [&](const CollisionObject& o) {
-          return o.id.substr(0, o.id.find('#')) == name;
+          return object_name(o.id) == name;
         });
         if (!object && !is_link(name) && std::find(unknown.begin(), unknown.end(), name) == unknown.end()) unknown.push_back(name);
       }

@@ -57,6 +57,10 @@ inline ShapeRef shape_of(const CollisionObject& o) { return ShapeRef{o.mesh.get(
 // triangles too, which the general queries use; mesh against box primitive measured faster).
 ShapeRef exact_shape_of(const CollisionObject& o);
 
+// The object a shape belongs to: an object of several shapes keeps them as "id#k" (an id itself
+// never holds '#'), and names such as allowed-collision entries name the object, "id".
+inline std::string object_name(const std::string& shape_id) { return shape_id.substr(0, shape_id.find('#')); }
+
 // An object as queries use it: its hierarchy and hull built (the costly part of adding one).
 // Throws std::invalid_argument as Environment::add_object does.
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
@@ -101,8 +105,7 @@ class Environment {
   // whole objects: a shape "id#k" of a several-shape object answers as "id".
   bool object_allowed(const std::string& link_name, std::size_t o) const {
     if (allowed_->empty()) return false;
-    const std::string& id = (*objects_)[o].id;
-    return allowed_->allowed(link_name, id.substr(0, id.find('#')));
+    return allowed_->allowed(link_name, object_name((*objects_)[o].id));
   }
 
   // The octree's distance field (octree/distance_field.h) over at least [lo, hi] with at least

@@ -10,11 +10,13 @@
 //   link's proxy spheres are tested against an object's exact primitive before any mesh is
 //   opened: proxies apart from it prove the link apart (they contain it), and a proxy that meets
 //   it sends the link to the exact test (or, at a tolerance the level fits, is the answer).
+//   A (link, object) pair the environment allows to touch (Environment::allowed_collisions) is
+//   not checked, in states and motions alike.
 // - Motion: an interval [s0, s1] of the straight joint-space segment is certified free by one
 //   boolean check of the proxies at its midpoint, each link's grown by how far any of its points
-//   can move in half the interval (CollisionChecker::link_speed, the kinematic chain's levers
-//   times each joint's change) and each self pair's by how far its links can close (the joints
-//   between the two links only); an interval that fails is bisected, breadth first, its midpoint
+//   can move in half the interval (from the arm's pose at the midpoint: chain_speed, capped by
+//   CollisionChecker::link_speed's chain-length levers) and each self pair's by how far its links
+//   can close (the joints between the two links only); an interval that fails is bisected, breadth first, its midpoint
 //   state checked (a collision there ends the motion). Once the growth is below the proxies' own
 //   error, an exact distance at the midpoint settles a link or pair (farther than its growth:
 //   free over the interval). At a tolerance t, an interval whose growth and proxy error fit in t
@@ -71,10 +73,10 @@ class SceneChecker {
   const std::vector<const ProxyLevel*>& proxies() const { return proxies_; }
 
   // How far any point of link `l` can move over the interval [lo, hi] of the segment (fractions)
-  // from where it is at the interval's midpoint: each joint up the chain turns the link at its
-  // distance from the joint's axis at the midpoint, plus how far the joints below can carry it
-  // within the interval (never more than the chain's length bound). Exported for the test that
-  // proves it against sampled motion; the motions use the same bound.
+  // from where it is at the interval's midpoint, from the arm's pose there (chain_speed: the
+  // joints' levers and the link's velocity at the midpoint, plus how much either can change
+  // within the interval; never more than the chain-length bound). Exported for the test that
+  // checks it against sampled motion; the motions use the same bound.
   double link_growth(int link, const double* start, const double* goal, double lo, double hi) const;
   // How far the distance between the links of checked pair `pair` can fall over such an
   // interval: only the joints on the path between the two links count (proven by a test the same way).
