@@ -13,7 +13,7 @@ std::vector<std::pair<int, std::string>> allowed_object_contacts(const Collision
   if (env.allowed_collisions().empty()) return out;
   const auto& links = checker.model().links();
   for (std::size_t l = 0; l < links.size(); ++l) {
-    if (links[l].collision.empty()) continue;
+    if (checker.collision_model().shapes()[l].empty()) continue;  // (a carried object has shapes, no URDF elements)
     Environment allowed(env.octree().resolution());
     for (std::size_t o = 0; o < env.objects().size(); ++o) {
       if (env.object_allowed(links[l].name, o)) allowed.add_object(env.objects()[o]);

@@ -80,6 +80,13 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   return hit;
 }
 
+CollisionChecker CollisionChecker::carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed) const {
+  if (bodies.empty()) return *this;
+  auto model = std::make_shared<const RobotCollisionModel>(m_->carrying(bodies, allowed));
+  auto accelerators = std::make_shared<const RobotAccelerators>(a_->carrying(*model));
+  return CollisionChecker(std::move(model), std::move(accelerators));
+}
+
 double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
                                        const SelfCollisionRequest& request, SelfCollisionResult& result) const {
   for (const LinkShape& sa : m_->shapes()[a]) {

@@ -99,13 +99,18 @@ CollisionObject make_collision_object(const std::string& id, const ObjectShape& 
 Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
 
 Environment::Environment(const Environment& other)
-    : octree_(other.octree_), objects_(other.objects_), allowed_(other.allowed_), field_(std::atomic_load(&other.field_)) {}
+    : octree_(other.octree_),
+      objects_(other.objects_),
+      allowed_(other.allowed_),
+      attached_(other.attached_),
+      field_(std::atomic_load(&other.field_)) {}
 
 Environment& Environment::operator=(const Environment& other) {
   if (this == &other) return *this;
   octree_ = other.octree_;
   objects_ = other.objects_;
   allowed_ = other.allowed_;
+  attached_ = other.attached_;
   std::atomic_store(&field_, std::atomic_load(&other.field_));
   return *this;
 }
@@ -173,6 +178,36 @@ bool Environment::remove_object(const std::string& id) {
   auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
   next->erase(next->begin() + i);
   objects_ = std::move(next);
+  return true;
+}
+
+const AttachedBody* Environment::find_attached(const std::string& id) const {
+  const auto it = std::find_if(attached_->begin(), attached_->end(), [&](const AttachedBody& b) { return b.id == id; });
+  return it == attached_->end() ? nullptr : &*it;
+}
+
+void Environment::attach(AttachedBody body) {
+  if (body.id.empty() || body.id.find('#') != std::string::npos) {
+    throw std::invalid_argument("attached object '" + body.id + "': the id must be non-empty without '#'");
+  }
+  if (body.link.empty()) throw std::invalid_argument("attached object '" + body.id + "': no link named");
+  if (body.shapes.empty()) throw std::invalid_argument("attached object '" + body.id + "' has no shapes");
+  auto next = std::make_shared<std::vector<AttachedBody>>(*attached_);
+  const auto it = std::find_if(next->begin(), next->end(), [&](const AttachedBody& b) { return b.id == body.id; });
+  if (it != next->end()) {
+    *it = std::move(body);
+  } else {
+    next->push_back(std::move(body));
+  }
+  attached_ = std::move(next);
+}
+
+bool Environment::detach(const std::string& id) {
+  auto next = std::make_shared<std::vector<AttachedBody>>(*attached_);
+  const auto it = std::find_if(next->begin(), next->end(), [&](const AttachedBody& b) { return b.id == id; });
+  if (it == next->end()) return false;
+  next->erase(it);
+  attached_ = std::move(next);
   return true;
 }
 

@@ -71,6 +71,23 @@ RobotAccelerators RobotAccelerators::with_proxy_level(const RobotCollisionModel&
   return copy;
 }
 
+RobotAccelerators RobotAccelerators::carrying(const RobotCollisionModel& carried) const {
+  RobotAccelerators copy = *this;
+  copy.pair_clearance_ = pair_clearance_.for_pairs(carried.checked_pairs().size());
+  for (ProxyLevel& level : copy.proxy_levels_) {
+    const std::size_t before = level.links.size();
+    level.links.resize(carried.shapes().size());
+    for (std::size_t l = before; l < carried.shapes().size(); ++l) {
+      if (carried.shapes()[l].empty()) continue;
+      level.links[l] = copy.cached_or_built_proxy(carried, static_cast<int>(l), level.level, level.links_from_cache);
+      level.leaves += level.links[l].leaf_count();
+      level.memory_bytes += level.links[l].memory_bytes();
+    }
+    level.batch = ProxyBatch(carried, copy.pair_clearance_, level);
+  }
+  return copy;
+}
+
 const ProxyLevel* RobotAccelerators::proxies_for(double tolerance) const {
   const ProxyLevel* best = nullptr;
   for (const ProxyLevel& p : proxy_levels_) {

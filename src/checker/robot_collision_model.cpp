@@ -35,8 +35,13 @@ std::vector<BodyShape> RobotCollisionModel::placed_shapes(int link) const {
 }
 
 RobotCollisionModel::RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options)
-    : robot_(std::move(robot)), acm_(std::move(acm)), limits_(options.limits) {
+    : robot_(std::move(robot)),
+      acm_(std::move(acm)),
+      limits_(options.limits),
+      default_padding_(options.padding),
+      link_padding_(options.link_padding) {
   const std::size_t n = robot_.links().size();
+  robot_links_ = n;
   check_limit("robot '" + robot_.name() + "' with its links", double(n), limits_.robot_links, "max_robot_links");
   if (acm_.size() != n) acm_ = AllowedCollisionMatrix(n);
   padding_.resize(n, options.padding);
@@ -122,6 +127,65 @@ void RobotCollisionModel::build_meshes(const std::vector<const TriangleMesh*>& d
     meshes_.push_back(std::move(*trees[m]));
     hulls_.push_back(std::move(*hulls[m]));
   }
+}
+
+RobotCollisionModel RobotCollisionModel::carrying(const std::vector<AttachedBody>& bodies,
+                                                  const NamedAllowedCollisions& allowed) const {
+  RobotCollisionModel out = *this;
+  for (const AttachedBody& body : bodies) out.add_body(body, allowed);
+  std::vector<bool> needed(out.shapes_.size());
+  for (std::size_t l = 0; l < needed.size(); ++l) needed[l] = !out.shapes_[l].empty();
+  out.kinematics_ = KinematicsPlan(out.robot_, needed);
+  out.compute_motion_rates();
+  return out;
+}
+
+// One carried body: a link of its own (shapes, bound, padding) and its self pairs.
+void RobotCollisionModel::add_body(const AttachedBody& body, const NamedAllowedCollisions& allowed) {
+  const std::string what = "attached object '" + body.id + "'";
+  const int parent = robot_.link_index(body.link);
+  if (parent < 0) throw std::invalid_argument(what + ": no link '" + body.link + "'");
+  if (robot_.link_index(body.id) >= 0) throw std::invalid_argument(what + ": the robot has a link of that name");
+  if (body.shapes.empty()) throw std::invalid_argument(what + " has no shapes");
+  std::vector<bool> touches(robot_.links().size(), false);
+  touches[static_cast<std::size_t>(parent)] = true;
+  for (const std::string& name : body.touch_links) {
+    const int l = robot_.link_index(name);
+    if (l < 0) throw std::invalid_argument(what + ": no touch link '" + name + "'");
+    touches[static_cast<std::size_t>(l)] = true;
+  }
+  robot_ = robot_.with_fixed_link(body.id, parent, Transform::Identity());
+  const std::size_t n = robot_.links().size();
+  check_limit("robot '" + robot_.name() + "' with its links and carried objects", double(n), limits_.robot_links, "max_robot_links");
+  const int self = static_cast<int>(n) - 1;
+  acm_ = acm_.grown_to(n);
+  std::vector<LinkShape> shapes;
+  for (const CollisionObject& o : body.shapes) {
+    LinkShape s;
+    s.origin = o.pose;
+    if (o.mesh != nullptr) {
+      s.mesh = static_cast<int>(meshes_.size());
+      meshes_.push_back(*o.mesh);
+      hulls_.push_back(*o.hull);
+    } else {
+      s.primitive = o.primitive;
+    }
+    shapes.push_back(s);
+  }
+  shapes_.push_back(std::move(shapes));
+  bounds_.push_back(bounding_sphere(placed_shapes(self)));
+  const auto named = link_padding_.find(body.id);
+  padding_.push_back(named != link_padding_.end() ? named->second : default_padding_);
+  for (int l = 0; l < self; ++l) {
+    if (shapes_[static_cast<std::size_t>(l)].empty() || (l < static_cast<int>(touches.size()) && touches[l]) ||
+        allowed.allowed(body.id, robot_.links()[static_cast<std::size_t>(l)].name)) {
+      acm_.allow(l, self, AcmReason::kAdjacent);
+      continue;
+    }
+    checked_pairs_.emplace_back(l, self);
+  }
+  check_limit("robot '" + robot_.name() + "' with its checked pairs and carried objects", double(checked_pairs_.size()),
+              limits_.checked_pairs, "max_checked_pairs");
 }
 
 // For each link, walk to the root: a revolute joint moves the link's points at most at their

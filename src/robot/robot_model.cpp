@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/robot/mesh_loader.h"
@@ -205,6 +206,27 @@ class RobotModelBuilder {
 
 RobotModel RobotModel::from_urdf(const urdf::ModelInterface& urdf, const PackageResolver& resolver) {
   return RobotModelBuilder(urdf, resolver).build();
+}
+
+RobotModel RobotModel::with_fixed_link(const std::string& name, int parent, const Transform& origin) const {
+  if (parent < 0 || parent >= static_cast<int>(links_.size())) {
+    throw std::invalid_argument("link '" + name + "': no parent link " + std::to_string(parent));
+  }
+  const std::string joint_name = name + "/attached";
+  if (name.empty() || link_index(name) >= 0 || joint_index(joint_name) >= 0) {
+    throw std::invalid_argument("link '" + name + "': the robot already has a link or joint of that name");
+  }
+  RobotModel out = *this;
+  RobotJoint joint;
+  joint.name = joint_name;
+  joint.type = JointType::kFixed;
+  joint.parent_link = parent;
+  joint.child_link = static_cast<int>(links_.size());
+  joint.origin = origin;
+  out.joint_order_.push_back(static_cast<int>(out.joints_.size()));
+  out.joints_.push_back(joint);
+  out.links_.push_back({name, static_cast<int>(out.joints_.size()) - 1, {}});
+  return out;
 }
 
 int RobotModel::link_index(const std::string& name) const {

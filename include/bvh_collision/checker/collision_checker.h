@@ -40,6 +40,17 @@ class CollisionChecker {
     return CollisionChecker(m_, std::make_shared<const RobotAccelerators>(a_->with_proxy_level(*m_, level, cancel)));
   }
 
+  // This checker carrying `bodies` (AttachedBody, checker/environment.h; the model's carrying and
+  // its accelerators'): each body one more link, named by its id, after the robot's links; the
+  // state vector is the same. Throws as RobotCollisionModel::carrying.
+  CollisionChecker carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed) const;
+  // The checker a query on `env` uses: this one carrying env.attached() (this one when it holds
+  // none) with env's allowed collisions. Queries that take an environment read its objects only:
+  // a checker that does not carry its attached bodies ignores them.
+  CollisionChecker carrying(const Environment& env) const {
+    return env.attached().empty() ? *this : carrying(env.attached(), env.allowed_collisions());
+  }
+
   const RobotModel& model() const { return m_->robot(); }
   const AllowedCollisionMatrix& acm() const { return m_->acm(); }
   // What every query reads: shapes, hierarchies, bounds, kinematics, motion rates (immutable).

@@ -61,6 +61,19 @@ ShapeRef exact_shape_of(const CollisionObject& o);
 // never holds '#'), and names such as allowed-collision entries name the object, "id".
 inline std::string object_name(const std::string& shape_id) { return shape_id.substr(0, shape_id.find('#')); }
 
+// An object the robot carries (MoveIt's AttachedCollisionObject): its shapes fixed in a link's
+// frame, moving with the link in every query. A checker carries it as one more link, named `id`,
+// hung from `link` (CollisionChecker::carrying): self checks test it against every link except
+// `link` and `touch_links` (and pairs the environment's allowed collisions name), environment
+// checks against the world, motions bound it by its link's motion, the self filter drops points
+// on it, rays and contacts name it `id`.
+struct AttachedBody {
+  std::string id;    // as a world object's id (no '#'); differs from every link name
+  std::string link;  // the link it hangs from
+  std::vector<std::string> touch_links;  // links allowed to touch it besides `link`
+  std::vector<CollisionObject> shapes;   // built, poses in the link's frame ("id", or "id#k" for several)
+};
+
 // An object as queries use it: its hierarchy and hull built (the costly part of adding one).
 // Throws std::invalid_argument as Environment::add_object does.
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
@@ -108,6 +121,20 @@ class Environment {
     return allowed_->allowed(link_name, object_name((*objects_)[o].id));
   }
 
+  // Objects the robot carries (AttachedBody), in the order attached. A snapshot that holds one
+  // does not hold a world object of that id: attaching and detaching move an object between the
+  // two in one change (the node's attach_object, detach_object), so a query sees it in one place.
+  const std::vector<AttachedBody>& attached() const { return *attached_; }
+  // The list itself: unchanged between snapshots until an object is attached or detached (the
+  // node keeps the checker that carries it by this pointer).
+  const std::shared_ptr<const std::vector<AttachedBody>>& attached_list() const { return attached_; }
+  const AttachedBody* find_attached(const std::string& id) const;
+  // Adds the body, or replaces the one with the same id. Throws std::invalid_argument (and changes
+  // nothing) for an empty id, one with '#', no link or no shapes.
+  void attach(AttachedBody body);
+  // False (and nothing changes) when no body has this id.
+  bool detach(const std::string& id);
+
   // The octree's distance field (octree/distance_field.h) over at least [lo, hi] with at least
   // `cap`, built on the first call and kept until the octree changes (its revision) or a box or
   // cap it does not cover is asked for; null when that would take more than `max_cells` cells.
@@ -127,6 +154,7 @@ class Environment {
   Octree octree_;
   std::shared_ptr<const std::vector<CollisionObject>> objects_ = std::make_shared<const std::vector<CollisionObject>>();
   std::shared_ptr<const NamedAllowedCollisions> allowed_ = std::make_shared<const NamedAllowedCollisions>();
+  std::shared_ptr<const std::vector<AttachedBody>> attached_ = std::make_shared<const std::vector<AttachedBody>>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
 };
 

@@ -56,6 +56,13 @@ class PairClearance {
   // periodic variable, or a box of more than `max_cells` cells (then cheaper tests serve).
   double lower_bound_over(std::size_t pair, const double* a, const double* b, std::size_t max_cells = 64) const;
   bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
+  // The same grids for a model whose first checked pairs are these and which has `pairs` in all
+  // (RobotCollisionModel::carrying appends a carried object's pairs): the new ones have none.
+  PairClearance for_pairs(std::size_t pairs) const {
+    PairClearance out = *this;
+    if (!out.grid_of_.empty()) out.grid_of_.resize(pairs, -1);
+    return out;
+  }
   const std::vector<PairClearanceGrid>& grids() const { return grids_; }
   std::size_t memory_bytes() const;
   double build_seconds() const { return build_seconds_; }

@@ -52,6 +52,10 @@ class RobotAccelerators {
   // for a bad level.
   RobotAccelerators with_proxy_level(const RobotCollisionModel& model, double level,
                                      const std::atomic<bool>* cancel = nullptr) const;
+  // These for `carried` (RobotCollisionModel::carrying of the model these were built from): every
+  // level gets the carried links' proxies (from the proxy cache when it holds them), the new self
+  // pairs get no clearance grid.
+  RobotAccelerators carrying(const RobotCollisionModel& carried) const;
 
  private:
   ProxyLevel build_proxy_level(const RobotCollisionModel& model, double level, const std::atomic<bool>* cancel) const;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bvh_collision/bvh/bvh.h"
+#include "bvh_collision/checker/environment.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/primitives.h"
@@ -72,6 +73,17 @@ class RobotCollisionModel {
  public:
   RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options);
 
+  // This model carrying `bodies` (AttachedBody, checker/environment.h): each one more link, named
+  // by its id and hung from its link (RobotModel::with_fixed_link), with its shapes, padded as a
+  // link of that name would be (CheckerOptions::link_padding, else the default). Its self pairs
+  // come after the model's, whose indices stay: every link or body with geometry except its own
+  // link, its touch links, and those `allowed` lets it touch (by name). Throws
+  // std::invalid_argument for an unknown link or touch link, an id a link has, or an id twice;
+  // LimitExceeded past the links or pairs allowed.
+  RobotCollisionModel carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed) const;
+  // The robot's own links: carried bodies are the links from here on.
+  std::size_t robot_link_count() const { return robot_links_; }
+
   const RobotModel& robot() const { return robot_; }
   const AllowedCollisionMatrix& acm() const { return acm_; }
   const KinematicsPlan& kinematics() const { return kinematics_; }  // poses of the modelled links only
@@ -98,6 +110,7 @@ class RobotCollisionModel {
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);
   void build_meshes(const std::vector<const TriangleMesh*>& distinct, const BuildOptions& bvh);
   void compute_motion_rates();
+  void add_body(const AttachedBody& body, const NamedAllowedCollisions& allowed);
 
   RobotModel robot_;
   AllowedCollisionMatrix acm_;
@@ -113,6 +126,9 @@ class RobotCollisionModel {
   std::vector<std::vector<SlideBound>> motion_slides_;
   double reach_ = 0.0;
   Limits limits_;
+  double default_padding_ = 0.0;
+  std::map<std::string, double> link_padding_;  // CheckerOptions', for carried bodies
+  std::size_t robot_links_ = 0;
 };
 
 }  // namespace bvh_collision

@@ -37,6 +37,15 @@ class AllowedCollisionMatrix {
   bool allowed(int a, int b) const { return reasons_[a * n_ + b] != AcmReason::kChecked; }
   AcmReason reason(int a, int b) const { return reasons_[a * n_ + b]; }
   std::size_t size() const { return n_; }
+  // The same entries for the first size() links, and `links` - size() more links, checked
+  // against everything (links appended to a model: RobotModel::with_fixed_link).
+  AllowedCollisionMatrix grown_to(std::size_t links) const {
+    AllowedCollisionMatrix out(links);
+    for (std::size_t a = 0; a < n_ && a < links; ++a) {
+      for (std::size_t b = 0; b < n_ && b < links; ++b) out.reasons_[a * links + b] = reasons_[a * n_ + b];
+    }
+    return out;
+  }
 
  private:
   void set(int a, int b, AcmReason why) {

@@ -76,6 +76,13 @@ class RobotModel {
   // Distinct mesh files read (a file used by several links is read once).
   std::size_t mesh_files_read() const { return mesh_files_read_; }
 
+  // This model with one more link, `name`, hung from link `parent` at `origin` (in the parent's
+  // frame) by a fixed joint named "<name>/attached": what an object the robot carries becomes
+  // (checker/environment.h, AttachedBody). The link has no collision elements here (its shapes
+  // are the collision model's); the state vector is unchanged. Throws std::invalid_argument for
+  // a name a link or joint already has, or a parent that is not a link.
+  RobotModel with_fixed_link(const std::string& name, int parent, const Transform& origin) const;
+
  private:
   std::string name_;
   std::vector<RobotLink> links_;
