@@ -20,9 +20,9 @@ import sys
 import time
 
 import rospy
-from bvh_collision.srv import (CastRay, CheckMotion, CheckMotions, CheckState, CheckStateRequest, CheckStates, ClearBox,
-                               LoadScene, RemoveCollisionObject, SaveOctree, SaveScene, SetAllowedCollisions,
-                               SetCollisionObject)
+from bvh_collision.srv import (AttachObject, CastRay, CheckMotion, CheckMotions, CheckState, CheckStateRequest,
+                               CheckStates, ClearBox, DetachObject, LoadScene, RemoveCollisionObject, SaveOctree,
+                               SaveScene, SetAllowedCollisions, SetCollisionObject)
 from geometry_msgs.msg import Point, Pose, Vector3
 from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
@@ -50,7 +50,8 @@ class CollisionClient:
                 "cast_ray": CastRay, "clear_box": ClearBox, "set_collision_object": SetCollisionObject,
                 "remove_collision_object": RemoveCollisionObject, "save_octree": SaveOctree,
                 "load_scene": LoadScene, "save_scene": SaveScene, "clear_environment": Empty,
-                "set_allowed_collisions": SetAllowedCollisions}
+                "set_allowed_collisions": SetAllowedCollisions, "attach_object": AttachObject,
+                "detach_object": DetachObject}
 
     def __init__(self, node="/collision_checker", timeout=30.0):
         """Waits up to `timeout` s for the node's ~ready (its robot summary ~robot is set and every
@@ -128,6 +129,19 @@ class CollisionClient:
         names whose default entry is set; allowed=False checks them, remove=True drops the entries."""
         return self._call("set_allowed_collisions", names_a=[a for a, _ in pairs], names_b=[b for _, b in pairs],
                           default_names=list(defaults), allowed=allowed, remove=remove)
+
+    def attach_object(self, object_id, link, touch_links=(), primitives=None, frame_id="", object_pose=None):
+        """Carry an object on `link` (touch_links may touch it): the world object `object_id` where
+        it is, or, given primitives [(SolidPrimitive.BOX, [x, y, z], pose), ...], a new one posed in
+        frame_id (empty: the link's frame)."""
+        shapes = [SolidPrimitive(type=t, dimensions=list(d)) for t, d, _ in primitives or ()]
+        return self._call("attach_object", id=object_id, link=link, touch_links=list(touch_links), frame_id=frame_id,
+                          pose=object_pose or pose(), primitives=shapes,
+                          primitive_poses=[p for _, _, p in primitives or ()])
+
+    def detach_object(self, object_id, remove=False):
+        """Put a carried object back into the world where its link holds it (remove=True: drop it)."""
+        return self._call("detach_object", id=object_id, remove=remove)
 
     def clear_environment(self):
         return self._proxies["clear_environment"]()

@@ -314,5 +314,31 @@ TEST(AttachedObjects, SelfFilterAndRaysSeeTheCarriedObject) {
   EXPECT_EQ(c.ours.model().links()[ray.link].name, "held");
 }
 
+// A checker that does not carry an environment's attached objects would miss their collisions:
+// the queries that take the environment refuse it; SceneChecker carries them itself.
+TEST(AttachedObjects, AnEnvironmentsObjectsAreCarriedOrTheQueryIsRefused) {
+  const Pair& c = checkers();
+  CheckerOptions options;
+  options.proxy_levels = {};
+  const CollisionChecker base = test::panda_as_moveit(options);
+  Environment env = test::generate_scene(2026, 2).environment();
+  env.attach(held_body(kFingers));
+  std::vector<double> q(base.model().variable_count(), 0.0);
+  EXPECT_FALSE(base.carries(env));
+  EXPECT_TRUE(c.ours.carries(env));
+  EXPECT_THROW(base.check_environment(q.data(), env), std::invalid_argument);
+  EXPECT_THROW(base.check_motion(q.data(), q.data(), env), std::invalid_argument);
+  EXPECT_THROW(base.cast_ray(q.data(), env, Vec3::Zero(), Vec3::UnitX(), 1.0), std::invalid_argument);
+  BatchRequest batch;
+  EXPECT_THROW(base.check_batch(q.data(), 1, &env, batch), std::invalid_argument);
+  EXPECT_NO_THROW(c.ours.check_environment(q.data(), env));
+  const auto shared = std::make_shared<const Environment>(env);
+  const SceneChecker from_base(base, shared), from_carried(c.ours, shared);
+  EXPECT_TRUE(from_base.checker().carries(env));
+  int differ = 0;
+  for (const auto& state : random_states(base, test::sized(200), 77)) differ += from_base.collides(state.data()) != from_carried.collides(state.data());
+  EXPECT_EQ(differ, 0);
+}
+
 }  // namespace
 }  // namespace bvh_collision

@@ -14,9 +14,11 @@
 
 #include <std_srvs/Empty.h>
 
+#include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/ClearBox.h"
+#include "bvh_collision/DetachObject.h"
 #include "bvh_collision/LoadScene.h"
 #include "bvh_collision/RemoveCollisionObject.h"
 #include "bvh_collision/SaveScene.h"
@@ -605,6 +607,81 @@ TEST_F(NodeEnvironment, AllowedCollisionsLetLinksTouchAnObject) {
               r.id = "wrapper";
               return r;
             }()).response.error, "");
+}
+
+
+// An object the hand carries (attach_object, detach_object): taken off the world where it is,
+// moved with the hand in state checks, motions and rays, allowed to touch the fingers, put back
+// where the hand holds it. The demo arm stands straight up (no joint_states: the neutral state),
+// the hand's frame at z = 1.25 m; the parcel sits on the fingers, 9-17 cm above the hand frame.
+TEST_F(NodeEnvironment, AttachedObjectMovesWithTheHand) {
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", box_object("parcel", Vec3(0.08, 0.08, 0.08), Vec3(0.0, 0.0, 1.38))).response.error, "");
+  // A wall beside the parcel, above the hand and fingers: only the parcel can reach it.
+  ASSERT_EQ(call<SetCollisionObject>("set_collision_object", box_object("wall", Vec3(0.02, 0.3, 0.14), Vec3(0.07, 0.0, 1.43))).response.error, "");
+  const auto home = arm(0.0, 0.0);
+  std::vector<double> tilted = home;
+  tilted[4] = 0.2;  // joint5: the parcel swings 4-5 cm towards the wall, the hand 2 cm
+  const CheckState::Response before = check(home, 10);
+  ASSERT_FALSE(before.valid) << "the parcel sits on the fingers";
+  for (const auto& c : before.contacts) EXPECT_EQ(c.body_b, "parcel");
+  auto attach = [&](const std::string& id, const std::string& link, std::vector<std::string> touch) {
+    AttachObject::Request r;
+    r.id = id, r.link = link, r.touch_links = std::move(touch);
+    return call<AttachObject>("attach_object", r).response.error;
+  };
+  auto detach = [&](const std::string& id, bool remove) {
+    DetachObject::Request r;
+    r.id = id, r.remove = remove;
+    return call<DetachObject>("detach_object", r).response.error;
+  };
+  // Bad requests are refused by name and change nothing.
+  EXPECT_NE(attach("parcel", "no_link", {}).find("no link 'no_link'"), std::string::npos);
+  EXPECT_NE(attach("parcel", "hand", {"no_finger"}).find("'no_finger'"), std::string::npos);
+  EXPECT_NE(attach("ghost", "hand", {}).find("no collision object 'ghost'"), std::string::npos);
+  EXPECT_NE(attach("link3", "hand", {}).find("link's name"), std::string::npos);
+  EXPECT_NE(detach("parcel", false).find("no attached object 'parcel'"), std::string::npos);
+  EXPECT_FALSE(check(home).valid);
+  ASSERT_EQ(attach("parcel", "hand", {"finger_left", "finger_right"}), "");
+  EXPECT_NE(call<SetCollisionObject>("set_collision_object", box_object("parcel", Vec3(0.1, 0.1, 0.1), Vec3(1.0, 1.0, 1.0))).response.error.find("attached"),
+            std::string::npos);
+  EXPECT_TRUE(check(home).valid) << "carried: the fingers may touch it, and it left the world";
+  const CheckState::Response swung = check(tilted, 10);
+  ASSERT_FALSE(swung.valid) << "tilted, the carried parcel meets the wall";
+  ASSERT_FALSE(swung.contacts.empty());
+  for (const auto& c : swung.contacts) {
+    EXPECT_EQ(c.body_a, "parcel");
+    EXPECT_EQ(c.body_b, "wall");
+  }
+  CheckMotion::Request motion;
+  for (const std::string& name : checker().model().variable_names()) motion.joint_names.push_back(name);
+  motion.start = home, motion.goal = tilted;
+  const CheckMotion::Response moved = call<CheckMotion>("check_motion", motion).response;
+  EXPECT_EQ(moved.error, "");
+  EXPECT_FALSE(moved.valid) << "the certified motion carries the parcel into the wall";
+  EXPECT_GT(moved.last_valid_fraction, 0.0);
+  CastRay::Request ray;
+  ray.origin.z = 2.0, ray.direction.z = -1.0;
+  const CastRay::Response down = call<CastRay>("cast_ray", ray).response;
+  ASSERT_TRUE(down.hit);
+  EXPECT_EQ(down.body, "parcel");
+  EXPECT_NEAR(down.point.z, 1.42, 1e-6);
+  // Detached: back in the world where the hand holds it (at home, where it was taken from).
+  ASSERT_EQ(detach("parcel", false), "");
+  EXPECT_EQ(call<CastRay>("cast_ray", ray).response.body, "parcel");
+  EXPECT_FALSE(check(home).valid) << "the fingers touch it in the world again";
+  // Attached with its geometry in the hand's frame, then removed altogether.
+  AttachObject::Request made;
+  made.id = "cup", made.link = "hand";
+  made.primitives = {solid(shape_msgs::SolidPrimitive::CYLINDER, {0.1, 0.03})};
+  made.primitive_poses = {pose_at(Vec3(0.0, 0.0, 0.3))};
+  made.pose.orientation.w = 1.0;
+  ASSERT_EQ(call<AttachObject>("attach_object", made).response.error, "");
+  ray.origin.x = 0.0, ray.origin.y = 0.0;
+  const CastRay::Response cup = call<CastRay>("cast_ray", ray).response;
+  EXPECT_EQ(cup.body, "cup");
+  EXPECT_NEAR(cup.point.z, 1.25 + 0.35, 1e-6);
+  ASSERT_EQ(detach("cup", true), "");
+  EXPECT_EQ(call<CastRay>("cast_ray", ray).response.body, "parcel");
 }
 
 }  // namespace

@@ -13,7 +13,7 @@ namespace {
 
 const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree",
-                                 "load_scene", "save_scene", "set_allowed_collisions"};
+                                 "load_scene", "save_scene", "set_allowed_collisions", "attach_object", "detach_object"};
 
 bool node_is_registered(const std::string& name) {
   std::vector<std::string> nodes;

@@ -103,6 +103,21 @@ class PythonClient(unittest.TestCase):
         finally:
             self.client.remove_object("py_wrap")
 
+    def test_attached_object(self):
+        # A ball carried 0.3 m above the demo arm's hand (its frame at z = 1.25 m at HOME) is hit
+        # by a ray from above as "py_ball"; put back into the world, it stays where it was carried.
+        self.client.attach_object("py_ball", "hand", primitives=[(SolidPrimitive.SPHERE, [0.05], pose((0.0, 0.0, 0.3)))])
+        try:
+            ray = self.client.cast_ray((0.0, 0.0, 2.5), (0.0, 0.0, -1.0))
+            self.assertEqual(ray.body, "py_ball")
+            self.assertAlmostEqual(ray.point.z, 1.60, places=6)
+            self.client.detach_object("py_ball")
+            self.assertEqual(self.client.cast_ray((0.0, 0.0, 2.5), (0.0, 0.0, -1.0)).body, "py_ball")
+            with self.assertRaises(CheckerError):
+                self.client.detach_object("py_ball")  # no longer carried
+        finally:
+            self.client.remove_object("py_ball")
+
 
 if __name__ == "__main__":
     rostest.rosrun("bvh_collision", "python_client", PythonClient)

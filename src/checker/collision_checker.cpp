@@ -211,6 +211,7 @@ bool CollisionChecker::split_fixed_links(std::vector<char>& moving, std::vector<
 std::vector<char> CollisionChecker::check_batch(const double* states, std::size_t count, const Environment* env,
                                                 const BatchRequest& request) const {
   if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
+  if (env != nullptr) require_carried(*env);
   check_limit("a batch with its configurations", double(count), m_->limits().batch_states, "max_batch_states");
   std::vector<char> out(count, 0);
   SelfCollisionRequest self;

@@ -268,6 +268,7 @@ MotionResult motion_certified(const CollisionChecker& checker, Segment& segment,
 
 MotionResult CollisionChecker::check_motion(const double* start, const double* goal, const Environment& env,
                                             const MotionRequest& request) const {
+  require_carried(env);
   if (!std::isfinite(request.resolution) || request.resolution < 0.0) {
     throw std::invalid_argument("motion check: resolution must be finite and >= 0");
   }

@@ -61,6 +61,9 @@ CheckerPlanningContext::CheckerPlanningContext(CollisionChecker checker_, std::s
                                 model.name() + "' has " + std::to_string(model.variable_count()) + " variables");
   }
   if (!environment) throw std::invalid_argument("no environment to plan in");
+  // The objects the environment has the robot carry, carried in every check (a checker given
+  // carrying them already is used as it is).
+  if (!checker.carries(*environment)) checker = checker.carrying(*environment);
   for (const std::string& name : group.names) {
     const auto& all = model.variable_names();
     const auto it = std::find(all.begin(), all.end(), name);

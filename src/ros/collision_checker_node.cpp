@@ -19,7 +19,8 @@ namespace {
 
 const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree",
-                                 "load_scene", "save_scene", "set_allowed_collisions"};
+                                 "load_scene", "save_scene", "set_allowed_collisions", "attach_object",
+                                 "detach_object"};
 
 }  // namespace
 
@@ -207,6 +208,8 @@ void CollisionCheckerNode::advertise() {
   services_.push_back(
       private_nh_.advertiseService("set_allowed_collisions", &CollisionCheckerNode::set_allowed_collisions, this));
   services_.push_back(private_nh_.advertiseService("save_scene", &CollisionCheckerNode::save_scene, this));
+  services_.push_back(private_nh_.advertiseService("attach_object", &CollisionCheckerNode::attach_object, this));
+  services_.push_back(private_nh_.advertiseService("detach_object", &CollisionCheckerNode::detach_object, this));
 
   joint_state_sub_ = nh_.subscribe("joint_states", 10, &CollisionCheckerNode::on_joint_state, this,
                                    ros::TransportHints().tcpNoDelay());
@@ -350,6 +353,25 @@ geometry_msgs::TransformStamped CollisionCheckerNode::latest_transform(const std
     }
   }
   return t;
+}
+
+std::shared_ptr<const CollisionChecker> CollisionCheckerNode::checker_for(const std::shared_ptr<const Environment>& env) const {
+  std::shared_ptr<const CollisionChecker> base = checker();
+  if (env->attached().empty()) return base;
+  std::lock_guard<std::mutex> lock(carried_mutex_);
+  // (Built under the lock: queries that come together for one new attachment build it once.)
+  if (carried_.base != base || carried_.attached != env->attached_list() || carried_.allowed != env->allowed_collisions_shared()) {
+    auto carried = std::make_shared<const CollisionChecker>(base->carrying(*env));
+    carried_ = Carried{std::move(base), env->attached_list(), env->allowed_collisions_shared(), std::move(carried)};
+  }
+  return carried_.checker;
+}
+
+Transform CollisionCheckerNode::link_in_world(int link) const {
+  const std::vector<double> state = current_state_for({});
+  std::vector<Transform> poses;
+  forward_kinematics(checker()->model(), state.data(), poses);
+  return root_pose(ros::Time(0)) * poses[static_cast<std::size_t>(link)];
 }
 
 Transform CollisionCheckerNode::root_pose(const ros::Time& stamp, const ros::Duration& timeout) const {

@@ -130,7 +130,9 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
     return;
   }
   const std::vector<double>& state = *at_stamp;
-  const FilteredScan filtered = checker()->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
+  // The robot with what it carries: points on a carried object are not obstacles either.
+  const FilteredScan filtered =
+      checker_for(store_->snapshot())->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   });
@@ -176,6 +178,9 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
     if (req.id.find('#') != std::string::npos) {
       throw RequestError("collision object id '" + req.id + "' contains '#' (it names an object's shapes: id#k)");
     }
+    if (store_->snapshot()->find_attached(req.id) != nullptr) {
+      throw RequestError("object '" + req.id + "' is attached to a link: detach_object it first");
+    }
     const Transform pose = frame_to_world(req.frame_id) * to_transform(req.pose);
     // Meshes are read before the environment is locked: a slow file delays no other change.
     const std::vector<PlacedShape> shapes = object_shapes(req, resolver_);
@@ -190,6 +195,7 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
       parts.push_back(make_collision_object(name, shapes[k].shape, pose * shapes[k].pose));
     }
     store_->modify([&](Environment& env) {
+      if (env.find_attached(req.id) != nullptr) throw RequestError("object '" + req.id + "' is attached to a link: detach_object it first");
       remove_object_shapes(env, req.id);  // a replaced object may have had more or fewer shapes
       for (CollisionObject& part : parts) env.add_object(std::move(part));
     });
@@ -250,6 +256,9 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
       else entries.set_entry(e.a, e.b, e.allowed);
     }
     store_->modify([&](Environment& env) {
+      for (const SceneObject& o : scene.objects) {
+        if (env.find_attached(o.id) != nullptr) throw RequestError(req.path + ": object '" + o.id + "' is attached to a link: detach_object it first");
+      }
       if (!req.merge) env.clear_objects();
       for (const SceneObject& o : scene.objects) remove_object_shapes(env, o.id);
       for (CollisionObject& part : parts) env.add_object(std::move(part));
@@ -302,7 +311,7 @@ bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request&
         const bool object = std::any_of(env.objects().begin(), env.objects().end(), [&](const CollisionObject& o) {
           return object_name(o.id) == name;
         });
-        if (!object && !is_link(name) && std::find(unknown.begin(), unknown.end(), name) == unknown.end()) unknown.push_back(name);
+        if (!object && !is_link(name) && env.find_attached(name) == nullptr && std::find(unknown.begin(), unknown.end(), name) == unknown.end()) unknown.push_back(name);
       }
     });
     if (!unknown.empty()) {
@@ -320,6 +329,96 @@ bool CollisionCheckerNode::save_scene(SaveScene::Request& req, SaveScene::Respon
     } catch (const SceneFileError& e) {
       throw RequestError(e.what());
     }
+  });
+}
+
+// A new attached object's shapes, built in the link's frame (`link_world`: the link in world_frame now).
+std::vector<CollisionObject> CollisionCheckerNode::attached_shapes(const AttachObject::Request& req, const Transform& link_world) const {
+  SetCollisionObject::Request geometry;
+  geometry.id = req.id;
+  geometry.primitives = req.primitives;
+  geometry.primitive_poses = req.primitive_poses;
+  geometry.meshes = req.meshes;
+  geometry.mesh_poses = req.mesh_poses;
+  geometry.mesh_resources = req.mesh_resources;
+  geometry.mesh_resource_scales = req.mesh_resource_scales;
+  geometry.mesh_resource_poses = req.mesh_resource_poses;
+  const std::vector<PlacedShape> shapes = object_shapes(geometry, resolver_);
+  double triangles = 0.0;
+  for (const PlacedShape& s : shapes) triangles += static_cast<double>(s.shape.triangle_count());
+  check_limit("attached object '" + req.id + "' with its triangles", triangles, params_.limits.object_triangles,
+              "max_object_triangles");
+  const bool in_link = req.frame_id.empty() || req.frame_id == req.link;
+  const Transform pose = in_link ? to_transform(req.pose) : relative_transform(link_world, frame_to_world(req.frame_id) * to_transform(req.pose));
+  std::vector<CollisionObject> out;
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    const std::string name = shapes.size() == 1 ? req.id : req.id + "#" + std::to_string(k);
+    out.push_back(make_collision_object(name, shapes[k].shape, pose * shapes[k].pose));
+  }
+  return out;
+}
+
+bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObject::Response& res) {
+  return serve("attach_object", res, [&] {
+    if (req.id.empty() || req.id.find('#') != std::string::npos || req.id == "octree") {
+      throw RequestError("attached object id '" + req.id + "' must be non-empty, without '#', and not 'octree'");
+    }
+    const RobotModel& model = checker()->model();  // (the node's checker lives as long as the node)
+    const int link = model.link_index(req.link);
+    if (link < 0) throw RequestError("no link '" + req.link + "' to attach '" + req.id + "' to");
+    if (model.link_index(req.id) >= 0) throw RequestError("attached object id '" + req.id + "' is a link's name");
+    for (const std::string& t : req.touch_links) {
+      if (model.link_index(t) < 0) throw RequestError("touch link '" + t + "' is not a link");
+    }
+    const Transform link_world = link_in_world(link);
+    const bool given = !req.primitives.empty() || !req.meshes.empty() || !req.mesh_resources.empty();
+    AttachedBody body{req.id, req.link, req.touch_links, given ? attached_shapes(req, link_world) : std::vector<CollisionObject>{}};
+    const std::shared_ptr<const CollisionChecker> base = checker();
+    std::shared_ptr<const CollisionChecker> carried;
+    store_->modify([&](Environment& env) {
+      if (!given) {
+        for (const CollisionObject& o : env.objects()) {
+          if (object_name(o.id) != req.id) continue;
+          body.shapes.push_back(o);
+          body.shapes.back().pose = relative_transform(link_world, o.pose);
+        }
+        if (body.shapes.empty()) {
+          throw RequestError("no collision object '" + req.id + "' in the world to attach (give its geometry to attach a new one)");
+        }
+      }
+      remove_object_shapes(env, req.id);
+      env.attach(std::move(body));
+      // Built here, so that a robot that cannot carry it (a limit) changes nothing; kept for the queries.
+      try {
+        carried = std::make_shared<const CollisionChecker>(base->carrying(env));
+      } catch (const std::invalid_argument& e) {
+        throw RequestError(e.what());
+      }
+    });
+    const std::shared_ptr<const Environment> env = store_->snapshot();
+    std::lock_guard<std::mutex> lock(carried_mutex_);
+    if (env->attached_list() == carried_.attached) return;  // (a later change was kept already)
+    carried_ = Carried{base, env->attached_list(), env->allowed_collisions_shared(), std::move(carried)};
+  });
+}
+
+bool CollisionCheckerNode::detach_object(DetachObject::Request& req, DetachObject::Response& res) {
+  return serve("detach_object", res, [&] {
+    const AttachedBody* now = store_->snapshot()->find_attached(req.id);
+    if (now == nullptr) throw RequestError("no attached object '" + req.id + "'");
+    const Transform link_world = req.remove ? Transform::Identity() : link_in_world(checker()->model().link_index(now->link));
+    store_->modify([&](Environment& env) {
+      const AttachedBody* body = env.find_attached(req.id);
+      if (body == nullptr) throw RequestError("no attached object '" + req.id + "'");
+      if (body->link != now->link) throw RequestError("object '" + req.id + "' was attached again meanwhile: detach it again");
+      std::vector<CollisionObject> shapes = body->shapes;
+      env.detach(req.id);
+      if (req.remove) return;
+      for (CollisionObject& o : shapes) {
+        o.pose = link_world * o.pose;
+        env.add_object(std::move(o));
+      }
+    });
   });
 }
 

@@ -178,6 +178,7 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("octree memory (bytes)", std::to_string(env->octree().memory_bytes())),
       kv("octree resolution (m)", std::to_string(env->octree().resolution())),
       kv("collision objects", std::to_string(env->objects().size())),
+      kv("attached objects", std::to_string(env->attached().size())),
   };
   diagnostic_msgs::DiagnosticStatus queries;
   queries.name = name + ": queries";

@@ -64,11 +64,13 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
   const bool need_pose = checks.environment || req.max_contacts > 0;
   const Transform root = need_pose ? root_pose(ros::Time(0)) : Transform::Identity();
   res.min_distance = kNaN;
-  if (checks.self) self_part(state.data(), req, tolerance, root, res);
+  // One snapshot and the checker that carries its attached objects, for the whole answer (the
+  // node may swap in another: a proxy level built, an object attached).
   const std::shared_ptr<const Environment> env = store_->snapshot();
-  if (checks.environment) environment_part(state.data(), *env, req, tolerance, root, res);
+  const std::shared_ptr<const CollisionChecker> checker = checker_for(env);
+  if (checks.self) self_part(*checker, state.data(), req, tolerance, root, res);
+  if (checks.environment) environment_part(*checker, state.data(), *env, req, tolerance, root, res);
   if (checks.environment && req.report_allowed) {
-    const std::shared_ptr<const CollisionChecker> checker = this->checker();
     for (const auto& [link, object] : allowed_object_contacts(*checker, state.data(), *env, root)) {
       res.allowed_links.push_back(checker->model().links()[link].name);
       res.allowed_objects.push_back(object);
@@ -80,18 +82,15 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
   if (!res.contacts.empty()) publish_contacts(res.contacts);
 }
 
-void CollisionCheckerNode::self_part(const double* state, const CheckState::Request& req, double tolerance,
-                                     const Transform& root, CheckState::Response& res) {
+void CollisionCheckerNode::self_part(const CollisionChecker& checker, const double* state, const CheckState::Request& req,
+                                     double tolerance, const Transform& root, CheckState::Response& res) {
   SelfCollisionRequest request;
   request.tolerance = tolerance;
   request.all_pairs = req.max_contacts > 0;
   request.max_contacts = req.max_contacts;
   request.distance = req.distance;
-  // One checker for the whole answer: the node may swap in another (a proxy level built), and
-  // `links` must outlive this function's use of it.
-  const std::shared_ptr<const CollisionChecker> checker = this->checker();
-  const SelfCollisionResult result = checker->check_self(state, request);
-  const auto& links = checker->model().links();
+  const SelfCollisionResult result = checker.check_self(state, request);
+  const auto& links = checker.model().links();
   res.self_collision = result.collision;
   for (const LinkContact& lc : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;
@@ -110,7 +109,7 @@ void CollisionCheckerNode::self_part(const double* state, const CheckState::Requ
   }
 }
 
-void CollisionCheckerNode::environment_part(const double* state, const Environment& env,
+void CollisionCheckerNode::environment_part(const CollisionChecker& checker, const double* state, const Environment& env,
                                             const CheckState::Request& req, double tolerance, const Transform& root,
                                             CheckState::Response& res) {
   EnvironmentRequest request;
@@ -118,11 +117,8 @@ void CollisionCheckerNode::environment_part(const double* state, const Environme
   request.all_links = req.max_contacts > 0;
   request.distance = req.distance;
   request.root_pose = root;
-  // One checker for the whole answer: the node may swap in another (a proxy level built), and
-  // `links` must outlive this function's use of it.
-  const std::shared_ptr<const CollisionChecker> checker = this->checker();
-  const EnvironmentResult result = checker->check_environment(state, env, request);
-  const auto& links = checker->model().links();
+  const EnvironmentResult result = checker.check_environment(state, env, request);
+  const auto& links = checker.model().links();
   res.environment_collision = result.collision;
   for (const EnvironmentContact& ec : result.contacts) {
     if (res.contacts.size() >= req.max_contacts) break;
@@ -196,12 +192,10 @@ bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::
     request.self = checks.self;
     request.environment = checks.environment;
     request.tolerance = tolerance;
-    std::shared_ptr<const Environment> env;
-    if (checks.environment) {
-      request.root_pose = root_pose(ros::Time(0));
-      env = store_->snapshot();
-    }
-    const std::vector<char> colliding = checker()->check_batch(states.data(), rows, env.get(), request);
+    if (checks.environment) request.root_pose = root_pose(ros::Time(0));
+    const std::shared_ptr<const Environment> env = store_->snapshot();  // its attached objects count in self checks too
+    const std::vector<char> colliding =
+        checker_for(env)->check_batch(states.data(), rows, checks.environment ? env.get() : nullptr, request);
     states_checked_ += rows;
     res.valid.resize(rows);
     for (std::size_t r = 0; r < rows; ++r) res.valid[r] = !colliding[r];
@@ -235,7 +229,7 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     if (checks.environment) request.root_pose = root_pose(ros::Time(0));
     const std::shared_ptr<const Environment> env = store_->snapshot();
     const MotionResult result = req.resolution > 0.0
-        ? checker()->check_motion(start.data(), goal.data(), *env, request)
+        ? checker_for(env)->check_motion(start.data(), goal.data(), *env, request)
         : scene_checker(env, checks.self, checks.environment, request.root_pose)->check_motion(start.data(), goal.data(), true);
     res.valid = result.valid;
     res.last_valid_fraction = result.last_valid_fraction;
@@ -248,7 +242,7 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
 
 std::shared_ptr<const SceneChecker> CollisionCheckerNode::scene_checker(const std::shared_ptr<const Environment>& env, bool self,
                                                                          bool environment, const Transform& root) const {
-  const std::shared_ptr<const CollisionChecker> now = checker();
+  const std::shared_ptr<const CollisionChecker> now = checker_for(env);
   std::lock_guard<std::mutex> lock(scene_mutex_);
   const auto same = [&](const SceneChecker& s) {
     const SceneCheckOptions& o = s.options();
@@ -310,11 +304,12 @@ bool CollisionCheckerNode::cast_ray(CastRay::Request& req, CastRay::Response& re
     const Vec3 origin(req.origin.x, req.origin.y, req.origin.z);
     const Vec3 direction(req.direction.x, req.direction.y, req.direction.z);
     const std::vector<double> state = current_state_for({});  // every link where joint_states put it
-    const RayCastResult hit =
-        checker()->cast_ray(state.data(), *store_->snapshot(), origin, direction, req.max_range, root_pose(ros::Time(0)));
+    const std::shared_ptr<const Environment> env = store_->snapshot();
+    const std::shared_ptr<const CollisionChecker> checker = checker_for(env);  // a carried object is hit as a link
+    const RayCastResult hit = checker->cast_ray(state.data(), *env, origin, direction, req.max_range, root_pose(ros::Time(0)));
     res.hit = hit.hit;
     if (!hit.hit) return;
-    res.body = hit.link >= 0 ? checker()->model().links()[hit.link].name : hit.octree ? "octree" : hit.object;
+    res.body = hit.link >= 0 ? checker->model().links()[hit.link].name : hit.octree ? "octree" : hit.object;
     res.point = point_msg(hit.point);
     res.distance = hit.distance;
   });

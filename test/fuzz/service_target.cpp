@@ -31,6 +31,8 @@ struct NodeFuzzAccess {
     if constexpr (std::is_same_v<Request, SetCollisionObject::Request>) return n.set_collision_object(req, res);
     if constexpr (std::is_same_v<Request, RemoveCollisionObject::Request>) return n.remove_collision_object(req, res);
     if constexpr (std::is_same_v<Request, SetAllowedCollisions::Request>) return n.set_allowed_collisions(req, res);
+    if constexpr (std::is_same_v<Request, AttachObject::Request>) return n.attach_object(req, res);
+    if constexpr (std::is_same_v<Request, DetachObject::Request>) return n.detach_object(req, res);
   }
 };
 
@@ -231,7 +233,31 @@ std::string answer(ByteReader& in) {
       for (const std::string& uri : req.mesh_resources) {
         if (res.error.empty() && uri.find('\0') != std::string::npos) return "a mesh URI with a NUL inside was loaded";
       }
-      return error_problem(res);
+      if (std::string problem = error_problem(res); !problem.empty() || in.remaining() == 0) return problem;
+      // Bytes left: that object (or another name) attached to a link, with its geometry or the
+      // world's, then detached back or removed.
+      AttachObject::Request attach;
+      attach.id = in.name(kNames);
+      attach.link = in.name(kNames);
+      attach.touch_links.resize(in.count(2));
+      for (auto& n : attach.touch_links) n = in.name(kNames);
+      if (in.byte() & 1) {
+        attach.frame_id = req.frame_id;
+        attach.pose = req.pose;
+        attach.primitives = req.primitives;
+        attach.primitive_poses = req.primitive_poses;
+        attach.meshes = req.meshes;
+        attach.mesh_poses = req.mesh_poses;
+      }
+      AttachObject::Response attached;
+      NodeFuzzAccess::call(attach, attached);
+      if (std::string problem = error_problem(attached); !problem.empty()) return problem;
+      DetachObject::Request detach;
+      detach.id = in.byte() & 1 ? attach.id : in.name(kNames);
+      detach.remove = in.byte() & 1;
+      DetachObject::Response detached;
+      NodeFuzzAccess::call(detach, detached);
+      return error_problem(detached);
     }
     default: {
       RemoveCollisionObject::Request req;

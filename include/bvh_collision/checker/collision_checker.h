@@ -50,6 +50,18 @@ class CollisionChecker {
   CollisionChecker carrying(const Environment& env) const {
     return env.attached().empty() ? *this : carrying(env.attached(), env.allowed_collisions());
   }
+  // Does this checker carry every object `env` has attached (a carried link named by its id)?
+  // The queries that take an environment (check_environment, check_batch, check_motion,
+  // cast_ray) throw std::invalid_argument when it does not: a carried object left out would be a
+  // collision missed. SceneChecker and the planning context carry them themselves.
+  bool carries(const Environment& env) const {
+    if (env.attached().empty()) return true;
+    for (const AttachedBody& body : env.attached()) {
+      const int l = model().link_index(body.id);
+      if (l < static_cast<int>(m_->robot_link_count())) return false;
+    }
+    return true;
+  }
 
   const RobotModel& model() const { return m_->robot(); }
   const AllowedCollisionMatrix& acm() const { return m_->acm(); }
@@ -148,6 +160,11 @@ class CollisionChecker {
   std::size_t built_meshes() const { return m_->meshes().size(); }
 
  private:
+  void require_carried(const Environment& env) const {
+    if (!carries(env)) {
+      throw std::invalid_argument("the environment has attached objects this checker does not carry: query with checker.carrying(env)");
+    }
+  }
   friend class SceneChecker;  // checker/scene_checker.h: the exact tests behind its proxies
 
   bool pair_collides(int a, int b, const std::vector<Transform>& poses, const SelfCollisionRequest& request,

@@ -111,6 +111,8 @@ class Environment {
   // the environment's checks skip the allowed (link, object) pairs. Kept by name, so an entry
   // holds for an object added later, as MoveIt's do.
   const NamedAllowedCollisions& allowed_collisions() const { return *allowed_; }
+  // The same, shared: unchanged between snapshots until the allowances change.
+  const std::shared_ptr<const NamedAllowedCollisions>& allowed_collisions_shared() const { return allowed_; }
   void set_allowed_collisions(NamedAllowedCollisions allowed) {
     allowed_ = std::make_shared<const NamedAllowedCollisions>(std::move(allowed));
   }

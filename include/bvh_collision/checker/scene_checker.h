@@ -54,7 +54,9 @@ struct SceneCheckOptions {
 class SceneChecker {
  public:
   // Throws std::invalid_argument for a null environment, a bad root pose or tolerance. Builds the
-  // object grid, and the octree's distance field when there is an octree and none is kept.
+  // object grid, and the octree's distance field when there is an octree and none is kept. The
+  // objects the environment has attached are carried (CollisionChecker::carrying) unless
+  // `checker` carries them already.
   SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment, const SceneCheckOptions& options = {});
 
   // Boolean: is `state` (model().variable_count() values) in collision at the tolerance?

@@ -32,6 +32,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/CheckMotion.h"
@@ -39,6 +40,7 @@
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
 #include "bvh_collision/ClearBox.h"
+#include "bvh_collision/DetachObject.h"
 #include "bvh_collision/RemoveCollisionObject.h"
 #include "bvh_collision/LoadScene.h"
 #include "bvh_collision/SaveOctree.h"
@@ -149,6 +151,14 @@ class CollisionCheckerNode {
   // The checker queries use now: proxy levels join it as they are built. Hold the pointer while
   // using references into it (a swap may free the old one).
   std::shared_ptr<const CollisionChecker> checker() const { return std::atomic_load(&checker_); }
+  // The checker a query on snapshot `env` uses: checker() carrying env's attached objects
+  // (CollisionChecker::carrying), built once per attachment and proxy level and kept; checker()
+  // itself when nothing is attached. A query takes the snapshot first and this from it, so it
+  // sees an object on the link or in the world, never both or neither.
+  std::shared_ptr<const CollisionChecker> checker_for(const std::shared_ptr<const Environment>& env) const;
+  // Where link `link` is in world_frame now (joint_states, tf2): attaching and detaching fix an
+  // object's pose between the two frames with it.
+  Transform link_in_world(int link) const;
 
   // The robot's state and pose (collision_checker_node.cpp).
   void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg);
@@ -181,10 +191,10 @@ class CollisionCheckerNode {
                                                     bool environment, const Transform& root) const;
   bool cast_ray(CastRay::Request& req, CastRay::Response& res);
   void answer_check_state(const CheckState::Request& req, CheckState::Response& res);
-  void self_part(const double* state, const CheckState::Request& req, double tolerance, const Transform& root,
-                 CheckState::Response& res);
-  void environment_part(const double* state, const Environment& env, const CheckState::Request& req,
-                        double tolerance, const Transform& root, CheckState::Response& res);
+  void self_part(const CollisionChecker& checker, const double* state, const CheckState::Request& req, double tolerance,
+                 const Transform& root, CheckState::Response& res);
+  void environment_part(const CollisionChecker& checker, const double* state, const Environment& env,
+                        const CheckState::Request& req, double tolerance, const Transform& root, CheckState::Response& res);
   double request_tolerance(double requested) const;
   // Runs `handler` with the request timed under `name`; a RequestError (or any exception) becomes
   // the response's error, so no request can take the node down.
@@ -203,6 +213,9 @@ class CollisionCheckerNode {
   bool load_scene(LoadScene::Request& req, LoadScene::Response& res);
   bool save_scene(SaveScene::Request& req, SaveScene::Response& res);
   bool set_allowed_collisions(SetAllowedCollisions::Request& req, SetAllowedCollisions::Response& res);
+  bool attach_object(AttachObject::Request& req, AttachObject::Response& res);
+  bool detach_object(DetachObject::Request& req, DetachObject::Response& res);
+  std::vector<CollisionObject> attached_shapes(const AttachObject::Request& req, const Transform& link_world) const;
 
   // Output (node_output.cpp).
   void publish_occupied_cells(const ros::WallTimerEvent&);
@@ -224,6 +237,16 @@ class CollisionCheckerNode {
   std::unique_ptr<EnvironmentStore> store_;
   mutable std::mutex scene_mutex_;
   mutable std::shared_ptr<const SceneChecker> scene_;  // the last scene_checker(), kept for the next
+  // The last checker_for(): the checker it carries the attached objects on, the snapshot's list
+  // and allowed collisions it was built for (held, so that their addresses stay theirs), and it.
+  struct Carried {
+    std::shared_ptr<const CollisionChecker> base;
+    std::shared_ptr<const std::vector<AttachedBody>> attached;
+    std::shared_ptr<const NamedAllowedCollisions> allowed;
+    std::shared_ptr<const CollisionChecker> checker;
+  };
+  mutable std::mutex carried_mutex_;
+  mutable Carried carried_;
 
   mutable std::mutex state_mutex_;
   std::vector<double> state_;  // from joint_states; neutral_state() until the first message
