@@ -163,13 +163,8 @@ void RobotCollisionModel::add_body(const AttachedBody& body, const NamedAllowedC
   for (const CollisionObject& o : body.shapes) {
     LinkShape s;
     s.origin = o.pose;
-    if (o.mesh != nullptr) {
-      s.mesh = static_cast<int>(meshes_.size());
-      meshes_.push_back(*o.mesh);
-      hulls_.push_back(*o.hull);
-    } else {
-      s.primitive = o.primitive;
-    }
+    s.mesh = append_shape(shape_of(o), meshes_, hulls_);
+    s.primitive = o.primitive;
     shapes.push_back(s);
   }
   shapes_.push_back(std::move(shapes));

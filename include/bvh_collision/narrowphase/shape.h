@@ -35,6 +35,16 @@ inline ShapeRef shape_ref(const std::vector<Bvh<Obb>>& meshes, const std::vector
   return ShapeRef{&meshes[static_cast<std::size_t>(index)], &hulls[static_cast<std::size_t>(index)], Primitive{}};
 }
 
+// The inverse of shape_ref: `shape` kept in such tables, its hierarchy and hull copied to the
+// end of `meshes` and `hulls` (their index returned), or -1 for a primitive (which the caller
+// keeps itself).
+inline int append_shape(const ShapeRef& shape, std::vector<Bvh<Obb>>& meshes, std::vector<ConvexHull>& hulls) {
+  if (shape.mesh == nullptr) return -1;
+  meshes.push_back(*shape.mesh);
+  hulls.push_back(*shape.hull);
+  return static_cast<int>(meshes.size()) - 1;
+}
+
 // A shape placed in its body's frame.
 struct BodyShape {
   ShapeRef shape;
