@@ -7,6 +7,7 @@
 #include <ros/topic.h>
 
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <map>
 #include <mutex>
@@ -220,6 +221,28 @@ inline SetCollisionObject::Request box_object(const std::string& id, const Vec3&
   r.pose.position.z = centre.z();
   r.pose.orientation.w = 1.0;
   return r;
+}
+
+// The points of a box's surface (edge lengths `size`, placed at `pose`), every `step` or a little
+// less along each face: what a camera's cloud of it holds.
+inline std::vector<Vec3> box_surface(const Transform& pose, const Vec3& size, double step = 0.01) {
+  std::vector<Vec3> out;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const int nu = int(std::ceil(size[u] / step)), nv = int(std::ceil(size[v] / step));
+    for (const double side : {-0.5, 0.5}) {
+      for (int i = 0; i <= nu; ++i) {
+        for (int j = 0; j <= nv; ++j) {
+          Vec3 p = Vec3::Zero();
+          p[axis] = side * size[axis];
+          p[u] = (double(i) / nu - 0.5) * size[u];
+          p[v] = (double(j) / nv - 0.5) * size[v];
+          out.push_back(pose * p);
+        }
+      }
+    }
+  }
+  return out;
 }
 
 // Random configurations until `want(state)` holds; fails after `tries`.

@@ -33,21 +33,8 @@ geometry_msgs::TransformStamped translation(const std::string& parent, const std
 // The demo's pillar (0.12 x 0.12 x 0.8 m at (0.45, 0.35, 0.4)) as the camera sees its faces, every 1 cm.
 std::vector<ScanPoint> pillar_cloud() {
   std::vector<ScanPoint> points;
-  const Vec3 centre(0.45, 0.35, 0.4), size(0.12, 0.12, 0.8);
-  for (int axis = 0; axis < 3; ++axis) {
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const int nu = int(std::ceil(size[u] / 0.01)), nv = int(std::ceil(size[v] / 0.01));
-    for (const double side : {-0.5, 0.5}) {
-      for (int i = 0; i <= nu; ++i) {
-        for (int j = 0; j <= nv; ++j) {
-          Vec3 p = centre;
-          p[axis] += side * size[axis];
-          p[u] += (double(i) / nu - 0.5) * size[u];
-          p[v] += (double(j) / nv - 0.5) * size[v];
-          points.push_back((p - kCamera).cast<float>());
-        }
-      }
-    }
+  for (const Vec3& p : box_surface(Transform::Translation(Vec3(0.45, 0.35, 0.4)), Vec3(0.12, 0.12, 0.8))) {
+    points.push_back((p - kCamera).cast<float>());
   }
   return points;
 }
