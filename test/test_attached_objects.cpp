@@ -15,6 +15,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -312,6 +313,44 @@ TEST(AttachedObjects, SelfFilterAndRaysSeeTheCarriedObject) {
   const RayCastResult ray = c.ours.cast_ray(q.data(), empty, sensor, (centre - sensor).normalized(), 0.0);
   ASSERT_TRUE(ray.hit);
   EXPECT_EQ(c.ours.model().links()[ray.link].name, "held");
+}
+
+// MoveIt's (object, object) entries: the carried object may rest on a world object, or touch
+// another carried one, when an entry names the two.
+TEST(AttachedObjects, EntriesBetweenTwoObjectsHoldForACarriedOne) {
+  const CollisionChecker base = test::panda_as_moveit();
+  std::vector<double> q(base.model().variable_count(), 0.0);
+  q[3] = -1.5, q[5] = 1.5;
+  std::vector<Transform> poses;
+  forward_kinematics(base.model(), q.data(), poses);
+  const Vec3 ball = poses[base.model().link_index("panda_hand")] * held_shapes()[1].xyz;
+  Environment env(0.05);
+  env.add_object("ball", ObjectShape::sphere(0.01), Transform::Translation(ball));  // inside the held sphere
+  env.attach(held_body(kFingers));
+  AttachedBody second{"second", "panda_link7", {}, {make_collision_object("second", ObjectShape::sphere(0.05), Transform::Translation(Vec3(0.0, 0.0, 0.347)))}};
+  env.attach(second);  // 0.24 m down the hand: 1 cm into the held sphere
+  const auto answers = [&] {
+    const CollisionChecker carried = base.carrying(env);
+    const SceneChecker scene(base, std::make_shared<const Environment>(env));
+    EnvironmentRequest request;
+    request.all_links = true;
+    SelfCollisionRequest self;
+    self.all_pairs = true;
+    return std::make_tuple(named(carried, carried.check_self(q.data(), self).colliding_pairs),
+                           carried.check_environment(q.data(), env, request).contacts.size(), scene.collides(q.data()));
+  };
+  const auto [pairs, contacts, collides] = answers();
+  EXPECT_EQ(pairs, (std::set<std::pair<std::string, std::string>>{{"held", "second"}}));
+  EXPECT_EQ(contacts, 1u);
+  EXPECT_TRUE(collides);
+  NamedAllowedCollisions allowed;
+  allowed.set_entry("held", "ball", true);
+  allowed.set_entry("second", "held", true);
+  env.set_allowed_collisions(allowed);
+  const auto [pairs_after, contacts_after, collides_after] = answers();
+  EXPECT_TRUE(pairs_after.empty());
+  EXPECT_EQ(contacts_after, 0u);
+  EXPECT_FALSE(collides_after);
 }
 
 // A checker that does not carry an environment's attached objects would miss their collisions:
