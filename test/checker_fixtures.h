@@ -48,6 +48,7 @@ inline const CollisionChecker& panda_with_proxies() {
   static const CollisionChecker checker = [] {
     CheckerOptions options;
     options.proxy_levels = {0.005, 0.01, 0.02};
+    options.proxy_cache = proxy_cache_dir();
     return panda_as_moveit(options);
   }();
   return checker;

@@ -25,6 +25,18 @@ inline bool running_in_ci() {
 
 inline std::string source_dir() { return BVH_COLLISION_SOURCE_DIR; }
 
+// A folder where tests keep the robots' link proxies by content (narrowphase/link_proxy_cache.h),
+// shared by the test programs of one build and by the sanitizer pass that runs them again: panda's
+// proxy levels are built once per `make test`, not once per program (writes are atomic). Their
+// build is tested on its own, uncached (test_link_proxy).
+inline std::string proxy_cache_dir() {
+#ifdef BVH_COLLISION_TEST_PROXY_CACHE
+  return BVH_COLLISION_TEST_PROXY_CACHE;
+#else
+  return (std::filesystem::temp_directory_path() / "bvh_collision_test_proxy_cache").string();
+#endif
+}
+
 // Whether AddressSanitizer's runtime is in the process: the sanitizer pass of `make test` runs
 // the Release test programs on the sanitized library (scripts/run_tests.sh), so this is decided
 // when the test runs, not when it is compiled.

@@ -5,12 +5,9 @@
 // SceneChecker's states and certified motions, the self filter and rays.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <random>
 #include <set>
@@ -101,11 +98,10 @@ struct Pair {
 const Pair& checkers() {
   static const Pair pair = [] {
     // Two proxy levels (5 mm alone takes most of panda's build); the oracle reads the robot's
-    // link proxies from the cache the first build fills.
+    // link proxies from the tests' cache (test::proxy_cache_dir) as this one does.
     CheckerOptions options;
     options.proxy_levels = {0.01, 0.02};
-    const std::filesystem::path cache = std::filesystem::temp_directory_path() / ("bvh_attached_cache_" + std::to_string(::getpid()));
-    options.proxy_cache = cache.string();
+    options.proxy_cache = test::proxy_cache_dir();
     const CollisionChecker base = test::panda_as_moveit(options);
     Environment env(0.05);
     env.attach(held_body(kFingers));
@@ -113,7 +109,6 @@ const Pair& checkers() {
     CollisionChecker ours = base.carrying(env);
     std::printf("carrying: %.1f ms\n", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     Pair out{std::move(ours), panda_with(held_link_urdf(), kFingers, options)};
-    std::filesystem::remove_all(cache);
     return out;
   }();
   return pair;
@@ -165,7 +160,9 @@ TEST(AttachedObjects, SelfChecksMatchTheLinkOracle) {
     const SelfCollisionResult a = c.ours.check_self(q.data(), request), b = c.oracle.check_self(q.data(), request);
     ASSERT_EQ(a.collision, b.collision);
     EXPECT_EQ(named(c.ours, a.colliding_pairs), named(c.oracle, b.colliding_pairs));
-    if (!a.collision) EXPECT_NEAR(a.min_distance, b.min_distance, 1e-9);
+    if (!a.collision) {
+      EXPECT_NEAR(a.min_distance, b.min_distance, 1e-9);
+    }
     colliding += a.collision;
     for (const auto& [x, y] : named(c.ours, a.colliding_pairs)) with_held += x == "held" || y == "held";
   }
@@ -234,7 +231,9 @@ TEST(AttachedObjects, EnvironmentAndSceneChecksMatchTheLinkOracle) {
       for (std::size_t i = 0; i < a.contacts.size(); ++i) {
         hits_by_held += c.ours.model().links()[a.contacts[i].link].name == "held";
       }
-      if (!a.collision) EXPECT_NEAR(a.min_distance, b.min_distance, 1e-9);
+      if (!a.collision) {
+        EXPECT_NEAR(a.min_distance, b.min_distance, 1e-9);
+      }
       const bool expected = oracle.collides(q.data());
       EXPECT_EQ(ours.collides(q.data()), expected);
       EXPECT_EQ(ours_tolerant.collides(q.data()), expected);  // states stay exact at a tolerance
