@@ -659,6 +659,12 @@ TEST_F(NodeEnvironment, AttachedObjectMovesWithTheHand) {
   EXPECT_EQ(moved.error, "");
   EXPECT_FALSE(moved.valid) << "the certified motion carries the parcel into the wall";
   EXPECT_GT(moved.last_valid_fraction, 0.0);
+  // Answered at once without proxies; the same once the parcel's proxy levels are built.
+  EXPECT_EQ(wait_for_diagnostic("attached objects' proxy levels", [](const std::string& v) { return v == "built"; }, 60.0), "built");
+  EXPECT_EQ(check(tilted, 10).contacts.size(), swung.contacts.size());
+  const CheckMotion::Response with_levels = call<CheckMotion>("check_motion", motion).response;
+  EXPECT_FALSE(with_levels.valid);
+  EXPECT_NEAR(with_levels.last_valid_fraction, moved.last_valid_fraction, 2e-3);  // (earliest to 1e-3)
   CastRay::Request ray;
   ray.origin.z = 2.0, ray.direction.z = -1.0;
   const CastRay::Response down = call<CastRay>("cast_ray", ray).response;

@@ -80,10 +80,11 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   return hit;
 }
 
-CollisionChecker CollisionChecker::carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed) const {
+CollisionChecker CollisionChecker::carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed,
+                                            bool proxies) const {
   if (bodies.empty()) return *this;
   auto model = std::make_shared<const RobotCollisionModel>(m_->carrying(bodies, allowed));
-  auto accelerators = std::make_shared<const RobotAccelerators>(a_->carrying(*model));
+  auto accelerators = std::make_shared<const RobotAccelerators>(a_->carrying(*model, proxies));
   return CollisionChecker(std::move(model), std::move(accelerators));
 }
 

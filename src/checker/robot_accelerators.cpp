@@ -71,9 +71,10 @@ RobotAccelerators RobotAccelerators::with_proxy_level(const RobotCollisionModel&
   return copy;
 }
 
-RobotAccelerators RobotAccelerators::carrying(const RobotCollisionModel& carried) const {
+RobotAccelerators RobotAccelerators::carrying(const RobotCollisionModel& carried, bool proxies) const {
   RobotAccelerators copy = *this;
   copy.pair_clearance_ = pair_clearance_.for_pairs(carried.checked_pairs().size());
+  if (!proxies) copy.proxy_levels_.clear();
   for (ProxyLevel& level : copy.proxy_levels_) {
     const std::size_t before = level.links.size();
     level.links.resize(carried.shapes().size());

@@ -47,6 +47,11 @@ CollisionCheckerNode::~CollisionCheckerNode() {
   if (ros::ok()) private_nh_.setParam("ready", false);
   stop_building_ = true;  // the build stops at its next link
   if (proxy_builder_.joinable()) proxy_builder_.join();
+  {
+    std::lock_guard<std::mutex> lock(carried_mutex_);  // (no new carried build starts after this)
+    carried_.base = nullptr;
+  }
+  if (carried_builder_.joinable()) carried_builder_.join();
   if (cloud_spinner_) cloud_spinner_->stop();
 }
 
@@ -359,12 +364,31 @@ std::shared_ptr<const CollisionChecker> CollisionCheckerNode::checker_for(const 
   std::shared_ptr<const CollisionChecker> base = checker();
   if (env->attached().empty()) return base;
   std::lock_guard<std::mutex> lock(carried_mutex_);
-  // (Built under the lock: queries that come together for one new attachment build it once.)
-  if (carried_.base != base || carried_.attached != env->attached_list() || carried_.allowed != env->allowed_collisions_shared()) {
-    auto carried = std::make_shared<const CollisionChecker>(base->carrying(*env));
-    carried_ = Carried{std::move(base), env->attached_list(), env->allowed_collisions_shared(), std::move(carried)};
+  const Carried key{base, env->attached_list(), env->allowed_collisions_shared(), nullptr};
+  if (!carried_.same(key)) {
+    // At once and exact; the levels follow (a query never waits for a proxy build).
+    carried_ = key;
+    carried_.checker = std::make_shared<const CollisionChecker>(base->carrying(*env, false));
+    carried_.levels = base->accelerators().proxy_levels().empty();
   }
+  if (!carried_.levels) build_carried_levels(env);
   return carried_.checker;
+}
+
+void CollisionCheckerNode::build_carried_levels(const std::shared_ptr<const Environment>& env) const {
+  if (carried_building_ || carried_.base == nullptr) return;
+  if (carried_builder_.joinable()) carried_builder_.join();  // finished: it cleared carried_building_ last
+  carried_building_ = true;
+  carried_builder_ = std::thread([this, key = carried_, env] {
+    try {
+      auto full = std::make_shared<const CollisionChecker>(key.base->carrying(*env));
+      std::lock_guard<std::mutex> lock(carried_mutex_);
+      if (carried_.same(key)) carried_.checker = std::move(full), carried_.levels = true;  // else attached anew meanwhile
+    } catch (const std::exception& e) {
+      ROS_WARN_STREAM("collision_checker: carried objects' proxy levels not built (exact answers go on): " << e.what());
+    }
+    carried_building_ = false;
+  });
 }
 
 Transform CollisionCheckerNode::link_in_world(int link) const {

@@ -374,7 +374,6 @@ bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObjec
     const bool given = !req.primitives.empty() || !req.meshes.empty() || !req.mesh_resources.empty();
     AttachedBody body{req.id, req.link, req.touch_links, given ? attached_shapes(req, link_world) : std::vector<CollisionObject>{}};
     const std::shared_ptr<const CollisionChecker> base = checker();
-    std::shared_ptr<const CollisionChecker> carried;
     store_->modify([&](Environment& env) {
       if (!given) {
         for (const CollisionObject& o : env.objects()) {
@@ -388,17 +387,15 @@ bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObjec
       }
       remove_object_shapes(env, req.id);
       env.attach(std::move(body));
-      // Built here, so that a robot that cannot carry it (a limit) changes nothing; kept for the queries.
+      // Built here, so that a robot that cannot carry it (a limit) changes nothing (without its
+      // proxy levels: checker_for builds those after).
       try {
-        carried = std::make_shared<const CollisionChecker>(base->carrying(env));
+        base->carrying(env, false);
       } catch (const std::invalid_argument& e) {
         throw RequestError(e.what());
       }
     });
-    const std::shared_ptr<const Environment> env = store_->snapshot();
-    std::lock_guard<std::mutex> lock(carried_mutex_);
-    if (env->attached_list() == carried_.attached) return;  // (a later change was kept already)
-    carried_ = Carried{base, env->attached_list(), env->allowed_collisions_shared(), std::move(carried)};
+    checker_for(store_->snapshot());  // carried at once, its proxy levels started
   });
 }
 

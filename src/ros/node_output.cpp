@@ -179,6 +179,11 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("octree resolution (m)", std::to_string(env->octree().resolution())),
       kv("collision objects", std::to_string(env->objects().size())),
       kv("attached objects", std::to_string(env->attached().size())),
+      kv("attached objects' proxy levels", [&] {
+        if (env->attached().empty()) return std::string("none attached");
+        std::lock_guard<std::mutex> lock(carried_mutex_);
+        return std::string(carried_.attached == env->attached_list() && carried_.levels ? "built" : "building");
+      }()),
   };
   diagnostic_msgs::DiagnosticStatus queries;
   queries.name = name + ": queries";

@@ -43,12 +43,15 @@ class CollisionChecker {
   // This checker carrying `bodies` (AttachedBody, checker/environment.h; the model's carrying and
   // its accelerators'): each body one more link, named by its id, after the robot's links; the
   // state vector is the same. Throws as RobotCollisionModel::carrying.
-  CollisionChecker carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed) const;
+  // With `proxies` false the copy has no proxy level (RobotAccelerators::carrying): built at
+  // once, exact answers; the node carries so at first and swaps the levels in once built.
+  CollisionChecker carrying(const std::vector<AttachedBody>& bodies, const NamedAllowedCollisions& allowed,
+                            bool proxies = true) const;
   // The checker a query on `env` uses: this one carrying env.attached() (this one when it holds
   // none) with env's allowed collisions. Queries that take an environment read its objects only:
   // a checker that does not carry its attached bodies ignores them.
-  CollisionChecker carrying(const Environment& env) const {
-    return env.attached().empty() ? *this : carrying(env.attached(), env.allowed_collisions());
+  CollisionChecker carrying(const Environment& env, bool proxies = true) const {
+    return env.attached().empty() ? *this : carrying(env.attached(), env.allowed_collisions(), proxies);
   }
   // Does this checker carry every object `env` has attached (a carried link named by its id)?
   // The queries that take an environment (check_environment, check_batch, check_motion,

@@ -154,8 +154,12 @@ class CollisionCheckerNode {
   // The checker a query on snapshot `env` uses: checker() carrying env's attached objects
   // (CollisionChecker::carrying), built once per attachment and proxy level and kept; checker()
   // itself when nothing is attached. A query takes the snapshot first and this from it, so it
-  // sees an object on the link or in the world, never both or neither.
+  // sees an object on the link or in the world, never both or neither. A new attachment is
+  // carried at once without proxy levels (exact answers); carried_builder_ builds its proxies
+  // and swaps in the checker with levels (a large object's take seconds).
   std::shared_ptr<const CollisionChecker> checker_for(const std::shared_ptr<const Environment>& env) const;
+  // Starts carried_builder_ for `env` when the kept checker lacks its levels (carried_mutex_ held).
+  void build_carried_levels(const std::shared_ptr<const Environment>& env) const;
   // Where link `link` is in world_frame now (joint_states, tf2): attaching and detaching fix an
   // object's pose between the two frames with it.
   Transform link_in_world(int link) const;
@@ -244,9 +248,13 @@ class CollisionCheckerNode {
     std::shared_ptr<const std::vector<AttachedBody>> attached;
     std::shared_ptr<const NamedAllowedCollisions> allowed;
     std::shared_ptr<const CollisionChecker> checker;
+    bool levels = false;  // `checker` has base's proxy levels (else none yet)
+    bool same(const Carried& o) const { return base == o.base && attached == o.attached && allowed == o.allowed; }
   };
   mutable std::mutex carried_mutex_;
   mutable Carried carried_;
+  mutable std::thread carried_builder_;
+  mutable std::atomic<bool> carried_building_{false};
 
   mutable std::mutex state_mutex_;
   std::vector<double> state_;  // from joint_states; neutral_state() until the first message
