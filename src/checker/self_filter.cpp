@@ -2,15 +2,16 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "bvh_collision/checker/collision_checker.h"
 #include "bvh_collision/geometry/intersection.h"
 #include "bvh_collision/geometry/safety_margin.h"
-#include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/geometry/tree_walk.h"
 #include "bvh_collision/narrowphase/shape_queries.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
+#include "scan_chunks.h"
 
 namespace bvh_collision {
 namespace {
@@ -21,6 +22,7 @@ struct LinkInScan {
   Transform pose;
   Vec3 centre = Vec3::Zero();
   double radius = 0.0;
+  double padding = 0.0;  // the robot's links: the filter's; carried objects: theirs
   bool holds_sensor = false;
 };
 
@@ -28,21 +30,6 @@ struct LinkInScan {
 bool segment_meets_ball(const Vec3& origin, const Vec3& unit, double length, const Vec3& centre, double radius) {
   const double s = std::clamp((centre - origin).dot(unit), 0.0, length);
   return (origin + s * unit - centre).squaredNorm() <= radius * radius;
-}
-
-// fn(begin, end, part) over contiguous chunks of [0, n), one per core (a thread pays for itself
-// only with a few thousand points); the parts come back in order.
-template <class Part, class Fn>
-std::vector<Part> in_chunks(std::size_t n, Fn&& fn) {
-  ThreadPool& pool = ThreadPool::shared();
-  const std::size_t chunks = std::clamp<std::size_t>(n / 4096, 1, pool.capacity());
-  std::vector<Part> parts(chunks);
-  const std::size_t chunk = (n + chunks - 1) / chunks;
-  pool.for_each(chunks, 1, [&](std::size_t c) {
-    const std::size_t begin = std::min(n, c * chunk), end = std::min(n, begin + chunk);
-    fn(begin, end, parts[c]);
-  });
-  return parts;
 }
 
 // What a link's proxy (narrowphase/link_proxy.h) says of a point and a padding: -1, the point is
@@ -90,9 +77,12 @@ double CollisionChecker::ray_meets_link(int link, const Transform& pose, const V
 }
 
 FilteredScan CollisionChecker::filter_scan(const double* state, const std::vector<ScanPoint>& points,
-                                           const ScanPoint& sensor, double padding, const Transform& root_pose) const {
-  if (!(padding >= 0.0) || !std::isfinite(padding)) {
-    throw std::invalid_argument("self filter: padding must be finite and >= 0, got " + std::to_string(padding));
+                                           const ScanPoint& sensor, double padding, const Transform& root_pose,
+                                           std::optional<double> carried_padding) const {
+  for (const double pad : {padding, carried_padding.value_or(padding)}) {
+    if (!(pad >= 0.0) || !std::isfinite(pad)) {
+      throw std::invalid_argument("self filter: padding must be finite and >= 0, got " + std::to_string(pad));
+    }
   }
   if (!sensor.allFinite()) throw std::invalid_argument("self filter: the sensor origin is not finite");
   if (!is_rigid(root_pose)) throw std::invalid_argument("self filter: the root pose is not a finite rigid transform");
@@ -104,8 +94,9 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
     if (m_->shapes()[l].empty()) continue;
     const int link = static_cast<int>(l);
     poses[l] = root_pose * poses[l];
-    links.push_back({link, poses[l], poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius,
-                     point_on_link(link, poses[l], origin, padding)});
+    const double pad = l < m_->robot_link_count() ? padding : carried_padding.value_or(padding);
+    links.push_back({link, poses[l], poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius, pad,
+                     point_on_link(link, poses[l], origin, pad)});
   }
   // Where proxies are built, they settle most points near a link without the exact test, with
   // the same answers: the coarsest level whose spheres lie within the padding of their links
@@ -114,8 +105,8 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
   // (A point is an exact obstacle and the padding the room: tolerance_policy.h's rule.)
   const ProxyLevel* proxies = a_->proxies_for(proxy_use({padding, Counterpart::kObject}).decide_up_to);
   if (proxies == nullptr && !levels.empty()) proxies = &levels.front();
-  // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends `padding`
-  // before the ray first meets a link.
+  // One point: on the robot, in its shadow, or an obstacle; a ray that clears only ends the
+  // padding of the link it first meets before it.
   auto classify = [&](const ScanPoint& point, FilteredScan& out) {
     const Vec3 p = point.cast<double>();
     const Vec3 d = p - origin;
@@ -126,15 +117,16 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
     }
     const Vec3 unit = d / length;
     bool on_robot = false;
-    double first = length;
+    double first = length, first_padding = padding;
     for (const LinkInScan& v : links) {
-      const double reach = v.radius + padding;
+      const double reach = v.radius + v.padding;
       if (!on_robot && (p - v.centre).squaredNorm() <= reach * reach) {
-        const int verdict = proxies ? proxy_point_verdict(proxies->links[v.link], v.pose, p, padding) : 0;
-        on_robot = verdict > 0 || (verdict == 0 && point_on_link(v.link, v.pose, p, padding));
+        const int verdict = proxies ? proxy_point_verdict(proxies->links[v.link], v.pose, p, v.padding) : 0;
+        on_robot = verdict > 0 || (verdict == 0 && point_on_link(v.link, v.pose, p, v.padding));
       }
       if (!v.holds_sensor && segment_meets_ball(origin, unit, first, v.centre, v.radius)) {
-        first = std::min(first, ray_meets_link(v.link, v.pose, origin, unit, first));
+        const double entry = ray_meets_link(v.link, v.pose, origin, unit, first);
+        if (entry < first) first = entry, first_padding = v.padding;
       }
     }
     if (!on_robot && first >= length) {
@@ -142,12 +134,12 @@ FilteredScan CollisionChecker::filter_scan(const double* state, const std::vecto
       return;
     }
     ++(on_robot ? out.on_robot : out.shadowed);
-    if (first - padding > 0.0) out.clear_only.push_back((origin + unit * (first - padding)).cast<float>());
+    if (first - first_padding > 0.0) out.clear_only.push_back((origin + unit * (first - first_padding)).cast<float>());
   };
   auto filter_chunk = [&](std::size_t begin, std::size_t end, FilteredScan& part) {
     for (std::size_t i = begin; i < end; ++i) classify(points[i], part);
   };
-  std::vector<FilteredScan> parts = in_chunks<FilteredScan>(points.size(), filter_chunk);
+  std::vector<FilteredScan> parts = detail::in_chunks<FilteredScan>(points.size(), filter_chunk);
   FilteredScan all = std::move(parts.front());
   for (std::size_t w = 1; w < parts.size(); ++w) {
     all.obstacles.insert(all.obstacles.end(), parts[w].obstacles.begin(), parts[w].obstacles.end());

@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "bvh_collision/geometry/thread_pool.h"
@@ -116,6 +118,26 @@ void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, bool mark_end
   for (auto it = part.ray.rbegin(); it != part.ray.rend() && box.contains(*it); ++it) part.free.insert(*it);
 }
 
+// ScanOptions::clip_rays_to_workspace: an end inside the box and within range as OctoMap has it;
+// any other ray frees the voxels it crosses inside the box, up to max_range (a box is convex: they
+// are one run along the ray).
+void cast_clipped(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
+                  const ScanOptions& options, const KeyBox& box, ScanPart& part) {
+  const bool within = within_range(p, origin, options);
+  if (within && options.workspace->contains(p) && mark_end) return cast_in_workspace(grid, p, true, origin, options, box, part);
+  ScanPoint end = p;
+  if (!within) {
+    ScanPoint direction = p - origin;
+    direction /= static_cast<float>(float_norm(direction));
+    end = origin + direction * static_cast<float>(options.max_range);
+  }
+  if (!walk_ray(grid, origin, end, [&](const OctreeKey& k) {
+        if (box.contains(k)) part.free.insert(k);
+      })) {
+    ++part.stats.skipped_outside;
+  }
+}
+
 void cast(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
           const ScanOptions& options, ScanPart& part) {
   const bool within = within_range(p, origin, options);
@@ -155,6 +177,8 @@ void cast_all(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, s
     const ScanPoint& p = rays[first];
     if (!p.allFinite()) {
       ++part.stats.skipped_invalid;
+    } else if (box && options.clip_rays_to_workspace) {
+      cast_clipped(grid, p, rays.marks(first), origin, options, *box, part);
     } else if (box) {
       cast_in_workspace(grid, p, rays.marks(first), origin, options, *box, part);
     } else {
@@ -248,6 +272,70 @@ ScanStats insert_points(Octree& tree, const std::vector<ScanPoint>& points, cons
   tree.update_sorted(keys, true);
   stats.occupied = keys.size();
   return stats;
+}
+
+bool PinholeCamera::valid() const {
+  return std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) && std::isfinite(cy) && fx != 0.0 && fy != 0.0;
+}
+
+namespace {
+
+// The least-squares line t = a * s + b through the pairs (s, t).
+struct LineFit {
+  double n = 0, s = 0, t = 0, ss = 0, st = 0;
+  void add(double x, double y) { n += 1, s += x, t += y, ss += x * x, st += x * y; }
+  bool spread() const { return n >= 2 && ss * n - s * s > 0.5; }  // at least two distinct pixel indices
+  double slope() const { return (st * n - s * t) / (ss * n - s * s); }
+  double intercept() const { return (t - slope() * s) / n; }
+};
+
+bool in_front(const ScanPoint& p) { return p.allFinite() && p.z() > 0.0f; }
+
+}  // namespace
+
+std::optional<PinholeCamera> fit_pinhole(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height) {
+  if (organized.size() != width * height) return std::nullopt;
+  LineFit across, down;  // x / z against the column, y / z against the row
+  for (std::size_t v = 0; v < height; ++v) {
+    for (std::size_t u = 0; u < width; ++u) {
+      const ScanPoint& p = organized[v * width + u];
+      if (!in_front(p)) continue;
+      across.add(double(u), double(p.x()) / p.z());
+      down.add(double(v), double(p.y()) / p.z());
+    }
+  }
+  if (!across.spread() || !down.spread()) return std::nullopt;
+  const double ax = across.slope(), bx = across.intercept(), ay = down.slope(), by = down.intercept();
+  const PinholeCamera camera{1.0 / ax, 1.0 / ay, -bx / ax, -by / ay};
+  if (!camera.valid()) return std::nullopt;
+  for (std::size_t v = 0; v < height; ++v) {
+    for (std::size_t u = 0; u < width; ++u) {
+      const ScanPoint& p = organized[v * width + u];
+      if (!in_front(p)) continue;
+      const double off_x = double(p.x()) / p.z() - (ax * u + bx), off_y = double(p.y()) / p.z() - (ay * v + by);
+      if (std::abs(off_x) > 1e-3 || std::abs(off_y) > 1e-3) return std::nullopt;
+    }
+  }
+  return camera;
+}
+
+std::vector<ScanPoint> no_return_ends(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,
+                                      const PinholeCamera& camera, double range) {
+  if (organized.size() != width * height) {
+    throw std::invalid_argument("no-return rays: the scan has " + std::to_string(organized.size()) + " points, not " +
+                                std::to_string(width) + " x " + std::to_string(height));
+  }
+  if (!camera.valid()) throw std::invalid_argument("no-return rays: the camera model is not valid (fx, fy non-zero, all finite)");
+  if (!(range > 0.0) || !std::isfinite(range)) throw std::invalid_argument("no-return rays: the range must be positive and finite");
+  std::vector<ScanPoint> ends;
+  for (std::size_t v = 0; v < height; ++v) {
+    for (std::size_t u = 0; u < width; ++u) {
+      if (organized[v * width + u].allFinite()) continue;
+      const Eigen::Vector3d ray((double(u) - camera.cx) / camera.fx, (double(v) - camera.cy) / camera.fy, 1.0);
+      ends.push_back((ray.normalized() * range).cast<float>());
+    }
+  }
+  return ends;
 }
 
 }  // namespace bvh_collision

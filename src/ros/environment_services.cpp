@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <map>
 
+#include "bvh_collision/checker/object_filter.h"
 #include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/ros/collision_checker_node.h"
@@ -130,9 +131,13 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
     return;
   }
   const std::vector<double>& state = *at_stamp;
-  // The robot with what it carries: points on a carried object are not obstacles either.
-  const FilteredScan filtered =
-      checker_for(store_->snapshot())->filter_scan(state.data(), points, origin, params_.self_filter_padding, root);
+  // The robot with what it carries, and the world's objects: points on a known object are not
+  // voxels (it would be counted twice, and leave debris when it moves).
+  const double object_padding = params_.object_padding.value_or(params_.self_filter_padding);
+  const std::shared_ptr<const Environment> scene = store_->snapshot();
+  FilteredScan filtered =
+      checker_for(scene)->filter_scan(state.data(), points, origin, params_.self_filter_padding, root, object_padding);
+  filter_objects(scene->objects(), origin, object_padding, filtered);
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   });
@@ -144,6 +149,7 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   clouds_.skipped_workspace += stats.skipped_workspace;
   clouds_.on_robot += filtered.on_robot;
   clouds_.shadowed += filtered.shadowed;
+  clouds_.on_objects += filtered.on_objects;
   clouds_.last_insert_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // Last: diagnostics read this first, so a cloud counted inserted has its points counted and its
   // octree in the store.

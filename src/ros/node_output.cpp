@@ -173,6 +173,7 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("points skipped (outside the workspace)", std::to_string(clouds_.skipped_workspace.load())),
       kv("points on the robot", std::to_string(clouds_.on_robot.load())),
       kv("points in the robot's shadow", std::to_string(clouds_.shadowed.load())),
+      kv("points on known objects", std::to_string(clouds_.on_objects.load())),
       kv("last insertion (ms)", ms(clouds_.last_insert_seconds.load())),
       kv("octree nodes", std::to_string(env->octree().node_count())),
       kv("octree memory (bytes)", std::to_string(env->octree().memory_bytes())),

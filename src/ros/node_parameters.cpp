@@ -142,6 +142,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   read_workspace(nh, p);
   p.max_range = read_number(nh, "max_range", p.max_range, true);
   p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);
+  if (nh.hasParam("object_padding")) p.object_padding = read_number(nh, "object_padding", 0.0, false);
   if (nh.hasParam("distance_field") && !nh.getParam("distance_field", p.distance_field)) {
     throw NodeStartupError("parameter ~distance_field must be a boolean");
   }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -107,9 +108,11 @@ class CollisionChecker {
   // through the space in front of the robot, so their rays still clear it, up to `padding` before
   // the ray first meets a link. A link that holds the sensor (within padding) casts no shadow: a
   // camera inside its mount's mesh would otherwise see nothing. Uses every core.
-  // `root_pose` places the root link in the points' frame (a moving base).
+  // `root_pose` places the root link in the points' frame (a moving base). Objects the checker
+  // carries (carrying()) take `carried_padding` when it is given (the node's ~object_padding).
   FilteredScan filter_scan(const double* state, const std::vector<ScanPoint>& points, const ScanPoint& sensor,
-                           double padding, const Transform& root_pose = Transform::Identity()) const;
+                           double padding, const Transform& root_pose = Transform::Identity(),
+                           std::optional<double> carried_padding = std::nullopt) const;
 
   // The motion from `start` to `goal` (both variable_count() values). Throws std::invalid_argument
   // for a negative or non-finite resolution or tolerance.

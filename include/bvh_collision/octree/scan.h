@@ -32,6 +32,11 @@ struct ScanOptions {
   double max_range = -1.0;                 // < 0: unlimited; points beyond it clear along the ray only
   std::optional<ScanWorkspace> workspace;  // "model only what a scene needs"
   int threads = 0;                         // rays are cast on this many threads; 0: one per core
+  // With a workspace, OctoMap drops a ray whose end is outside it or beyond max_range, so a wall
+  // past the workspace clears nothing in it. True: such a ray, and every clear-only ray, frees the
+  // voxels it crosses inside the workspace (up to max_range); an end point inside the box and
+  // within range is inserted as before. False: OctoMap's bounding-box rule, tree for tree.
+  bool clip_rays_to_workspace = false;
   // Points per scan (end points and clear-only ones together) and voxels per ray (max_range /
   // resolution, when max_range is given; without it a ray stays inside the 16-bit key range):
   // insert_scan throws LimitExceeded beyond them, before it changes anything.
@@ -59,6 +64,27 @@ ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const 
 // ScanStats::points counts both lists.
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const std::vector<ScanPoint>& clear_only,
                       const ScanPoint& origin, const ScanOptions& options = {});
+
+// A depth camera's pinhole model (sensor_msgs/CameraInfo's K): pixel (u, v) looks along
+// ((u - cx) / fx, (v - cy) / fy, 1) in the camera's optical frame (z forward, x right, y down).
+struct PinholeCamera {
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
+  bool valid() const;  // finite, fx and fy non-zero
+};
+
+// The pinhole model an organized scan (row-major, `width` x `height`, in its optical frame) was
+// made with, fitted to its valid points (a depth image's cloud: x / z and y / z are linear in the
+// pixel's column and row). Nullopt when fewer than two columns or rows hold a point in front of
+// the camera, or when some point is off the fitted ray of its pixel by more than 1e-3 of its
+// depth (not a pinhole camera's cloud: a LiDAR's rings, say).
+std::optional<PinholeCamera> fit_pinhole(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height);
+
+// Rays that returned nothing: for each pixel of an organized scan whose point is NaN or infinite,
+// the point `range` along the pixel's ray from the camera (optical frame), for insert_scan's
+// clear-only list. Throws std::invalid_argument when the size is not width x height, the camera
+// is not valid or the range is not positive and finite.
+std::vector<ScanPoint> no_return_ends(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,
+                                      const PinholeCamera& camera, double range);
 
 // End points only, without rays (no free space observed): each voxel holding a point is updated
 // once as occupied. max_range does not apply (there is no sensor origin); the workspace does.

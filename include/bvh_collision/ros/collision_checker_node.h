@@ -87,6 +87,9 @@ struct NodeParameters {
   std::optional<Vec3> workspace_min, workspace_max;
   double max_range = 5.0;
   double self_filter_padding = 0.02;
+  // Points on or within this of a collision object or a carried object are not voxels either
+  // (checker/object_filter.h): a known object is not counted twice. Unset: self_filter_padding.
+  std::optional<double> object_padding;
   // Probabilities, as octomap_server takes them (OctoMap's defaults).
   double sensor_hit = 0.7, sensor_miss = 0.4, sensor_min = 0.1192, sensor_max = 0.971;
   std::string octree_file;
@@ -285,7 +288,7 @@ class CollisionCheckerNode {
     std::atomic<std::uint64_t> superseded{0};  // replaced by a newer cloud before the node took it (seq gaps)
     std::atomic<std::uint64_t> over_limit{0};  // more points than ~max_cloud_points
     std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
-    std::atomic<std::uint64_t> on_robot{0}, shadowed{0};
+    std::atomic<std::uint64_t> on_robot{0}, shadowed{0}, on_objects{0};
     std::atomic<double> last_insert_seconds{0.0};
   } clouds_;
   std::map<std::string, LatencyStats> latency_;  // keys fixed at start-up: lookups need no lock
