@@ -223,6 +223,9 @@ void CollisionCheckerNode::advertise() {
   ros::NodeHandle cloud_nh(nh_);
   cloud_nh.setCallbackQueue(&cloud_queue_);
   cloud_sub_ = cloud_nh.subscribe("obstacle_cloud", 1, &CollisionCheckerNode::on_cloud, this);
+  if (!params_.camera_info_topic.empty()) {
+    camera_info_sub_ = cloud_nh.subscribe(params_.camera_info_topic, 1, &CollisionCheckerNode::on_camera_info, this);
+  }
   cloud_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &cloud_queue_);
   cloud_spinner_->start();
 
@@ -233,7 +236,7 @@ void CollisionCheckerNode::advertise() {
   cells_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.marker_rate),
                                      &CollisionCheckerNode::publish_occupied_cells, this);
   diagnostics_timer_ =
-      nh_.createWallTimer(ros::WallDuration(1.0), &CollisionCheckerNode::publish_diagnostics, this);
+      nh_.createWallTimer(ros::WallDuration(params_.diagnostic_period), &CollisionCheckerNode::publish_diagnostics, this);
 }
 
 // One line: which links are solids (a link inside one collides) and which meshes are open, and

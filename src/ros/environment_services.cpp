@@ -91,6 +91,7 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   check_limit("a cloud with its points", double(msg.width) * double(msg.height), params_.limits.cloud_points,
               "max_cloud_points");
   std::vector<ScanPoint> points = cloud_points(msg);
+  std::vector<ScanPoint> dark = params_.clear_no_return ? no_return_rays(msg, points) : std::vector<ScanPoint>{};
   // Where the sensor and the robot were when the cloud was taken; a transform that does not come
   // within the timeout drops the cloud (counted), rather than queueing it forever.
   Transform sensor, root;
@@ -109,11 +110,13 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
     return;
   }
   for (ScanPoint& p : points) p = (sensor.R * p.cast<double>() + sensor.t).cast<float>();
+  for (ScanPoint& p : dark) p = (sensor.R * p.cast<double>() + sensor.t).cast<float>();
   const ScanPoint origin = sensor.t.cast<float>();
 
   ScanOptions options;
   options.max_range = params_.max_range;
   options.limits = params_.limits;
+  options.clip_rays_to_workspace = params_.clear_no_return;
   const double half = checker()->reach() + kWorkspaceMargin;
   options.workspace = params_.workspace_min
                           ? ScanWorkspace{params_.workspace_min->cast<float>(), params_.workspace_max->cast<float>()}
@@ -138,6 +141,14 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   FilteredScan filtered =
       checker_for(scene)->filter_scan(state.data(), points, origin, params_.self_filter_padding, root, object_padding);
   filter_objects(scene->objects(), origin, object_padding, filtered);
+  if (!dark.empty()) {
+    // A dark pixel's ray clears up to the robot where it passes through it, as a shadow's does.
+    FilteredScan rays =
+        checker_for(scene)->filter_scan(state.data(), dark, origin, params_.self_filter_padding, root, object_padding);
+    filtered.clear_only.insert(filtered.clear_only.end(), rays.obstacles.begin(), rays.obstacles.end());
+    filtered.clear_only.insert(filtered.clear_only.end(), rays.clear_only.begin(), rays.clear_only.end());
+    clouds_.no_return += dark.size();
+  }
   const ScanStats stats = store_->modify([&](Environment& env) {
     return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
   });
@@ -154,6 +165,40 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   // Last: diagnostics read this first, so a cloud counted inserted has its points counted and its
   // octree in the store.
   ++clouds_.inserted;
+}
+
+std::vector<ScanPoint> CollisionCheckerNode::no_return_rays(const sensor_msgs::PointCloud2& msg,
+                                                            const std::vector<ScanPoint>& points) {
+  if (msg.height <= 1) return {};  // unorganized: a NaN point has no direction
+  std::optional<PinholeCamera> camera;
+  {
+    std::lock_guard<std::mutex> lock(camera_mutex_);
+    camera = camera_info_;
+  }
+  if (!camera) camera = params_.camera_intrinsics;
+  if (!camera) camera = fit_pinhole(points, msg.width, msg.height);
+  if (!camera) {
+    const auto dark = static_cast<std::size_t>(
+        std::count_if(points.begin(), points.end(), [](const ScanPoint& p) { return !p.allFinite(); }));
+    clouds_.no_return_unplaced += dark;
+    if (dark > 0) {
+      ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: " << dark << " NaN pixels of an organized cloud in '"
+                                        << msg.header.frame_id << "' clear nothing: no CameraInfo on ~camera_info, no "
+                                        << "~camera_intrinsics, and its points fit no pinhole camera");
+    }
+    return {};
+  }
+  return no_return_ends(points, msg.width, msg.height, *camera, params_.max_range);
+}
+
+void CollisionCheckerNode::on_camera_info(const sensor_msgs::CameraInfo& msg) {
+  const PinholeCamera camera{msg.K[0], msg.K[4], msg.K[2], msg.K[5]};
+  if (!camera.valid()) {
+    ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: CameraInfo on ~camera_info has no usable K (fx, fy zero); ignored");
+    return;
+  }
+  std::lock_guard<std::mutex> lock(camera_mutex_);
+  camera_info_ = camera;
 }
 
 bool CollisionCheckerNode::clear_environment(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {

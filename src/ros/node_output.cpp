@@ -174,6 +174,8 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("points on the robot", std::to_string(clouds_.on_robot.load())),
       kv("points in the robot's shadow", std::to_string(clouds_.shadowed.load())),
       kv("points on known objects", std::to_string(clouds_.on_objects.load())),
+      kv("rays with no return cast", std::to_string(clouds_.no_return.load())),
+      kv("pixels with no return and no camera model", std::to_string(clouds_.no_return_unplaced.load())),
       kv("last insertion (ms)", ms(clouds_.last_insert_seconds.load())),
       kv("octree nodes", std::to_string(env->octree().node_count())),
       kv("octree memory (bytes)", std::to_string(env->octree().memory_bytes())),

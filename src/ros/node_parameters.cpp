@@ -115,6 +115,21 @@ void read_proxy_levels(const ros::NodeHandle& nh, NodeParameters& p) {
   }
 }
 
+void read_no_return(const ros::NodeHandle& nh, NodeParameters& p) {
+  if (nh.hasParam("clear_no_return") && !nh.getParam("clear_no_return", p.clear_no_return)) {
+    throw NodeStartupError("parameter ~clear_no_return must be a boolean");
+  }
+  read(nh, "camera_info", p.camera_info_topic, "a string (a sensor_msgs/CameraInfo topic; empty for none)");
+  if (!nh.hasParam("camera_intrinsics")) return;
+  std::vector<double> k;
+  const PinholeCamera camera = nh.getParam("camera_intrinsics", k) && k.size() == 4 ? PinholeCamera{k[0], k[1], k[2], k[3]}
+                                                                                   : PinholeCamera{};
+  if (!camera.valid()) {
+    throw NodeStartupError("parameter ~camera_intrinsics must be [fx, fy, cx, cy] (pixels), finite, fx and fy non-zero");
+  }
+  p.camera_intrinsics = camera;
+}
+
 }  // namespace
 
 OccupancyModel NodeParameters::occupancy_model() const {
@@ -143,6 +158,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.max_range = read_number(nh, "max_range", p.max_range, true);
   p.self_filter_padding = read_number(nh, "self_filter_padding", p.self_filter_padding, false);
   if (nh.hasParam("object_padding")) p.object_padding = read_number(nh, "object_padding", 0.0, false);
+  read_no_return(nh, p);
   if (nh.hasParam("distance_field") && !nh.getParam("distance_field", p.distance_field)) {
     throw NodeStartupError("parameter ~distance_field must be a boolean");
   }
@@ -161,6 +177,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.joint_state_lead = read_number(nh, "joint_state_lead", p.joint_state_lead, false);
   p.joint_state_timeout = read_number(nh, "joint_state_timeout", p.joint_state_timeout, false);
   p.tf_timeout = read_number(nh, "tf_timeout", p.tf_timeout, false);
+  p.diagnostic_period = read_number(nh, "diagnostic_period", p.diagnostic_period, true);
   p.marker_rate = read_number(nh, "marker_rate", p.marker_rate, true);
   p.marker_alpha = read_number(nh, "marker_alpha", p.marker_alpha, true);
   if (p.marker_alpha > 1.0) {

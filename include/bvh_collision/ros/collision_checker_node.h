@@ -26,6 +26,7 @@
 #include <ros/console.h>
 #include <ros/node_handle.h>
 #include <ros/spinner.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/JointState.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
@@ -35,6 +36,7 @@
 #include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/octree/scan.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
@@ -90,6 +92,14 @@ struct NodeParameters {
   // Points on or within this of a collision object or a carried object are not voxels either
   // (checker/object_filter.h): a known object is not counted twice. Unset: self_filter_padding.
   std::optional<double> object_padding;
+  // Rays with no return (a depth image's NaN pixels) clear along their pixel's ray up to max_range,
+  // and rays that end past the workspace or max_range clear inside it instead of being dropped
+  // (ScanOptions::clip_rays_to_workspace). Off: the tree is OctoMap's insertPointCloud's.
+  bool clear_no_return = false;
+  // A NaN pixel's ray: from the latest sensor_msgs/CameraInfo on ~camera_info (a topic name; empty:
+  // none), else ~camera_intrinsics [fx, fy, cx, cy], else fitted to the cloud's own valid points.
+  std::string camera_info_topic;
+  std::optional<PinholeCamera> camera_intrinsics;
   // Probabilities, as octomap_server takes them (OctoMap's defaults).
   double sensor_hit = 0.7, sensor_miss = 0.4, sensor_min = 0.1192, sensor_max = 0.971;
   std::string octree_file;
@@ -108,6 +118,7 @@ struct NodeParameters {
   // a query that places the root link (or an object's frame) in world_frame through a transform
   // that is not static answers an error once that transform is older than this (s). 0: never.
   double tf_timeout = 1.0;
+  double diagnostic_period = 1.0;        // s between /diagnostics messages (diagnostic_updater's ~diagnostic_period)
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   double marker_alpha = 1.0;             // opacity of the occupied_cells cubes (below 1: the cloud shows through)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
@@ -212,6 +223,10 @@ class CollisionCheckerNode {
   void on_cloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event);
   void count_superseded(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event);
   void insert_cloud(const sensor_msgs::PointCloud2& msg);
+  void on_camera_info(const sensor_msgs::CameraInfo& msg);
+  // The rays of an organized cloud's NaN pixels, `max_range` long, in the cloud's frame
+  // (~clear_no_return; empty for an unorganized cloud or one no camera model fits, counted).
+  std::vector<ScanPoint> no_return_rays(const sensor_msgs::PointCloud2& msg, const std::vector<ScanPoint>& points);
   bool clear_environment(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
   bool clear_box(ClearBox::Request& req, ClearBox::Response& res);
   bool set_collision_object(SetCollisionObject::Request& req, SetCollisionObject::Response& res);
@@ -272,7 +287,9 @@ class CollisionCheckerNode {
   ros::CallbackQueue cloud_queue_;
   std::unique_ptr<ros::AsyncSpinner> cloud_spinner_;
   std::vector<ros::ServiceServer> services_;
-  ros::Subscriber joint_state_sub_, cloud_sub_;
+  ros::Subscriber joint_state_sub_, cloud_sub_, camera_info_sub_;
+  mutable std::mutex camera_mutex_;
+  std::optional<PinholeCamera> camera_info_;  // from the last CameraInfo (~camera_info)
   ros::Publisher cells_pub_, contacts_pub_, diagnostics_pub_;
   ros::WallTimer cells_timer_, diagnostics_timer_;
   std::uint64_t cells_version_ = ~std::uint64_t(0);  // the environment version last drawn
@@ -289,6 +306,8 @@ class CollisionCheckerNode {
     std::atomic<std::uint64_t> over_limit{0};  // more points than ~max_cloud_points
     std::atomic<std::uint64_t> points{0}, skipped_invalid{0}, skipped_outside{0}, skipped_workspace{0};
     std::atomic<std::uint64_t> on_robot{0}, shadowed{0}, on_objects{0};
+    std::atomic<std::uint64_t> no_return{0};           // rays of NaN pixels cast to max_range
+    std::atomic<std::uint64_t> no_return_unplaced{0};  // NaN pixels of a cloud no camera model fits
     std::atomic<double> last_insert_seconds{0.0};
   } clouds_;
   std::map<std::string, LatencyStats> latency_;  // keys fixed at start-up: lookups need no lock
