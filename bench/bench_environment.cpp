@@ -582,5 +582,6 @@ int main(int argc, char** argv) {
   workspace_table(scan, camera, checker, states, sizes, dir);
   self_filter(camera, 0.02, 0.04, sizes, dir);  // padding above the voxel diagonal: no cube reaches a link
   snapshot_table(sizes, dir);
+  clearing_table(quick, dir);
   return 0;
 }

@@ -1,5 +1,6 @@
-// What the environment benchmark's two units share (bench_environment.cpp, the insertion,
-// octree and clutter tables; bench_environment_world.cpp, the self filter and the snapshots):
+// What the environment benchmark's units share (bench_environment.cpp, the insertion, octree and
+// clutter tables; bench_environment_world.cpp, the self filter and the snapshots;
+// bench_environment_clearing.cpp, the clearing table):
 // the run's sizes and the depth camera's table scene.
 #pragma once
 
@@ -35,5 +36,8 @@ std::size_t occupied_voxels(const Octree& tree);
 // snapshots of a changing map (bench_environment_world.cpp).
 void self_filter(const Vec3& camera, double resolution, double padding, const Sizes& sizes, const std::string& dir);
 void snapshot_table(const Sizes& sizes, const std::string& dir);
+// How long an obstacle that left stays in the map, by sensor model, and what faster clearing
+// costs a thin or dark obstacle (bench_environment_clearing.cpp).
+void clearing_table(bool quick, const std::string& dir);
 
 }  // namespace bvh_collision::environment_bench
