@@ -80,15 +80,6 @@ std::size_t occupied_voxels(const Octree& tree) {
   return n;
 }
 
-}  // namespace environment_bench
-
-namespace {
-
-using namespace environment_bench;
-
-
-
-using LeafMap = std::map<std::tuple<int, int, int, int>, float>;
 LeafMap leaves_of(const Octree& tree) {
   LeafMap m;
   for (const auto& l : tree.leaves()) m[{l.key.k[0], l.key.k[1], l.key.k[2], l.depth}] = l.log_odds;
@@ -104,6 +95,13 @@ LeafMap leaves_of(const octomap::OcTree& tree) {
   }
   return m;
 }
+
+}  // namespace environment_bench
+
+namespace {
+
+using namespace environment_bench;
+
 
 
 using bench::Spread;
@@ -583,5 +581,6 @@ int main(int argc, char** argv) {
   self_filter(camera, 0.02, 0.04, sizes, dir);  // padding above the voxel diagonal: no cube reaches a link
   snapshot_table(sizes, dir);
   clearing_table(quick, dir);
+  insertion_cpu_table(quick, dir);
   return 0;
 }

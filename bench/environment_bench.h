@@ -1,11 +1,15 @@
 // What the environment benchmark's units share (bench_environment.cpp, the insertion, octree and
 // clutter tables; bench_environment_world.cpp, the self filter and the snapshots;
-// bench_environment_clearing.cpp, the clearing table):
+// bench_environment_updates.cpp, the clearing and per-core insertion tables):
 // the run's sizes and the depth camera's table scene.
 #pragma once
 
+#include <octomap/OcTree.h>
+
 #include <cstddef>
 #include <functional>
+#include <map>
+#include <tuple>
 #include <string>
 #include <vector>
 
@@ -31,13 +35,21 @@ using ExtraHit = std::function<double(const Vec3& origin, const Vec3& direction,
 // return NaN.
 std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr, int width = 600, int height = 500);
 std::size_t occupied_voxels(const Octree& tree);
+// Every leaf by (key of its lowest voxel, depth) with its log-odds: two trees are identical when
+// these are equal.
+using LeafMap = std::map<std::tuple<int, int, int, int>, float>;
+LeafMap leaves_of(const Octree& tree);
+LeafMap leaves_of(const octomap::OcTree& tree);
 
 // The self filter on the table scene with panda reaching over the table, and the shared
 // snapshots of a changing map (bench_environment_world.cpp).
 void self_filter(const Vec3& camera, double resolution, double padding, const Sizes& sizes, const std::string& dir);
 void snapshot_table(const Sizes& sizes, const std::string& dir);
 // How long an obstacle that left stays in the map, by sensor model, and what faster clearing
-// costs a thin or dark obstacle (bench_environment_clearing.cpp).
+// costs a thin or dark obstacle (bench_environment_updates.cpp).
 void clearing_table(bool quick, const std::string& dir);
+// Insertion against OctoMap per core (CPU time) on a room's depth image and a LiDAR scan, at 2 and
+// 5 cm, trees compared (bench_environment_updates.cpp).
+void insertion_cpu_table(bool quick, const std::string& dir);
 
 }  // namespace bvh_collision::environment_bench

@@ -1,5 +1,7 @@
-// Environment benchmark, its third unit: how long an obstacle that left stays in the map, and what
-// faster clearing costs (table `clearing`; environment_bench.h; main is in bench_environment.cpp).
+// Environment benchmark, its third unit: a map that changes. How long an obstacle that left stays
+// in the map, and what faster clearing costs (table `clearing`); insertion against OctoMap per
+// core, in CPU time, on a room's depth images and a LiDAR scan (table `insertion`).
+// (environment_bench.h; main is in bench_environment.cpp.)
 //
 // A depth camera (pinhole, 10 Hz) looks along +x at a box in front of a wall. The box is seen for
 // N scans and taken away; the table counts the scans until none of its voxels reads occupied,
@@ -8,6 +10,8 @@
 // rays through its voxel pass beside it), and a dark box that returns 5 % of its pixels (the rest
 // are NaN, which clear along their ray under ~clear_no_return). Their columns count how often
 // one of their voxels reads free.
+#include <time.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -217,6 +221,158 @@ void clearing_table(bool quick, const std::string& dir) {
              "the cost: of the obstacle's voxel readings over " + std::to_string(scans) + " scans (after 10), the share "
              "that reads free although the obstacle is there. OctoMap's default needs 9 misses from its upper clamp "
              "(log-odds 3.48 / 0.41); a lower clamp or a stronger miss clears in 3-4.");
+  table.write(dir);
+}
+
+namespace {
+
+// CPU seconds of the whole process (every thread) spent in f.
+template <class F>
+double cpu_seconds(F&& f) {
+  timespec a{}, b{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  f();
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
+}
+
+// The first hit of a ray among boxes (slabs), or infinity.
+double first_hit(const Vec3& o, const Vec3& d, const std::vector<Slab>& boxes) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Slab& b : boxes) best = std::min(best, entry(o, d, b));
+  return best;
+}
+
+// A room 6 x 5 x 3 m (walls, floor and ceiling as slabs) with a table, a shelf and boxes.
+std::vector<Slab> room() {
+  return {{{-0.1, 0, 0}, {0, 5, 3}},     {{6, 0, 0}, {6.1, 5, 3}},        {{0, -0.1, 0}, {6, 0, 3}},
+          {{0, 5, 0}, {6, 5.1, 3}},      {{0, 0, -0.1}, {6, 5, 0}},       {{0, 0, 3}, {6, 5, 3.1}},
+          {{2, 1.5, 0.7}, {3.2, 2.3, 0.75}}, {{4.5, 3.8, 0}, {5.8, 4.2, 2.0}}, {{2.3, 1.7, 0.75}, {2.5, 1.9, 0.95}},
+          {{1.0, 3.5, 0}, {1.6, 4.1, 0.5}}};
+}
+
+// A 640 x 480 depth image (70 x 55 degrees) of the room from `camera` looking at `target`.
+std::vector<ScanPoint> depth_image(const Vec3& camera, const Vec3& target, int step) {
+  const std::vector<Slab> boxes = room();
+  const Vec3 forward = (target - camera).normalized(), right = forward.cross(Vec3::UnitZ()).normalized();
+  const Vec3 up = right.cross(forward);
+  std::vector<ScanPoint> points;
+  for (int v = 0; v < 480; v += step) {
+    for (int u = 0; u < 640; u += step) {
+      const Vec3 d = (forward + std::tan(0.61) * ((u + 0.5) / 320.0 - 1.0) * right +
+                      std::tan(0.48) * (1.0 - (v + 0.5) / 240.0) * up).normalized();
+      const double t = first_hit(camera, d, boxes);
+      if (std::isfinite(t)) points.push_back((camera + t * d).cast<float>());
+    }
+  }
+  return points;
+}
+
+// A 64-beam LiDAR (elevations -25 to +15 degrees, 1024 azimuths) 1.8 m up in a street: the
+// ground and buildings between 12 and 60 m; beams that meet nothing return nothing.
+std::vector<ScanPoint> lidar_scan(int step) {
+  std::vector<Slab> boxes = {{{-100, -100, -0.1}, {100, 100, 0}}};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> size(4, 12), height(3, 20), angle(0, 2 * M_PI), distance(12, 60);  // none holds the sensor
+  for (int i = 0; i < 40; ++i) {
+    const double a = angle(rng), r = distance(rng), w = size(rng);
+    const Vec3 c(r * std::cos(a), r * std::sin(a), 0);
+    boxes.push_back({c - Vec3(w / 2, w / 2, 0), c + Vec3(w / 2, w / 2, height(rng))});
+  }
+  const Vec3 sensor(0, 0, 1.8);
+  std::vector<ScanPoint> points;
+  for (int beam = 0; beam < 64; beam += step) {
+    const double elevation = (-25.0 + 40.0 * beam / 63.0) * M_PI / 180.0;
+    for (int k = 0; k < 1024; ++k) {
+      const double azimuth = 2 * M_PI * k / 1024.0;
+      const Vec3 d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+      const double t = first_hit(sensor, d, boxes);
+      if (std::isfinite(t) && t < 120.0) points.push_back((sensor + t * d).cast<float>());
+    }
+  }
+  return points;
+}
+
+struct Cloud {
+  std::string name;
+  std::vector<std::vector<ScanPoint>> scans;  // inserted in turn into one tree
+  std::vector<Vec3> origins;
+  double max_range;
+};
+
+struct Timing {
+  double ours_one_core = 0, ours_two_cores_wall = 0, ours_two_cores_cpu = 0, octomap = 0;
+  bool identical = true;
+};
+
+Timing time_insertion(const Cloud& c, double resolution, int runs) {
+  std::vector<double> one, two_wall, two_cpu, theirs;
+  bool identical = true;
+  for (int r = 0; r < runs; ++r) {
+    Octree a(resolution), b(resolution);
+    octomap::OcTree reference(resolution);
+    ScanOptions single, pair;
+    single.max_range = pair.max_range = c.max_range;
+    single.threads = 1;
+    pair.threads = 2;
+    one.push_back(cpu_seconds([&] {
+      for (std::size_t i = 0; i < c.scans.size(); ++i) insert_scan(a, c.scans[i], c.origins[i].cast<float>(), single);
+    }));
+    double wall = 0.0;
+    two_cpu.push_back(cpu_seconds([&] {
+      wall = 1e-6 * bench::time_us([&] {
+        for (std::size_t i = 0; i < c.scans.size(); ++i) insert_scan(b, c.scans[i], c.origins[i].cast<float>(), pair);
+      });
+    }));
+    two_wall.push_back(wall);
+    theirs.push_back(cpu_seconds([&] {
+      for (std::size_t i = 0; i < c.scans.size(); ++i) {
+        octomap::Pointcloud cloud;
+        for (const ScanPoint& p : c.scans[i]) cloud.push_back(p.x(), p.y(), p.z());
+        reference.insertPointCloud(cloud, octomap::point3d(c.origins[i].x(), c.origins[i].y(), c.origins[i].z()), c.max_range);
+      }
+    }));
+    if (r == 0) identical = leaves_of(a) == leaves_of(reference) && leaves_of(b) == leaves_of(reference);
+  }
+  return {bench::median(one), bench::median(two_wall), bench::median(two_cpu), bench::median(theirs), identical};
+}
+
+}  // namespace
+
+void insertion_cpu_table(bool quick, const std::string& dir) {
+  const int step = quick ? 8 : 1;
+  const Vec3 camera(0.4, 0.4, 1.6);
+  std::vector<Cloud> clouds = {{"room, depth image, unlimited range", {depth_image(camera, {3, 2.5, 0.8}, step)}, {camera}, -1.0},
+                               {"room, depth image, 5 m range", {depth_image(camera, {3, 2.5, 0.8}, step)}, {camera}, 5.0},
+                               {"street, 64-beam LiDAR, 30 m range", {lidar_scan(step)}, {Vec3(0, 0, 1.8)}, 30.0}};
+  Cloud ten{"room, ten depth images into one tree, 5 m range", {}, {}, 5.0};
+  for (int k = 0; k < (quick ? 2 : 10); ++k) {
+    const double a = 2 * M_PI * k / 10.0;
+    const Vec3 at(3 + 2.2 * std::cos(a), 2.5 + 1.8 * std::sin(a), 1.2 + 0.3 * std::sin(3 * a));
+    ten.scans.push_back(depth_image(at, {3 - 0.5 * std::cos(a), 2.5, 0.6}, step));
+    ten.origins.push_back(at);
+  }
+  clouds.push_back(ten);
+  Table table("insertion", "Insertion per core against OctoMap (CPU time), depth images and LiDAR",
+              {"cloud", "resolution m", "points", "OctoMap CPU s", "ours one core CPU s", "OctoMap / ours, per core",
+               "ours two cores wall s", "ours two cores CPU s", "identical trees"});
+  const int runs = quick ? 1 : 3;
+  for (const Cloud& c : clouds) {
+    std::size_t points = 0;
+    for (const auto& s : c.scans) points += s.size();
+    for (const double res : {0.05, 0.02}) {
+      if (quick && res < 0.05) continue;
+      if (c.max_range > 10.0 && res < 0.05 && quick) continue;
+      const Timing t = time_insertion(c, res, runs);
+      table.row({c.name, res, double(points), t.octomap, t.ours_one_core, t.octomap / t.ours_one_core, t.ours_two_cores_wall,
+                 t.ours_two_cores_cpu, t.identical ? "yes" : "NO"});
+    }
+  }
+  table.note("CPU time of the whole process (clock_gettime(CLOCK_PROCESS_CPUTIME_ID)), medians of " + std::to_string(runs) +
+             " runs: 'per core' compares OctoMap 1.9's insertPointCloud with ours on one thread (ScanOptions::threads = 1), "
+             "so another load on the machine does not move the ratio much; the two-core columns are ours on two threads. "
+             "No workspace box (OctoMap's insertPointCloud without a bounding box). 'identical trees': every leaf, depth "
+             "and log-odds equal to OctoMap's, one core and two.");
   table.write(dir);
 }
 
