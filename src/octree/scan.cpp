@@ -332,7 +332,8 @@ std::vector<ScanPoint> no_return_ends(const std::vector<ScanPoint>& organized, s
     for (std::size_t u = 0; u < width; ++u) {
       if (organized[v * width + u].allFinite()) continue;
       const Eigen::Vector3d ray((double(u) - camera.cx) / camera.fx, (double(v) - camera.cy) / camera.fy, 1.0);
-      ends.push_back((ray.normalized() * range).cast<float>());
+      const ScanPoint end = (ray.normalized() * range).cast<float>();
+      if (end.allFinite()) ends.push_back(end);  // (a focal length of 1e-300 px has no direction to give)
     }
   }
   return ends;

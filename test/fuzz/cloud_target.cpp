@@ -1,4 +1,5 @@
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "bvh_collision/octree/scan.h"
@@ -12,6 +13,26 @@ namespace fuzz {
 namespace {
 
 const std::vector<std::string> kCloudFields = {"x", "y", "z", "rgb", "intensity", "x"};
+
+// An organized cloud's rays with no return, as the node casts them under ~clear_no_return: the
+// camera fitted to the cloud, its NaN pixels' rays clipped to a workspace.
+std::string no_return_problem(const std::vector<ScanPoint>& points, std::size_t width, std::size_t height) {
+  const std::optional<PinholeCamera> camera = fit_pinhole(points, width, height);
+  if (!camera) return "";
+  if (!camera->valid()) return "a fitted camera is not valid";
+  const std::vector<ScanPoint> ends = no_return_ends(points, width, height, *camera, 5.0);
+  if (ends.size() > points.size()) return "more rays with no return than pixels";
+  Octree tree(0.05);
+  ScanOptions options;
+  options.max_range = 5.0;
+  options.threads = 1;
+  options.workspace = ScanWorkspace{ScanPoint::Constant(-2.0f), ScanPoint::Constant(2.0f)};
+  options.clip_rays_to_workspace = true;
+  const ScanStats stats = insert_scan(tree, {}, ends, ScanPoint::Zero(), options);
+  if (stats.occupied != 0) return "rays with no return marked a voxel occupied";
+  if (stats.skipped_invalid != 0) return "a ray with no return was not finite";
+  return "";
+}
 
 std::string cloud_problem(const std::vector<ScanPoint>& points, std::size_t data_bytes) {
   if (points.size() > data_bytes / 4) return "decoded more points than the data holds";
@@ -51,7 +72,9 @@ std::string check_point_cloud(const std::uint8_t* data, std::size_t size) {
   try {
     Limits limits;
     check_limit("a cloud with its points", double(cloud.width) * double(cloud.height), limits.cloud_points, "max_cloud_points");
-    return cloud_problem(cloud_points(cloud), cloud.data.size());
+    const std::vector<ScanPoint> points = cloud_points(cloud);
+    const std::string problem = cloud_problem(points, cloud.data.size());
+    return problem.empty() ? no_return_problem(points, cloud.width, cloud.height) : problem;
   } catch (const std::invalid_argument& e) {  // RequestError, LimitExceeded
     return *e.what() ? "" : "refused without a message";
   }

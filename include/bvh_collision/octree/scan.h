@@ -81,7 +81,7 @@ std::optional<PinholeCamera> fit_pinhole(const std::vector<ScanPoint>& organized
 
 // Rays that returned nothing: for each pixel of an organized scan whose point is NaN or infinite,
 // the point `range` along the pixel's ray from the camera (optical frame), for insert_scan's
-// clear-only list. Throws std::invalid_argument when the size is not width x height, the camera
+// clear-only list (a pixel whose ray has no finite direction, under an absurd camera, none). Throws std::invalid_argument when the size is not width x height, the camera
 // is not valid or the range is not positive and finite.
 std::vector<ScanPoint> no_return_ends(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,
                                       const PinholeCamera& camera, double range);
