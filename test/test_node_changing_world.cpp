@@ -250,6 +250,30 @@ TEST_F(NodeChangingWorld, DarkPixelsClearWhatWasThere) {
   EXPECT_EQ(diagnostic("pixels with no return and no camera model", kNoReturn), "0");
 }
 
+// The same without a CameraInfo (a depth camera as most are configured): the node fits the
+// camera to its clouds and keeps the fit for the clouds that hold too little to fit, such as one
+// in which every pixel is NaN.
+TEST_F(NodeChangingWorld, WithoutCameraInfoTheFittedCameraClears) {
+  const Transform camera = pose({2.0, 0.7, 0.5}, columns({0, 1, 0}, {0, 0, -1}, {-1, 0, 0}));
+  statics_->sendTransform(transform_msg("world", "unlisted_optical", camera, ros::Time::now()));
+  const Box box{{1.1, 0.5, 0.3}, {1.3, 0.9, 0.7}};
+  const Vec3 lo = box.lo - Vec3::Constant(0.03), hi = box.hi + Vec3::Constant(0.03);
+  for (int i = 0; i < 3; ++i) {
+    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {box}, "unlisted_optical");
+    cloud.header.stamp = ros::Time::now();
+    show(cloud);
+  }
+  ASSERT_GT(count_in(occupied(kNoReturn), lo, hi), 50);
+  for (int scans = 0; scans < 7; ++scans) {
+    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {}, "unlisted_optical");
+    cloud.header.stamp = ros::Time::now();
+    show(cloud);
+  }
+  EXPECT_EQ(count_in(occupied(kNoReturn), lo, hi), 0) << "the fitted camera's rays clear the box in 7 scans";
+  EXPECT_GT(count_in(occupied(kOctomapRule), lo, hi), 50);
+  EXPECT_EQ(diagnostic("pixels with no return and no camera model", kNoReturn), "0");
+}
+
 // A box that a planner moves across a table as a collision object, seen from above after each
 // move: its points are never voxels, so it leaves nothing behind, and the table stays. A second
 // box that no one told the node about is a voxel obstacle, as it should be.

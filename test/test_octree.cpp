@@ -462,6 +462,30 @@ TEST(NoReturn, FitsTheCameraOfADepthImage) {
   EXPECT_FALSE(fit_pinhole(depth_image(0, 0), kWidth, kHeight + 1).has_value());
 }
 
+// A camera model given by configuration is used for a cloud only if the cloud's points agree.
+TEST(NoReturn, ACameraAgreesOnlyWithItsOwnClouds) {
+  const std::vector<ScanPoint> cloud = depth_image(50, 60);
+  EXPECT_TRUE(pinhole_agrees(cloud, kWidth, kHeight, kCamera));
+  PinholeCamera wider = kCamera;
+  wider.fx *= 0.95;
+  EXPECT_FALSE(pinhole_agrees(cloud, kWidth, kHeight, wider)) << "a focal length 5 % off";
+  PinholeCamera shifted = kCamera;
+  shifted.cy += 2.0;
+  EXPECT_FALSE(pinhole_agrees(cloud, kWidth, kHeight, shifted)) << "a centre 2 px off";
+  EXPECT_FALSE(pinhole_agrees(cloud, kWidth, kHeight + 1, kCamera)) << "another size";
+  EXPECT_FALSE(pinhole_agrees(cloud, kWidth, kHeight, PinholeCamera{})) << "not a camera";
+  // Nothing returned: nothing contradicts it. A driver's zero points are no return either; a
+  // point behind the camera is not a pinhole camera's.
+  std::vector<ScanPoint> dark(kWidth * kHeight, ScanPoint(kNan, kNan, kNan));
+  EXPECT_TRUE(pinhole_agrees(dark, kWidth, kHeight, wider));
+  std::vector<ScanPoint> zeros = cloud;
+  zeros[5] = ScanPoint::Zero();
+  EXPECT_TRUE(pinhole_agrees(zeros, kWidth, kHeight, kCamera));
+  std::vector<ScanPoint> behind = cloud;
+  behind[5] = -behind[5];
+  EXPECT_FALSE(pinhole_agrees(behind, kWidth, kHeight, kCamera));
+}
+
 TEST(NoReturn, EachDarkPixelGivesItsRayToTheRange) {
   const std::vector<ScanPoint> cloud = depth_image(50, 60);
   const std::vector<ScanPoint> ends = no_return_ends(cloud, kWidth, kHeight, kCamera, 3.0);

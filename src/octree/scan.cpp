@@ -307,16 +307,24 @@ std::optional<PinholeCamera> fit_pinhole(const std::vector<ScanPoint>& organized
   if (!across.spread() || !down.spread()) return std::nullopt;
   const double ax = across.slope(), bx = across.intercept(), ay = down.slope(), by = down.intercept();
   const PinholeCamera camera{1.0 / ax, 1.0 / ay, -bx / ax, -by / ay};
-  if (!camera.valid()) return std::nullopt;
+  if (!camera.valid() || !pinhole_agrees(organized, width, height, camera)) return std::nullopt;
+  return camera;
+}
+
+bool pinhole_agrees(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,
+                    const PinholeCamera& camera) {
+  if (organized.size() != width * height || !camera.valid()) return false;
   for (std::size_t v = 0; v < height; ++v) {
     for (std::size_t u = 0; u < width; ++u) {
       const ScanPoint& p = organized[v * width + u];
-      if (!in_front(p)) continue;
-      const double off_x = double(p.x()) / p.z() - (ax * u + bx), off_y = double(p.y()) / p.z() - (ay * v + by);
-      if (std::abs(off_x) > 1e-3 || std::abs(off_y) > 1e-3) return std::nullopt;
+      if (!p.allFinite() || p.isZero()) continue;  // no return (some drivers write zeros)
+      if (!in_front(p)) return false;              // a pinhole camera sees nothing behind it
+      const double off_x = double(p.x()) / p.z() - (double(u) - camera.cx) / camera.fx;
+      const double off_y = double(p.y()) / p.z() - (double(v) - camera.cy) / camera.fy;
+      if (!(std::abs(off_x) <= 1e-3 && std::abs(off_y) <= 1e-3)) return false;
     }
   }
-  return camera;
+  return true;
 }
 
 std::vector<ScanPoint> no_return_ends(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,

@@ -170,21 +170,32 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
 std::vector<ScanPoint> CollisionCheckerNode::no_return_rays(const sensor_msgs::PointCloud2& msg,
                                                             const std::vector<ScanPoint>& points) {
   if (msg.height <= 1) return {};  // unorganized: a NaN point has no direction
+  const auto agrees = [&](const PinholeCamera& c) { return pinhole_agrees(points, msg.width, msg.height, c); };
+  const auto key = std::make_tuple(msg.header.frame_id, msg.width, msg.height);
+  // In order: the CameraInfo of this camera (frame and size), ~camera_intrinsics, a model fitted
+  // to this cloud, the last one fitted to this camera's clouds; each only if the cloud's points
+  // agree with it (a model that is not this camera's would clear the wrong space).
   std::optional<PinholeCamera> camera;
-  {
-    std::lock_guard<std::mutex> lock(camera_mutex_);
-    camera = camera_info_;
+  std::lock_guard<std::mutex> lock(camera_mutex_);
+  if (camera_info_ && camera_info_->frame == msg.header.frame_id && camera_info_->width == msg.width &&
+      camera_info_->height == msg.height && agrees(camera_info_->camera)) {
+    camera = camera_info_->camera;
+  } else if (params_.camera_intrinsics && agrees(*params_.camera_intrinsics)) {
+    camera = params_.camera_intrinsics;
+  } else if ((camera = fit_pinhole(points, msg.width, msg.height))) {
+    fitted_cameras_[key] = *camera;
+  } else if (const auto it = fitted_cameras_.find(key); it != fitted_cameras_.end() && agrees(it->second)) {
+    camera = it->second;
   }
-  if (!camera) camera = params_.camera_intrinsics;
-  if (!camera) camera = fit_pinhole(points, msg.width, msg.height);
   if (!camera) {
     const auto dark = static_cast<std::size_t>(
         std::count_if(points.begin(), points.end(), [](const ScanPoint& p) { return !p.allFinite(); }));
     clouds_.no_return_unplaced += dark;
     if (dark > 0) {
       ROS_WARN_STREAM_THROTTLE(5.0, "collision_checker: " << dark << " NaN pixels of an organized cloud in '"
-                                        << msg.header.frame_id << "' clear nothing: no CameraInfo on ~camera_info, no "
-                                        << "~camera_intrinsics, and its points fit no pinhole camera");
+                                        << msg.header.frame_id << "' clear nothing: no CameraInfo of that camera on "
+                                        << "~camera_info, no ~camera_intrinsics that its points agree with, and they "
+                                        << "fit no pinhole camera");
     }
     return {};
   }
@@ -198,7 +209,7 @@ void CollisionCheckerNode::on_camera_info(const sensor_msgs::CameraInfo& msg) {
     return;
   }
   std::lock_guard<std::mutex> lock(camera_mutex_);
-  camera_info_ = camera;
+  camera_info_ = CameraModel{camera, msg.header.frame_id, msg.width, msg.height};
 }
 
 bool CollisionCheckerNode::clear_environment(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {

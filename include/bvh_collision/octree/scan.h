@@ -79,6 +79,13 @@ struct PinholeCamera {
 // depth (not a pinhole camera's cloud: a LiDAR's rings, say).
 std::optional<PinholeCamera> fit_pinhole(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height);
 
+// Does the camera agree with the organized scan: every point that returned (finite, not the zero
+// point some drivers write for none) in front of it and on its pixel's ray within 1e-3 of its
+// depth? A camera given by configuration that does not is not this cloud's: its rays would clear
+// the wrong space. True for a scan with no point that returned (nothing to contradict it).
+bool pinhole_agrees(const std::vector<ScanPoint>& organized, std::size_t width, std::size_t height,
+                    const PinholeCamera& camera);
+
 // Rays that returned nothing: for each pixel of an organized scan whose point is NaN or infinite,
 // the point `range` along the pixel's ray from the camera (optical frame), for insert_scan's
 // clear-only list (a pixel whose ray has no finite direction, under an absurd camera, none). Throws std::invalid_argument when the size is not width x height, the camera

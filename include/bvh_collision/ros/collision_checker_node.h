@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <ros/callback_queue.h>
@@ -97,7 +98,8 @@ struct NodeParameters {
   // (ScanOptions::clip_rays_to_workspace). Off: the tree is OctoMap's insertPointCloud's.
   bool clear_no_return = false;
   // A NaN pixel's ray: from the latest sensor_msgs/CameraInfo on ~camera_info (a topic name; empty:
-  // none), else ~camera_intrinsics [fx, fy, cx, cy], else fitted to the cloud's own valid points.
+  // none) of the cloud's camera, else ~camera_intrinsics [fx, fy, cx, cy], else fitted to the
+  // cloud's own valid points, else the camera's last fit; each only if the cloud agrees with it.
   std::string camera_info_topic;
   std::optional<PinholeCamera> camera_intrinsics;
   // Probabilities, as octomap_server takes them (OctoMap's defaults).
@@ -288,8 +290,17 @@ class CollisionCheckerNode {
   std::unique_ptr<ros::AsyncSpinner> cloud_spinner_;
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber joint_state_sub_, cloud_sub_, camera_info_sub_;
+  // Camera models for rays with no return: the last CameraInfo (~camera_info) with its frame and
+  // image size, and the last model fitted to each camera's clouds (by frame and size), for a
+  // cloud with too few points to fit (a box taken away with nothing behind it).
+  struct CameraModel {
+    PinholeCamera camera;
+    std::string frame;
+    std::uint32_t width = 0, height = 0;
+  };
   mutable std::mutex camera_mutex_;
-  std::optional<PinholeCamera> camera_info_;  // from the last CameraInfo (~camera_info)
+  std::optional<CameraModel> camera_info_;
+  std::map<std::tuple<std::string, std::uint32_t, std::uint32_t>, PinholeCamera> fitted_cameras_;
   ros::Publisher cells_pub_, contacts_pub_, diagnostics_pub_;
   ros::WallTimer cells_timer_, diagnostics_timer_;
   std::uint64_t cells_version_ = ~std::uint64_t(0);  // the environment version last drawn
