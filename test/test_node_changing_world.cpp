@@ -227,6 +227,12 @@ class NodeChangingWorld : public testing::Test {
     const auto inserted = inserted_->wait(sent_, {kNoReturn, kOctomapRule});
     for (const char* node : {kNoReturn, kOctomapRule}) EXPECT_EQ(inserted.at(node), sent_) << node;
   }
+  // A depth image of the boxes from the camera, stamped now, shown.
+  void show_image(const Transform& camera, const std::vector<Box>& boxes, const std::string& frame) {
+    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, boxes, frame);
+    cloud.header.stamp = ros::Time::now();
+    show(cloud);
+  }
   // Every cloud sent was inserted, none dropped or rejected (the waits above only see insertions).
   static void TearDownTestSuite() {
     for (const char* node : {kNoReturn, kOctomapRule}) {
@@ -262,17 +268,13 @@ TEST_F(NodeChangingWorld, DarkPixelsClearWhatWasThere) {
   const Box box{{1.1, -0.2, 0.3}, {1.3, 0.2, 0.7}};
   const Vec3 lo = box.lo - Vec3::Constant(0.03), hi = box.hi + Vec3::Constant(0.03);
   for (int i = 0; i < 3; ++i) {
-    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {box}, "depth_optical");
-    cloud.header.stamp = ros::Time::now();
-    show(cloud);
+    show_image(camera, {box}, "depth_optical");
   }
   ASSERT_GT(count_in(occupied(kNoReturn), lo, hi), 50);
   ASSERT_EQ(count_in(occupied(kNoReturn), lo, hi), count_in(occupied(kOctomapRule), lo, hi));
   int scans = 0;
   for (; scans < 12 && count_in(occupied(kNoReturn), lo, hi) > 0; ++scans) {
-    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {}, "depth_optical");
-    cloud.header.stamp = ros::Time::now();
-    show(cloud);
+    show_image(camera, {}, "depth_optical");
   }
   EXPECT_EQ(count_in(occupied(kNoReturn), lo, hi), 0) << "after " << scans << " scans with no return";
   EXPECT_EQ(scans, 7) << "the sensor model's count: 3 hits (2.54) need 7 misses (-0.41 each) to fall below 0";
@@ -290,15 +292,11 @@ TEST_F(NodeChangingWorld, WithoutCameraInfoTheFittedCameraClears) {
   const Box box{{1.1, 0.5, 0.3}, {1.3, 0.9, 0.7}};
   const Vec3 lo = box.lo - Vec3::Constant(0.03), hi = box.hi + Vec3::Constant(0.03);
   for (int i = 0; i < 3; ++i) {
-    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {box}, "unlisted_optical");
-    cloud.header.stamp = ros::Time::now();
-    show(cloud);
+    show_image(camera, {box}, "unlisted_optical");
   }
   ASSERT_GT(count_in(occupied(kNoReturn), lo, hi), 50);
   for (int scans = 0; scans < 7; ++scans) {
-    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {}, "unlisted_optical");
-    cloud.header.stamp = ros::Time::now();
-    show(cloud);
+    show_image(camera, {}, "unlisted_optical");
   }
   EXPECT_EQ(count_in(occupied(kNoReturn), lo, hi), 0) << "the fitted camera's rays clear the box in 7 scans";
   EXPECT_GT(count_in(occupied(kOctomapRule), lo, hi), 50);
@@ -319,9 +317,7 @@ TEST_F(NodeChangingWorld, AMovedObjectLeavesNoVoxels) {
     centres.push_back(c);
     ASSERT_EQ(call_on<SetCollisionObject>(kNoReturn, "set_collision_object", box_object("moved", size, c)).response.error, "");
     ASSERT_EQ(call_on<SetCollisionObject>(kOctomapRule, "set_collision_object", box_object("moved", size, c)).response.error, "");
-    sensor_msgs::PointCloud2 cloud = depth_cloud(camera, {table, unknown, {c - size / 2, c + size / 2}}, "overhead_optical");
-    cloud.header.stamp = ros::Time::now();
-    show(cloud);
+    show_image(camera, {table, unknown, {c - size / 2, c + size / 2}}, "overhead_optical");
   }
   RemoveCollisionObject::Request remove;
   remove.id = "moved";
