@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <map>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include "bvh_collision/checker/scene_checker.h"
@@ -99,6 +100,45 @@ TEST(SceneChecker, StatesAnswerAsTheGeneralQueries) {
             << " free ones answered colliding, all within 1 cm\n";
   EXPECT_GT(colliding, states / 10);  // the scenes are cluttered enough to test both answers
   EXPECT_LT(colliding, states - states / 10);
+}
+
+// A state found free is remembered by the thread (a planner asks for it again as the start of
+// its motions) and answered from memory only by the checker that found it: not by another one
+// alive beside it, nor by one built in the same storage after it (a pointer would call those the
+// same checker), whose box now holds the hand.
+TEST(SceneChecker, AStateRememberedFreeAnswersOnlyForItsChecker) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  auto variable = [&](const std::string& joint) { return static_cast<std::size_t>(model.joints()[model.joint_index(joint)].variable); };
+  std::vector<double> q(model.variable_count(), 0.02);  // the fingers half open
+  const double ready[] = {0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785};
+  for (int j = 0; j < 7; ++j) q[variable("panda_joint" + std::to_string(j + 1))] = ready[j];
+  std::vector<double> next = q;
+  next[variable("panda_joint1")] = 0.3;
+  std::vector<Transform> poses;
+  forward_kinematics(model, q.data(), poses);
+  const Vec3 hand = poses[model.link_index("panda_hand")].t;
+  const auto empty = std::make_shared<const Environment>(Environment(0.05));
+  Environment world(0.05);
+  world.add_object("box", ObjectShape::box({0.1, 0.1, 0.1}), Transform::Translation(hand));
+  const auto boxed = std::make_shared<const Environment>(world);
+
+  std::optional<SceneChecker> scene;
+  scene.emplace(checker, empty);
+  ASSERT_FALSE(scene->collides(q.data()));
+  ASSERT_FALSE(scene->collides(q.data()));  // from memory
+  ASSERT_TRUE(scene->check_motion(q.data(), next.data()).valid);
+  const SceneChecker beside(checker, boxed);
+  EXPECT_TRUE(beside.collides(q.data()));
+  EXPECT_FALSE(scene->collides(q.data()));
+  const SceneChecker* before = &*scene;
+  scene.emplace(checker, boxed);  // the first destroyed, the second built where it stood
+  ASSERT_EQ(before, &*scene);
+  EXPECT_TRUE(scene->collides(q.data()));
+  const MotionResult r = scene->check_motion(q.data(), next.data());
+  EXPECT_FALSE(r.valid);
+  EXPECT_EQ(r.colliding_fraction, 0.0);
 }
 
 // Every vertex of every link at any instant of an interval lies within the link's growth of

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <stdexcept>
@@ -35,11 +37,61 @@ std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tol
   return out;
 }
 
+std::atomic<std::uint64_t> next_serial{1};
+
+// The states a thread last found free, one slot per hash of their values: a planner asks for the
+// same state again and again (OMPL's RRTConnect checks a state, then the motion from it; each
+// motion starts at a tree node that was the end of an earlier one). A slot answers only for the
+// same checker and a state equal bit for bit, so it gives the answer the check would give.
+struct FreeStates {
+  static constexpr std::size_t kSlots = 64;
+  std::array<std::uint64_t, kSlots> serial{};  // 0: empty
+  std::vector<double> values;                  // kSlots rows of n values
+  std::size_t n = 0;
+};
+
+FreeStates& free_states() {
+  thread_local FreeStates f;
+  return f;
+}
+
+std::size_t slot_of(const double* state, std::size_t n) {
+  std::uint64_t h = 0x9E3779B97F4A7C15ULL;
+  for (std::size_t j = 0; j < n; ++j) {
+    std::uint64_t bits;
+    std::memcpy(&bits, state + j, sizeof bits);
+    h = (h ^ bits) * 0xBF58476D1CE4E5B9ULL;
+    h ^= h >> 31;
+  }
+  return static_cast<std::size_t>(h % FreeStates::kSlots);
+}
+
 }  // namespace
+
+bool SceneChecker::known_free(const double* state) const {
+  const FreeStates& f = free_states();
+  const std::size_t n = checker_.model().variable_count();
+  if (f.n != n) return false;
+  const std::size_t k = slot_of(state, n);
+  return f.serial[k] == serial_ && std::memcmp(f.values.data() + k * n, state, n * sizeof(double)) == 0;
+}
+
+void SceneChecker::remember_free(const double* state) const {
+  FreeStates& f = free_states();
+  const std::size_t n = checker_.model().variable_count();
+  if (f.n != n) {
+    f.n = n;
+    f.values.assign(FreeStates::kSlots * n, 0.0);
+    f.serial.fill(0);
+  }
+  const std::size_t k = slot_of(state, n);
+  f.serial[k] = serial_;
+  std::memcpy(f.values.data() + k * n, state, n * sizeof(double));
+}
 
 SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment,
                            const SceneCheckOptions& options)
-    : checker_(std::move(checker)), env_(std::move(environment)), options_(options) {
+    : checker_(std::move(checker)), env_(std::move(environment)), serial_(next_serial++), options_(options) {
   if (!env_) throw std::invalid_argument("scene checker: no environment");
   if (!checker_.carries(*env_)) checker_ = checker_.carrying(*env_);  // what the robot carries moves with it
   if (!is_rigid(options.root_pose)) throw std::invalid_argument("scene checker: the root pose is not a finite rigid transform");
@@ -58,6 +110,9 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   }
   relative_pair_rates();
   interval_chains();
+  for (const auto& [a, b] : m.checked_pairs()) {
+    pair_balls_.push_back({a, b, m.bounds()[a].radius, m.bounds()[b].radius, m.paddings()[a] + m.paddings()[b]});
+  }
   root_at_origin_ = options.root_pose.R == Mat3::Identity() && options.root_pose.t == Vec3::Zero();
   // Each link's environment first, the links farthest down the chain first, then the self pairs:
   // a planner's states and motions in a scene mostly collide with objects, and with the hand
@@ -472,20 +527,32 @@ SceneChecker::Answer SceneChecker::component_check(int k, const Posed& s) const 
 }
 
 SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
+  const int pairs = static_cast<int>(pair_rates_.size());
+  const bool still = s.growth == nullptr && s.pair_growth == nullptr;  // a state, not an interval
   for (const int k : components_) {
+    // A state's self pair whose bounding balls are apart is free: pair_check's first test, here
+    // without the call (most of a state's 21 panda pairs end there).
+    if (k < pairs && still) {
+      const PairBalls& p = pair_balls_[k];
+      const double reach = p.ra + p.rb + p.paddings + pose_margin(s.centre_norms[p.a] + s.centre_norms[p.b] + p.ra + p.rb);
+      if ((s.centres[p.a] - s.centres[p.b]).squaredNorm() > reach * reach) continue;
+    }
     if (const Answer a = component_check(k, s); a != Answer::kFree) return a;
   }
   return Answer::kFree;
 }
 
 bool SceneChecker::collides(const double* state) const {
+  if (known_free(state)) return false;
   thread_local Posed posed;
   pose_links(state, posed);
   posed.growth = nullptr;
   posed.pair_growth = nullptr;
   posed.tolerant_flag = options_.states_at_tolerance;
   posed.ends = nullptr;
-  return check_posed(posed) != Answer::kFree;
+  if (check_posed(posed) != Answer::kFree) return true;
+  remember_free(state);
+  return false;
 }
 
 }  // namespace bvh_collision

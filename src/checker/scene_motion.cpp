@@ -32,6 +32,8 @@ struct Scratch {
   // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
   // (depth first).
   std::vector<Interval> todo;
+  std::vector<int> order;  // pieces of a motion cut at once (spread_order)
+  std::vector<std::pair<int, int>> runs;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
   // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
   std::vector<signed char> tolerant;
@@ -45,6 +47,35 @@ Scratch& scratch() {
 // How close (a fraction of the motion) the last valid state of a colliding motion must come to
 // the collision found when the earliest one is asked for.
 constexpr double kEarliestResolution = 1e-3;
+
+// A motion whose whole interval fails, grown by more than this, is cut into pieces grown by about
+// this much rather than halved: a long motion's halves and quarters fail too, each costing a grown
+// check of every pending component and a midpoint check. Measured on the planning benchmark's
+// motions (callgrind, 11,048 motions of its 10 mm planner): 0.2 m cuts the instructions by 12 %
+// (10 % at tolerance 0); 0.15 by 11 %, 0.3 by 8 %.
+constexpr double kFirstPieceGrowth = 0.2;
+
+// The order in which the m pieces of a motion are checked: breadth first (a boolean answer), the
+// middle of each run of pieces first, so that the midpoints checked early are spread along the
+// motion as bisection spreads them (a colliding motion meets its collision as soon); depth first
+// (the earliest collision), pushed right to left, so the leftmost piece is taken first.
+// (Into `order`; `runs` is working memory.)
+void spread_order(int m, bool earliest, std::vector<int>& order, std::vector<std::pair<int, int>>& runs) {
+  order.clear();
+  if (earliest) {
+    for (int k = m - 1; k >= 0; --k) order.push_back(k);
+    return;
+  }
+  runs.assign(1, {0, m});  // [lo, hi) runs of pieces not yet ordered
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto [lo, hi] = runs[r];
+    if (lo >= hi) continue;
+    const int mid = (lo + hi) / 2;
+    order.push_back(mid);
+    runs.emplace_back(lo, mid);
+    runs.emplace_back(mid + 1, hi);
+  }
+}
 
 // The end of the certified intervals' run from 0 (they may overlap only at their ends).
 double certified_prefix(std::vector<Interval>& done) {
@@ -126,6 +157,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   // Every component that failed did so on an exact distance at the midpoint: each is free for
   // as long as it cannot have closed that gap, the smallest of which frees a middle stretch.
   Step split{Step::kSplit, -1.0, failing, left};
+  split.largest = largest;
   if (std::isfinite(posed.free_radius) && posed.free_radius > 0.0) {
     split.free_lo = std::max(lo, mid - posed.free_radius);
     split.free_hi = std::min(hi, mid + posed.free_radius);
@@ -235,7 +267,15 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
     ends[e].tolerant_flag = options_.states_at_tolerance;
     ends[e].ends = nullptr;
   }
-  double found = check_posed(ends[0]) != Answer::kFree ? 0.0 : check_posed(ends[1]) != Answer::kFree ? 1.0 : -1.0;  // the earliest collision known
+  // (An end this thread found free with this checker, as the state it is, is not checked again.)
+  auto end_collides = [&](int e) {
+    const double* q = e == 0 ? start : goal;
+    if (known_free(q)) return false;
+    if (check_posed(ends[e]) != Answer::kFree) return true;
+    remember_free(q);
+    return false;
+  };
+  double found = end_collides(0) ? 0.0 : end_collides(1) ? 1.0 : -1.0;  // the earliest collision known
   if (found == 0.0 || (found > 0.0 && !earliest)) {
     result.colliding_fraction = found;
     result.certified = true;
@@ -268,6 +308,15 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
       found = found < 0.0 ? step.at : std::min(found, step.at);
       if (!earliest) break;
       if (step.at > i.lo) todo.push_back({i.lo, step.at, step.first, step.count});
+    } else if (i.lo == 0.0 && i.hi == 1.0 && step.free_hi <= step.free_lo && step.largest > kFirstPieceGrowth) {
+      // The whole motion failed with a growth far beyond any clearance: its halves would fail too.
+      // Pieces whose growth is about kFirstPieceGrowth instead (each with the components the
+      // whole could not certify).
+      const int m = static_cast<int>(std::min(64.0, std::ceil(step.largest / kFirstPieceGrowth)));
+      spread_order(m, earliest, s.order, s.runs);
+      for (const int k : s.order) {
+        todo.push_back({static_cast<double>(k) / m, k + 1 == m ? 1.0 : static_cast<double>(k + 1) / m, step.first, step.count});
+      }
     } else {
       // The halves, less a middle stretch the exact distances freed (free_lo, free_hi).
       const double mid = 0.5 * (i.lo + i.hi);

@@ -28,6 +28,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -142,6 +143,7 @@ class SceneChecker {
     double at = -1.0;
     std::size_t first = 0, count = 0;
     double free_lo = 0.0, free_hi = 0.0;  // kSplit: a middle stretch already free (when free_hi > free_lo)
+    double largest = 0.0;                 // kSplit: the most a failing component moves over half the interval
   };
   template <class At>
   Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
@@ -168,8 +170,16 @@ class SceneChecker {
   double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
 
 
+  // A state this thread found free with this checker, asked again (a tree's node starts every
+  // motion grown from it): known_free answers from memory, remember_free records one.
+  bool known_free(const double* state) const;
+  void remember_free(const double* state) const;
+
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;
+  // Numbered at construction (copies share it: they answer alike), so that the memory of free
+  // states never answers for another checker, even one built where a destroyed one stood.
+  std::uint64_t serial_ = 0;
   SceneCheckOptions options_;
   std::vector<const ProxyLevel*> proxies_;  // coarsest first; the last is the finest used
   double level_ = 0.0;                       // the finest's
@@ -191,6 +201,11 @@ class SceneChecker {
     std::vector<std::pair<int, double>> weights;  // (state variable, rate)
   };
   std::vector<PairRates> pair_rates_;  // per checked pair
+  struct PairBalls {
+    int a, b;
+    double ra, rb, paddings;  // the links' bounding radii, the sum of their paddings
+  };
+  std::vector<PairBalls> pair_balls_;  // per checked pair
   // Per link with geometry, the moving joints above it, the link's own first: a joint turns
   // (or slides) the link about the axis through its child link's origin.
   struct ChainJoint {
