@@ -53,7 +53,7 @@ class Generator {
   SceneObject table(const std::string& id) {
     const double w = uniform(0.4, 0.8), d = uniform(0.4, 0.7), h = uniform(-0.3, 0.35), top = uniform(0.02, 0.05);
     const Transform f = around(uniform(0.45, 0.75) + d / 2, h);
-    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, top}), {0, 0, -top / 2})}};
+    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, top}), {0, 0, -top / 2})}, ""};
     const double leg = 0.04, height = h + 0.6;  // legs to 0.6 m below the base
     for (const int sx : {-1, 1}) {
       for (const int sy : {-1, 1}) {
@@ -69,7 +69,7 @@ class Generator {
     const double gap = uniform(0.22, 0.35), bottom = uniform(-0.2, 0.3);
     const double height = boards * gap;
     const Transform f = around(uniform(0.5, 0.8) + d / 2, bottom);
-    SceneObject o{id, Transform(), {}};
+    SceneObject o{id, Transform(), {}, ""};
     for (int b = 0; b <= boards; ++b) o.shapes.push_back(placed(f, ObjectShape::box({d, w, board}), {0, 0, b * gap}));
     for (const int s : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::box({d, board, height}), {0, s * (w / 2 + board / 2), height / 2}));
     o.shapes.push_back(placed(f, ObjectShape::box({board, w, height}), {d / 2 + board / 2, 0, height / 2}));  // the back
@@ -81,7 +81,7 @@ class Generator {
     const double w = uniform(0.2, 0.45), d = uniform(0.2, 0.4), h = uniform(0.15, 0.35), t = uniform(0.01, 0.02);
     const Transform f = around(uniform(0.4, 0.7) + d / 2, uniform(-0.1, 0.45));
     const bool open_top = integer(0, 1) == 0;
-    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, t}), {0, 0, t / 2})}};
+    SceneObject o{id, Transform(), {placed(f, ObjectShape::box({d, w, t}), {0, 0, t / 2})}, ""};
     for (const int s : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::box({d, t, h}), {0, s * (w / 2 - t / 2), h / 2}));
     o.shapes.push_back(placed(f, ObjectShape::box({t, w, h}), {d / 2 - t / 2, 0, h / 2}));
     if (open_top) {
@@ -98,7 +98,7 @@ class Generator {
     const double w = uniform(0.3, 0.6), d = uniform(0.25, 0.5), h = uniform(0.3, 0.7), r = uniform(0.005, 0.015);
     const Transform f = around(uniform(0.4, 0.75) + d / 2, uniform(-0.2, 0.2));
     const int per_side = integer(2, 4);
-    SceneObject o{id, Transform(), {}};
+    SceneObject o{id, Transform(), {}, ""};
     for (int i = 0; i < per_side; ++i) {
       const double y = -w / 2 + w * i / (per_side - 1);
       for (const int sx : {-1, 1}) o.shapes.push_back(placed(f, ObjectShape::cylinder(r, h), {sx * d / 2, y, h / 2}));
@@ -116,9 +116,9 @@ class Generator {
   SceneObject clutter(const std::string& id) {
     const Transform f = around(uniform(0.35, 0.8), uniform(-0.1, 0.8));
     switch (integer(0, 2)) {
-      case 0: return {id, Transform(), {placed(f, ObjectShape::sphere(uniform(0.02, 0.08)), Vec3::Zero())}};
-      case 1: return {id, Transform(), {placed(f, ObjectShape::cylinder(uniform(0.01, 0.05), uniform(0.05, 0.3)), Vec3::Zero())}};
-      default: return {id, Transform(), {placed(f, ObjectShape::box({uniform(0.03, 0.15), uniform(0.03, 0.15), uniform(0.03, 0.15)}), Vec3::Zero())}};
+      case 0: return {id, Transform(), {placed(f, ObjectShape::sphere(uniform(0.02, 0.08)), Vec3::Zero())}, ""};
+      case 1: return {id, Transform(), {placed(f, ObjectShape::cylinder(uniform(0.01, 0.05), uniform(0.05, 0.3)), Vec3::Zero())}, ""};
+      default: return {id, Transform(), {placed(f, ObjectShape::box({uniform(0.03, 0.15), uniform(0.03, 0.15), uniform(0.03, 0.15)}), Vec3::Zero())}, ""};
     }
   }
 
