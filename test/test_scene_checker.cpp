@@ -361,6 +361,75 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
   EXPECT_LT(free_motions, motions);
 }
 
+// Within one interval, a link that barely moves and lies just inside its growth of an obstacle
+// frees a stretch around the midpoint by its exact distance (it cannot close that gap sooner).
+// The stretch holds only for the components that were measured: here the hand swings through a
+// thin bar inside it (a large joint 4 motion, far beyond any piece's growth), while link 1, turned
+// a little by joint 1, grazes a box at the base. The collision with the bar must be found.
+TEST(SceneChecker, AStretchFreedByOneLinkDoesNotFreeAFasterOne) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  auto variable = [&](const std::string& joint) { return static_cast<std::size_t>(model.joints()[model.joint_index(joint)].variable); };
+  std::vector<double> a(model.variable_count(), 0.02);
+  const double ready[] = {0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785};
+  for (int j = 0; j < 7; ++j) a[variable("panda_joint" + std::to_string(j + 1))] = ready[j];
+  std::vector<double> b = a;
+  b[variable("panda_joint1")] += 0.02;
+  b[variable("panda_joint4")] = -0.6;
+  auto state = [&](double s) {
+    std::vector<double> q(a.size());
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
+    return q;
+  };
+  const int link1 = model.link_index("panda_link1"), hand = model.link_index("panda_hand");
+  const auto empty = std::make_shared<const Environment>(Environment(0.05));
+  const SceneChecker bare(checker, empty);
+  const double slow = bare.link_growth(link1, a.data(), b.data(), 0.0, 1.0);
+  const double fast = bare.link_growth(hand, a.data(), b.data(), 0.0, 1.0);
+  // A 2 cm box beside link 1 at the midpoint, 0.6 of link 1's growth away from it.
+  const std::vector<Transform> mid = poses_along(model, a, b, 0.5);
+  auto box_at = [&](double t) {
+    Environment world(0.05);
+    world.add_object("base_box", ObjectShape::box({0.02, 0.02, 0.02}), Transform::Translation(mid[link1].t + Vec3(0.0, -t, -0.05)));
+    return world;
+  };
+  auto distance_at = [&](const Environment& world, double s) {
+    EnvironmentRequest request;
+    request.distance = true;
+    request.contacts = false;
+    const EnvironmentResult r = checker.check_environment(state(s).data(), world, request);
+    return std::make_pair(r.collision ? 0.0 : r.min_distance, r.closest_link);
+  };
+  double lo = 0.0, hi = 0.5;
+  for (int i = 0; i < 60; ++i) {
+    const double t = 0.5 * (lo + hi);
+    (distance_at(box_at(t), 0.5).first < 0.9 * slow ? lo : hi) = t;
+  }
+  Environment world = box_at(hi);
+  const auto [gap, nearest] = distance_at(world, 0.5);
+  ASSERT_EQ(nearest, link1);
+  ASSERT_GT(gap, 0.0);
+  ASSERT_LT(gap, slow);     // link 1 fails its grown test: its exact distance frees a stretch
+  ASSERT_GT(fast, 0.4);     // the hand's growth over the motion: far beyond any piece's
+  const std::vector<Transform> late = poses_along(model, a, b, 0.76);
+  world.add_object("bar", ObjectShape::box({0.01, 0.01, 0.01}), Transform::Translation(late[hand].t));
+  const auto env = std::make_shared<const Environment>(world);
+  int first = -1;
+  for (int k = 0; k <= 1000 && first < 0; ++k) first = exact_collides(checker, state(k / 1000.0).data(), *env) ? k : -1;
+  ASSERT_GT(first, 500);  // free at the midpoint, colliding inside the stretch link 1 frees
+  ASSERT_LT(first / 1000.0, 0.5 + 0.5 * gap / slow);
+  const SceneChecker scene(checker, env);
+  const MotionResult r = scene.check_motion(a.data(), b.data());
+  EXPECT_FALSE(r.valid);
+  const MotionResult e = scene.check_motion(a.data(), b.data(), true);
+  ASSERT_FALSE(e.valid);
+  EXPECT_TRUE(exact_collides(padded(2e-5 + 1e-9), state(e.colliding_fraction).data(), *env)) << e.colliding_fraction;
+  EXPECT_GE(e.last_valid_fraction, first / 1000.0 - 1e-3 - 1e-3);
+  std::cout << "growth over the motion: link 1 " << slow << " m, the hand " << fast << " m; link 1 " << gap
+            << " m from its box; the bar met from " << first / 1000.0 << ", found at " << r.colliding_fraction << "\n";
+}
+
 // A motion that starts within the tolerance of an obstacle (a planner's goal a few millimetres
 // from a shelf) must be answered as at tolerance 0: the tolerance may not take its first
 // interval as colliding, or the planner could never leave the goal. (The ends' clearance was

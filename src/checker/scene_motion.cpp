@@ -126,7 +126,19 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
     posed.component = k;
-    if (component_check(k, posed) == Answer::kFree) continue;
+    // Over the whole motion, a component grown by more than a piece's growth is not walked: so
+    // grown it meets what is near it (its walk goes deep before it fails) and the pieces will
+    // check it again. Its midpoint check still runs. It has no exact distance, so it frees no
+    // stretch around the midpoint: another component's distance would free it there too (test
+    // AStretchFreedByOneLinkDoesNotFreeAFasterOne). (40,000 of the planning benchmark's calls,
+    // callgrind: 11 % fewer instructions at 10 mm and at tolerance 0, the same answers; the same
+    // skip in every interval measured 3 % more.)
+    const bool hopeless = hi - lo == 1.0 && (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) > kFirstPieceGrowth;
+    if (hopeless) {
+      posed.no_free_radius();
+    } else if (component_check(k, posed) == Answer::kFree) {
+      continue;
+    }
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
     // collide, and mostly where the intervals first fail: that ends the motion at once.)
     posed.growth = posed.pair_growth = nullptr;
