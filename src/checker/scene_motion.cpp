@@ -22,28 +22,6 @@ struct Interval {
   std::size_t first, count;
 };
 
-// A thread's working memory, kept between motions: a planner's millionth motion allocates nothing.
-struct Scratch {
-  // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
-  // current interval's (at most those); delta: goal - start.
-  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
-  std::vector<Vec3> axes;
-  std::vector<Interval> done;   // certified intervals (check_motion)
-  // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
-  // (depth first).
-  std::vector<Interval> todo;
-  std::vector<int> order;  // pieces of a motion cut at once (spread_order)
-  std::vector<std::pair<int, int>> runs;
-  std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
-  // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
-  std::vector<signed char> tolerant;
-};
-
-Scratch& scratch() {
-  thread_local Scratch s;
-  return s;
-}
-
 // How close (a fraction of the motion) the last valid state of a colliding motion must come to
 // the collision found when the earliest one is asked for.
 constexpr double kEarliestResolution = 1e-3;
@@ -90,11 +68,38 @@ double certified_prefix(std::vector<Interval>& done) {
 
 }  // namespace
 
+// A thread's working memory, kept between motions: a planner's millionth motion allocates nothing.
+struct SceneChecker::MotionScratch {
+  // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
+  // current interval's (at most those); delta: goal - start.
+  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
+  std::vector<Vec3> axes;
+  std::vector<Interval> done;   // certified intervals (check_motion)
+  // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
+  // (depth first).
+  std::vector<Interval> todo;
+  std::vector<int> order;  // pieces of a motion cut at once (spread_order)
+  std::vector<std::pair<int, int>> runs;
+  std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
+  // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
+  std::vector<signed char> tolerant;
+  Posed midpoint;                                   // check_interval's
+  std::array<Posed, 2> ends;                        // check_motion's end states
+  std::vector<double> end_growth, end_pair_growth;  // tolerant_component's
+};
+
+// (Not inlined: a caller keeps the reference it returns, where a thread_local named in a loop
+// costs a call to __tls_get_addr at every use after a call, in a shared library.)
+[[gnu::noinline]] SceneChecker::MotionScratch& SceneChecker::motion_scratch() {
+  thread_local MotionScratch s;
+  return s;
+}
+
 template <class At>
 SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
                                                 Posed* ends) const {
-  thread_local Posed posed;
-  Scratch& s = scratch();
+  MotionScratch& s = motion_scratch();
+  Posed& posed = s.midpoint;
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   s.from.assign(at(lo), at(lo) + s.state.size());
   s.to.assign(at(hi), at(hi) + s.state.size());
@@ -185,9 +190,11 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
 // of components that fail somewhere, and answered once per motion: the proxies grown by the
 // tolerance at both ends (`ends`, posed) must prove it clear of the tolerance there.
 bool SceneChecker::tolerant_component(int k, Posed* ends) const {
-  signed char& known = scratch().tolerant[k];
+  MotionScratch& s = motion_scratch();
+  signed char& known = s.tolerant[k];
   if (known >= 0) return known != 0;
-  thread_local std::vector<double> growth, pair_growth;
+  std::vector<double>& growth = s.end_growth;
+  std::vector<double>& pair_growth = s.end_pair_growth;
   growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
   pair_growth.assign(pair_rates_.size(), options_.tolerance);
   known = 1;
@@ -206,7 +213,7 @@ bool SceneChecker::tolerant_component(int k, Posed* ends) const {
 
 // Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
 void SceneChecker::motion_speeds(const double* start, const double* goal) const {
-  Scratch& s = scratch();
+  MotionScratch& s = motion_scratch();
   const RobotCollisionModel& m = checker_.collision_model();
   s.speed.assign(m.shapes().size(), 0.0);
   for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
@@ -232,7 +239,7 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
 void SceneChecker::speeds_over(const double* start, const double* goal, double lo, double hi) const {
   thread_local Posed posed;
   thread_local std::vector<double> mid;
-  Scratch& s = scratch();
+  MotionScratch& s = motion_scratch();
   motion_speeds(start, goal);
   mid.resize(s.delta.size());
   for (std::size_t j = 0; j < mid.size(); ++j) mid[j] = start[j] + 0.5 * (lo + hi) * s.delta[j];
@@ -247,13 +254,13 @@ void SceneChecker::speeds_over(const double* start, const double* goal, double l
 
 double SceneChecker::link_growth(int link, const double* start, const double* goal, double lo, double hi) const {
   speeds_over(start, goal, lo, hi);
-  const double g = scratch().interval_speed[link] * 0.5 * (hi - lo);
+  const double g = motion_scratch().interval_speed[link] * 0.5 * (hi - lo);
   return g * (1.0 + 1e-9) + pose_margin(g);
 }
 
 double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double lo, double hi) const {
   speeds_over(start, goal, lo, hi);
-  const double g = scratch().interval_pair_speed[pair] * 0.5 * (hi - lo);
+  const double g = motion_scratch().interval_pair_speed[pair] * 0.5 * (hi - lo);
   return g * (1.0 + 1e-9) + pose_margin(g);
 }
 
@@ -263,7 +270,7 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
     if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) throw std::invalid_argument("motion check: " + checker_.model().variable_names()[j] + " is not finite");
   }
   MotionResult result;
-  Scratch& s = scratch();
+  MotionScratch& s = motion_scratch();
   s.state.resize(n);
   auto at = [&](double f) {
     for (std::size_t j = 0; j < n; ++j) s.state[j] = f >= 1.0 ? goal[j] : start[j] + f * (goal[j] - start[j]);
@@ -272,7 +279,7 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   // The ends first (a planner's goal state is often the colliding one); the start's collision is
   // the earliest there is.
   result.states_checked = 2;
-  thread_local Posed ends[2];
+  Posed* ends = s.ends.data();
   for (int e = 0; e < 2; ++e) {
     pose_links(e == 0 ? start : goal, ends[e]);
     ends[e].growth = ends[e].pair_growth = nullptr;

@@ -125,6 +125,11 @@ class SceneChecker {
     }
   };
 
+  // A thread's working memory for motions (scene_motion.cpp), kept between them: a planner's
+  // millionth motion allocates nothing.
+  struct MotionScratch;
+  static MotionScratch& motion_scratch();
+
   Answer check_posed(const Posed& posed) const;
   // One component: a checked self pair or one link against the environment (components_).
   Answer component_check(int k, const Posed& posed) const;
