@@ -131,6 +131,28 @@ bool mesh_primitive_collide(const ShapeRef& mesh, const Transform& pm, const Sha
   return c.collision;
 }
 
+// A mesh's BVH query once its hull has given `upper` (surface points that far apart: an upper
+// bound on the distance, or `best` when there were none): only what beats it is walked.
+DistanceRequest below(double upper, bool solids, double tolerance) {
+  DistanceRequest request;
+  request.solids = solids;
+  request.upper_bound = upper;
+  request.tolerance = tolerance;
+  return request;
+}
+
+// The BVH's answer when it beats the surface points (or there were none), else those points.
+double nearer(const DistanceResult& d, double best, double upper, const Vec3& upper_a, const Vec3& upper_b, Vec3& wa, Vec3& wb) {
+  if (d.distance < upper || upper >= best) {
+    wa = d.point_a;
+    wb = d.point_b;
+    return d.distance;
+  }
+  wa = upper_a;
+  wb = upper_b;
+  return upper;
+}
+
 // The hull first, as for two meshes (meshes_distance): its distance is a certified lower bound
 // that settles most far pairs, and when its closest point lies on the mesh's surface it is the
 // mesh's distance, with no BVH walk. (A link a millimetre from a box face took 570 triangle tests
@@ -164,20 +186,9 @@ double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const 
     }
     if (apart < upper) upper = apart, upper_a = pm * q, upper_b = pm * hull.on_b;
   }
-  DistanceRequest request;
-  request.solids = solids;
-  request.upper_bound = upper;
-  request.tolerance = tolerance;
-  const DistanceResult d = distance(*mesh.mesh, pm, p.primitive, pp, request);
+  const DistanceResult d = distance(*mesh.mesh, pm, p.primitive, pp, below(upper, solids, tolerance));
   stats += d.stats;
-  if (d.distance < upper || upper >= best) {
-    wa = d.point_a;
-    wb = d.point_b;
-    return d.distance;
-  }
-  wa = upper_a;
-  wb = upper_b;
-  return upper;
+  return nearer(d, best, upper, upper_a, upper_b, wa, wb);
 }
 
 // ------------------------------------------------------------------------------ two meshes
@@ -230,20 +241,9 @@ double meshes_distance(const ShapeRef& ma, const Transform& pa, const ShapeRef& 
     }
   }
   // The exact query, only for what beats `upper`: a close upper bound prunes most of it.
-  DistanceRequest request;
-  request.solids = solids;
-  request.upper_bound = upper;
-  request.tolerance = tolerance;
-  const DistanceResult d = distance(*ma.mesh, pa, *mb.mesh, pb, request);
+  const DistanceResult d = distance(*ma.mesh, pa, *mb.mesh, pb, below(upper, solids, tolerance));
   stats += d.stats;
-  if (d.distance < upper || upper >= best) {
-    wa = d.point_a;
-    wb = d.point_b;
-    return d.distance;
-  }
-  wa = upper_a;
-  wb = upper_b;
-  return upper;
+  return nearer(d, best, upper, upper_a, upper_b, wa, wb);
 }
 
 bool meshes_collide(const ShapeRef& a, const Transform& pa, const ShapeRef& b, const Transform& pb,
