@@ -148,6 +148,70 @@ TEST(ConvexHull, RobotMeshes) {
   }
 }
 
+// hull_support climbs a large hull's edges: the vertex it names is as far along d as the furthest
+// of all (brute force), for random directions, the axes, and the faces' normals, their reverses
+// and slight tilts of them (where many vertices of a flat face tie, and a climb could stall on a
+// vertex inside the face), on random, grid (coplanar and collinear points) and robot hulls.
+TEST(ConvexHull, SupportClimbsToTheFurthestVertex) {
+  BVH_REQUIRE_ROBOTS();
+  std::vector<std::pair<std::string, std::vector<Vec3>>> clouds = {
+      {"random", random_cloud(2000, 1.0)}, {"grid", grid_cloud(3000, 8, 0.01)}, {"grid coarse", grid_cloud(400, 2, 1.0)}};
+  for (const char* file : {"panda/moveit_resources_panda_description/meshes/collision/link1.stl", "panda/moveit_resources_panda_description/meshes/collision/hand.stl"}) {
+    clouds.emplace_back(file, test::robot_mesh(file).vertices);
+  }
+  std::normal_distribution<double> g(0.0, 1.0);
+  int climbed = 0;
+  for (const auto& [name, points] : clouds) {
+    const ConvexHull hull = convex_hull(points);
+    std::vector<Vec3> directions = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitY(), Vec3::UnitZ(), -Vec3::UnitZ()};
+    for (int i = 0; i < 300; ++i) directions.emplace_back(g(rng()), g(rng()), g(rng()));
+    for (const auto& f : hull.faces) {
+      const Vec3 n = (hull.vertices[f[1]] - hull.vertices[f[0]]).cross(hull.vertices[f[2]] - hull.vertices[f[0]]);
+      for (const Vec3& d : {n, Vec3(-n), Vec3(n + 1e-9 * n.norm() * Vec3(g(rng()), g(rng()), g(rng())))}) directions.push_back(d);
+    }
+    for (const Vec3& d : directions) {
+      double furthest = -std::numeric_limits<double>::infinity();
+      for (const Vec3& v : hull.vertices) furthest = std::max(furthest, d.dot(v));
+      const int k = hull_support(hull, d);
+      ASSERT_GE(d.dot(hull.vertices[k]), furthest - 1e-12 * d.norm() * hull.extent) << name;
+    }
+    climbed += hull.vertices.size() >= 32;
+  }
+  EXPECT_GE(climbed, 3);  // hulls large enough to be climbed
+}
+
+// A climb that starts inside a flat face square to d finds every neighbour level with it: it must
+// not answer that vertex (the face is the lowest, not the highest, along d) but search them all.
+// (Built by hand: a fan of 8 around the centre of the base, a ring of 24 above it and a top; every
+// climb starts at the base's centre.)
+TEST(ConvexHull, AClimbLevelOnAFlatFaceSearchesEveryVertex) {
+  ConvexHull h;
+  std::vector<std::vector<std::uint32_t>> around;
+  auto add = [&](const Vec3& v) {
+    h.vertices.push_back(v);
+    around.emplace_back();
+    return static_cast<std::uint32_t>(h.vertices.size() - 1);
+  };
+  auto link = [&](std::uint32_t a, std::uint32_t b) { around[a].push_back(b), around[b].push_back(a); };
+  const std::uint32_t centre = add(Vec3::Zero());
+  std::vector<std::uint32_t> base, ring;
+  for (int i = 0; i < 8; ++i) base.push_back(add(Vec3(std::cos(i * M_PI / 4), std::sin(i * M_PI / 4), 0.0)));
+  for (int i = 0; i < 24; ++i) ring.push_back(add(Vec3(0.8 * std::cos(i * M_PI / 12), 0.8 * std::sin(i * M_PI / 12), 0.5)));
+  const std::uint32_t top = add(Vec3(0.0, 0.0, 1.0));
+  for (int i = 0; i < 8; ++i) link(centre, base[i]), link(base[i], base[(i + 1) % 8]), link(base[i], ring[3 * i]);
+  for (int i = 0; i < 24; ++i) link(ring[i], ring[(i + 1) % 24]), link(ring[i], top);
+  h.neighbour_start.assign(1, 0);
+  for (const auto& list : around) {
+    h.neighbours.insert(h.neighbours.end(), list.begin(), list.end());
+    h.neighbour_start.push_back(static_cast<std::uint32_t>(h.neighbours.size()));
+  }
+  h.extent = 1.0;
+  h.extremes.fill(static_cast<int>(centre));
+  ASSERT_GE(h.vertices.size(), 32u);  // large enough to be climbed
+  EXPECT_EQ(hull_support(h, Vec3::UnitZ()), static_cast<int>(top));
+  EXPECT_NE(hull_support(h, Vec3(0.3, 0.1, 1.0)), static_cast<int>(centre));
+}
+
 // A vertex no triangle uses is not on the surface: it must not become a hull vertex that the
 // checker would take for a surface point.
 TEST(ConvexHull, UsedVerticesLeaveOutUnreferencedPoints) {

@@ -207,21 +207,13 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
     return out;
   }
   const Mat3 Rt = b_in_a.R.transpose();
-  auto furthest = [](const std::vector<Vec3>& vertices, const Vec3& d) {
-    int best = 0;
-    double best_dot = -std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-      if (const double x = d.dot(vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
-    }
-    return best;
-  };
   auto b_point = [&](int i) -> Vec3 { return b_in_a * b.vertices[i]; };
   auto support_a = [&](const Vec3& d) {
-    const int i = furthest(a.vertices, d);
+    const int i = hull_support(a, d);
     return SupportPoint{a.vertices[i], i};
   };
   auto support_b = [&](const Vec3& d) {
-    const int i = furthest(b.vertices, Rt * d);
+    const int i = hull_support(b, Rt * d);
     return SupportPoint{b_point(i), i};
   };
   const double scale = a.extent + b.extent + b_in_a.t.norm();
@@ -266,11 +258,7 @@ SupportPoint own_support(const ConvexShape& s, const Vec3& d) {
       return {s.triangle[best], best};
     }
     case ConvexShape::Kind::kHull: {
-      int best = 0;
-      double best_dot = -std::numeric_limits<double>::infinity();
-      for (std::size_t i = 0; i < s.hull->vertices.size(); ++i) {
-        if (const double x = d.dot(s.hull->vertices[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
-      }
+      const int best = hull_support(*s.hull, d);
       return {s.hull->vertices[best], best};
     }
   }

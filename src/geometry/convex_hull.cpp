@@ -5,6 +5,7 @@
 #include <random>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "bvh_collision/geometry/predicates.h"
 
@@ -192,6 +193,37 @@ class Quickhull {
   std::vector<HorizonEdge> horizon_;
 };
 
+// Hulls with fewer vertices are searched whole: a climb's bookkeeping costs more than it saves.
+constexpr std::size_t kClimbFrom = 32;
+
+// The faces' edges, each once per end, and the axis extremes (hull_support).
+void index_edges(ConvexHull& hull) {
+  const std::size_t n = hull.vertices.size();
+  std::vector<std::vector<std::uint32_t>> around(n);
+  for (const auto& f : hull.faces) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      around[a].push_back(static_cast<std::uint32_t>(b));  // (each edge in two faces: both ends get it)
+    }
+  }
+  hull.neighbour_start.assign(1, 0);
+  for (std::vector<std::uint32_t>& list : around) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    hull.neighbours.insert(hull.neighbours.end(), list.begin(), list.end());
+    hull.neighbour_start.push_back(static_cast<std::uint32_t>(hull.neighbours.size()));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    int lo = 0, hi = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (hull.vertices[i][axis] < hull.vertices[lo][axis]) lo = static_cast<int>(i);
+      if (hull.vertices[i][axis] > hull.vertices[hi][axis]) hi = static_cast<int>(i);
+    }
+    hull.extremes[2 * axis] = lo;
+    hull.extremes[2 * axis + 1] = hi;
+  }
+}
+
 }  // namespace
 
 ConvexHull convex_hull(const std::vector<Vec3>& points) {
@@ -223,7 +255,43 @@ ConvexHull convex_hull(const std::vector<Vec3>& points) {
     }
   }
   hull.faces = std::move(faces);
+  index_edges(hull);
   return hull;
+}
+
+int hull_support(const ConvexHull& hull, const Vec3& d) {
+  const std::vector<Vec3>& v = hull.vertices;
+  auto every_vertex = [&] {
+    int best = 0;
+    double best_dot = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      if (const double x = d.dot(v[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
+    }
+    return best;
+  };
+  if (v.size() < kClimbFrom || hull.neighbours.empty()) return every_vertex();
+  int at = hull.extremes[d.x() >= 0 ? 1 : 0];
+  for (const int e : {d.y() >= 0 ? hull.extremes[3] : hull.extremes[2], d.z() >= 0 ? hull.extremes[5] : hull.extremes[4]}) {
+    if (d.dot(v[e]) > d.dot(v[at])) at = e;
+  }
+  // Each dot product is within 3 ulps of |d|_1 * extent of its value: a neighbour lower by more
+  // than this is truly lower.
+  const double rounding = 1e-13 * d.cwiseAbs().sum() * hull.extent;
+  for (;;) {
+    const double here = d.dot(v[at]);
+    int next = -1;
+    double next_dot = here, nearest = -std::numeric_limits<double>::infinity();
+    for (std::uint32_t k = hull.neighbour_start[at]; k < hull.neighbour_start[at + 1]; ++k) {
+      const double x = d.dot(v[hull.neighbours[k]]);
+      nearest = std::max(nearest, x);
+      if (x > next_dot) next_dot = x, next = static_cast<int>(hull.neighbours[k]);
+    }
+    if (next >= 0 && next_dot > here + rounding) {
+      at = next;
+      continue;
+    }
+    return nearest < here - rounding ? at : every_vertex();
+  }
 }
 
 }  // namespace bvh_collision

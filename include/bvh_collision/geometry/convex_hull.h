@@ -20,8 +20,19 @@ struct ConvexHull {
                                              // empty when the points are coplanar or fewer than 4
   double extent = 0.0;                       // the largest vertex norm (for rounding margins)
   std::uint64_t orientation_tests = 0;       // the build's work: point-against-face tests
+  // The faces' edges per vertex: neighbours[neighbour_start[v], neighbour_start[v + 1]) (empty
+  // without faces), and the vertices furthest along -x, +x, -y, +y, -z, +z (hull_support's starts).
+  std::vector<std::uint32_t> neighbour_start, neighbours;
+  std::array<int, 6> extremes{};
   bool empty() const { return vertices.empty(); }
 };
+
+// The index of a vertex furthest along d (the hull's support function, exactly the input's). A
+// large hull is climbed along its edges from the best of its axis extremes: on a convex polytope a
+// vertex that no edge rises from is furthest. A vertex is taken only when every neighbour is lower
+// by more than the dot products' rounding; otherwise (a face almost square to d, where a climb could
+// stall on a vertex inside a flat face) every vertex is tried.
+int hull_support(const ConvexHull& hull, const Vec3& d);
 
 // The hull of `points`. When the points span no volume (all coplanar), `vertices` holds every
 // distinct point (still a superset of the hull's vertices) and `faces` is empty.
