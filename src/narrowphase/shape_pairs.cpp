@@ -178,8 +178,10 @@ double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const 
       q = nearest.point_b;
     }
     const double apart = (q - hull.on_b).norm();
+    // (Within 1e-13 of the scale: the BVH's answer to rounding. At 1e-10, as two meshes take it,
+    // 6 % fewer instructions but a distance that moves by 3e-11 when a pose moves by an ulp.)
     const double scale = mesh.hull->extent + extent(primitive) + p_in_mesh.t.norm();
-    if (apart - hull.lower_bound <= std::max(1e-10 * scale, tolerance)) {
+    if (apart - hull.lower_bound <= std::max(1e-13 * scale, tolerance)) {
       wa = pm * q;
       wb = pm * hull.on_b;
       return apart;
