@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The body of `make test`: catkin_lint, then every unit and launch test of the Release build
+# The body of `make test`: the Release build (what `make build` builds), catkin_lint, then every
+# unit and launch test of the Release build
 # (unless SANITIZE=1), then the unit tests under AddressSanitizer and UndefinedBehaviorSanitizer
 # on the library of their own build folder (when SANITIZE=1 or CI=true). The last line is the combined count,
 # `N passed, N failed, N skipped`; the exit status is non-zero when anything failed.
@@ -14,6 +15,7 @@ export PATH="/usr/bin:$PATH"
 BUILD=${BUILD:-build}
 SAN_BUILD=${SAN_BUILD:-build-sanitize}
 JOBS=${JOBS:-2}
+BUILD_JOBS=${BUILD_JOBS:-3}
 run_normal=1; run_sanitized=0
 [[ "${SANITIZE:-0}" == "1" ]] && { run_normal=0; run_sanitized=1; }
 [[ "${CI:-}" == "true" ]] && run_sanitized=1
@@ -36,6 +38,25 @@ start_sanitized_build() {
   san_build_pid=$!
 }
 
+# The sanitized build starts first, at the lowest priority: it takes the CPU the Release build
+# and the tests leave (a build's serial steps and links; the tail of the unit tests; the launch
+# tests, one at a time, mostly wait on services and clocks) and little else (nice 19 weighs 1.5 %
+# of a nice-0 process).
+[[ $run_sanitized == 1 ]] && start_sanitized_build
+
+echo "== Release build ($BUILD) $(date +%T)"
+if ! { cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=Release && make -C "$BUILD" -j"$BUILD_JOBS" all \
+       && make -C "$BUILD" -j"$BUILD_JOBS" tests; }; then
+  echo "Release build failed"
+  [[ -n "$san_build_pid" ]] && { pkill -P "$san_build_pid"; kill "$san_build_pid"; } 2>/dev/null
+  echo "0 passed, 1 failed, 0 skipped"
+  exit 1
+fi
+
+# The robots' link proxies the tests share (test/robot_data.h: proxy_cache_dir), built afresh by
+# each run: a cache left by other code is not what this code builds.
+rm -rf "$BUILD/test_proxy_cache"
+
 lint_dir="$BUILD/lint_results"
 result_dirs=("$lint_dir")
 status=0
@@ -53,10 +74,6 @@ XML
 if [[ $run_normal == 1 ]]; then
   echo "== unit and launch tests ($BUILD) $(date +%T)"
   rm -rf "$BUILD/test_results"
-  # The sanitized build runs beside the Release tests at the lowest priority: it takes the CPU
-  # they leave (the tail of the unit tests; the launch tests, one at a time, mostly wait on
-  # services and clocks) and little else (nice 19 weighs 1.5 % of a nice-0 process).
-  [[ $run_sanitized == 1 ]] && start_sanitized_build
   unit_tests "$BUILD" || status=1
   echo "== launch tests ($BUILD) $(date +%T)"
   ctest --test-dir "$BUILD" -R '^_ctest_bvh_collision_rostest_' --output-on-failure || status=1
