@@ -18,17 +18,29 @@ inline RobotModel demo_arm_model() {
   return RobotModel::from_urdf(*load_robot_description_file(source_dir() + "/urdf/demo_arm.urdf"), PackageResolver({}));
 }
 
+// Options whose proxy levels come from the tests' cache (proxy_cache_dir) unless they name a cache
+// of their own: a robot's levels are then built once per `make test` (by the first program that
+// asks), not once per program and again under the sanitizers. What the builder makes is tested
+// uncached, on its own (test_link_proxy); a checker without levels is left as it is, and so is a
+// benchmark's (it times the build).
+inline CheckerOptions with_test_proxy_cache(CheckerOptions options) {
+#ifndef BVH_COLLISION_BENCHMARK
+  if (!options.proxy_levels.empty() && options.proxy_cache.empty()) options.proxy_cache = proxy_cache_dir();
+#endif
+  return options;
+}
+
 inline CollisionChecker demo_arm_checker(const CheckerOptions& options = {}) {
   RobotModel model = demo_arm_model();
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm), options);
+  return CollisionChecker(std::move(model), std::move(acm), with_test_proxy_cache(options));
 }
 
 inline CollisionChecker load_checker(const std::string& robot, const CheckerOptions& options = {}) {
   const std::string dir = robots_dir() + "/" + robot;
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  return CollisionChecker(std::move(model), std::move(acm), options);
+  return CollisionChecker(std::move(model), std::move(acm), with_test_proxy_cache(options));
 }
 
 // Panda as MoveIt sets it up: adjacent links and its SRDF's disabled pairs allowed.
@@ -40,7 +52,7 @@ inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) {
   std::stringstream text;
   text << srdf.rdbuf();
   apply_srdf(parse_srdf(text.str(), &model), model, acm);
-  return CollisionChecker(std::move(model), std::move(acm), options);
+  return CollisionChecker(std::move(model), std::move(acm), with_test_proxy_cache(options));
 }
 
 // Panda as above with the node's proxy levels (5, 10, 20 mm), built once per test binary.
