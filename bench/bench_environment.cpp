@@ -100,6 +100,15 @@ LeafMap leaves_of(const octomap::OcTree& tree) {
 
 namespace {
 
+// "5, 10 and 20 mm": the proxy levels a table was measured with.
+std::string levels_mm(const std::vector<double>& levels) {
+  std::string text;
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == levels.size() ? " and " : ", ") + bench::format(levels[i] * 1000);
+  }
+  return text + " mm";
+}
+
 using namespace environment_bench;
 
 
@@ -309,8 +318,8 @@ void speed_error_octree_table(const std::vector<ScanPoint>& scan, const Vec3& ca
                  level ? level->level * 1000 : 0.0, level ? double(level->leaves) : 0.0, level ? level->build_seconds : 0.0});
     }
   }
-  table.note(std::to_string(n) + " uniform random panda states, solids, adjacent-link matrix, proxy levels 5, 10 and "
-             "20 mm; the truth is our exact distance to the octree. Every row with the octree's distance field kept "
+  table.note(std::to_string(n) + " uniform random panda states, solids, adjacent-link matrix, proxy levels " +
+             levels_mm(sizes.proxy_levels) + "; the truth is our exact distance to the octree. Every row with the octree's distance field kept "
              "(octree/distance_field.h, built once in " + bench::format(field_ms) + " ms, as the node does after each "
              "cloud): links whose bounding sphere it clears skip the octree, and at a tolerance t the other links' "
              "proxies of the coarsest level up to 2 t answer against the field and its occupancy grid. single: one "
@@ -331,7 +340,7 @@ void motion_table(const Sizes& sizes, const std::string& dir) {
                                            PackageResolver({}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   CheckerOptions options;
-  options.proxy_levels = {0.005, 0.01, 0.02};
+  options.proxy_levels = sizes.proxy_levels;
   const CollisionChecker checker(std::move(model), std::move(acm), options);
   Environment env(0.02);
   std::vector<ScanPoint> pillar;
@@ -385,7 +394,7 @@ void motion_table(const Sizes& sizes, const std::string& dir) {
       }
     }
   }
-  table.note("Demo arm (proxy levels 5, 10 and 20 mm), self and environment, root at the origin, the octree's distance "
+  table.note("Demo arm (proxy levels " + levels_mm(sizes.proxy_levels) + "), self and environment, root at the origin, the octree's distance "
              "field kept; " + std::to_string(sizes.motions) + " random motions between uniform states. Certified: each "
              "state's clearance bounds the next step; at 0 exact distances, at a tolerance t a lower bound from the "
              "proxies of the coarsest level e up to t / 2 (within e of the exact one), and a motion ends as colliding "
@@ -559,8 +568,8 @@ int main(int argc, char** argv) {
   using namespace bvh_collision;
   using namespace bvh_collision::environment_bench;
   const bool quick = bench::quick_mode(argc, argv);
-  const Sizes sizes = quick ? Sizes{1, 40, 120, 100, {0.05, 0.1}, {16, 256}, 5}
-                            : Sizes{5, 1000, 600, 500, {0.02, 0.05, 0.1}, {16, 64, 256, 1024, 4096}, 100};
+  const Sizes sizes = quick ? Sizes{1, 40, 120, 100, {0.05, 0.1}, {16, 256}, 5, {0.02}}
+                            : Sizes{5, 1000, 600, 500, {0.02, 0.05, 0.1}, {16, 64, 256, 1024, 4096}, 100, {0.005, 0.01, 0.02}};
   const std::string dir = bench::output_dir(argc, argv);
   std::printf("# Environment: %s\n", bench::machine_description().c_str());
   const Vec3 camera(-0.4, 0.0, 1.4);
@@ -571,7 +580,7 @@ int main(int argc, char** argv) {
   resolution_table(scan, camera, checker, states, sizes, dir);
   {
     CheckerOptions levels;
-    levels.proxy_levels = {0.005, 0.01, 0.02};
+    levels.proxy_levels = sizes.proxy_levels;
     speed_error_octree_table(scan, camera, test::load_checker("panda", levels), states, sizes, dir);
   }
   motion_table(sizes, dir);

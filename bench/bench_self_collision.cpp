@@ -553,7 +553,7 @@ void run_robot(const std::string& name, const Sizes& sizes, const std::string& d
 int main(int argc, char** argv) {
   using namespace bvh_collision;
   const bool quick = bench::quick_mode(argc, argv);
-  const Sizes sizes = quick ? Sizes{60, 20, 2, 300} : Sizes{5000, 300, 5, 10000};
+  const Sizes sizes = quick ? Sizes{60, 10, 2, 300} : Sizes{5000, 300, 5, 10000};
   std::cout << "# Self-collision per configuration, against FCL as MoveIt uses it\n# Machine: "
             << bench::machine_description() << "\n";
   Table speed_error("speed_error", "Boolean self-collision (solids): time per state against tolerance, with the link proxies",

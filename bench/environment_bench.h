@@ -24,6 +24,9 @@ struct Sizes {
   std::vector<double> resolutions;
   std::vector<int> clutter;  // box counts for the growth curve
   std::size_t motions;       // random motions of the motion table
+  // The proxy levels of the tolerance tables: the node's three (5, 10, 20 mm); the quick run
+  // builds the 20 mm level only (panda's 5 mm level is most of its time).
+  std::vector<double> proxy_levels;
 };
 
 // The distance along a ray (unit direction) to something more in the scene than the boxes, if
