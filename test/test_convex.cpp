@@ -1,9 +1,5 @@
 // Convex hulls and the certified GJK distance, against CGAL: extreme points (convex_hull_3) and
 // the exact distance between two polytopes (Polytope_distance_d with an exact number type).
-#include <CGAL/Gmpzf.h>
-#include <CGAL/Polytope_distance_d.h>
-#include <CGAL/Polytope_distance_d_traits_3.h>
-#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 
 #include <map>
@@ -18,8 +14,6 @@
 
 namespace bvh_collision {
 namespace {
-
-using test::Epick;
 
 std::mt19937_64& rng() {
   static std::mt19937_64 r(7);
@@ -88,12 +82,9 @@ void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, 
   }
   EXPECT_EQ(outside, 0);
   // Every extreme point CGAL finds is one of ours.
-  std::vector<Epick::Point_3> cgal_points, extreme;
-  for (const Vec3& p : points) cgal_points.push_back(test::to_cgal<Epick>(p));
-  CGAL::extreme_points_3(cgal_points, std::back_inserter(extreme));
   std::set<std::array<double, 3>> ours;
   for (const Vec3& v : hull.vertices) ours.insert({v.x(), v.y(), v.z()});
-  for (const auto& e : extreme) EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
+  for (const Vec3& e : test::cgal_extreme_points(points)) EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
   expect_input_support(points, hull, 200);
 }
 
@@ -241,15 +232,7 @@ TEST(ConvexHull, DegenerateInputsKeepEveryDistinctPoint) {
 
 // --------------------------------------------------------------------------------- distance
 
-using PolytopeTraits = CGAL::Polytope_distance_d_traits_3<Epick, CGAL::Gmpzf, double>;
-
-double exact_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  std::vector<Epick::Point_3> pa, pb;
-  for (const Vec3& p : a) pa.push_back(test::to_cgal<Epick>(p));
-  for (const Vec3& p : b) pb.push_back(test::to_cgal<Epick>(p));
-  CGAL::Polytope_distance_d<PolytopeTraits> d(pa.begin(), pa.end(), pb.begin(), pb.end());
-  return std::sqrt(CGAL::to_double(d.squared_distance_numerator()) / CGAL::to_double(d.squared_distance_denominator()));
-}
+double exact_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) { return test::cgal_polytope_distance(a, b); }
 
 struct DistanceCase {
   std::vector<Vec3> a, b;

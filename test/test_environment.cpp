@@ -3,8 +3,6 @@
 // queries), solids, collision objects, and a whole robot.
 #include <gtest/gtest.h>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <iostream>
@@ -26,24 +24,14 @@
 namespace bvh_collision {
 namespace {
 
-using test::Epick;
-
 std::mt19937_64& rng() {
   static std::mt19937_64 r(42);
   return r;
 }
 
-bool cgal_triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi) {
-  const Epick::Iso_cuboid_3 box(test::to_cgal<Epick>(lo), test::to_cgal<Epick>(hi));
-  const test::CgalSimplex s = test::cgal_simplex(t[0], t[1], t[2]);
-  if (s.dim == 2) return CGAL::do_intersect(Epick::Triangle_3(s.p[0], s.p[1], s.p[2]), box);
-  if (s.dim == 1) return CGAL::do_intersect(Epick::Segment_3(s.p[0], s.p[1]), box);
-  return !box.has_on_unbounded_side(s.p[0]);
-}
-
 // Apart: the distance is reached on the box's surface, so the nearest of its 12 face triangles.
 double oracle_triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi) {
-  if (cgal_triangle_meets_box(t, lo, hi)) return 0.0;
+  if (test::cgal_triangle_meets_box(t, lo, hi)) return 0.0;
   const TriangleMesh box = box_mesh(hi - lo);
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t f = 0; f < box.triangles.size(); ++f) {
@@ -69,7 +57,7 @@ TEST(CubeTriangle, AgainstCgal) {
     if (i % 17 == 0) t[2] = t[1];                      // a segment
     if (i % 29 == 0) t[1] = t[2] = t[0];               // a point
     if (i % 13 == 0) t[2] = 0.5 * (t[0] + t[1]);       // collinear
-    const bool expected = cgal_triangle_meets_box(t, lo, hi);
+    const bool expected = test::cgal_triangle_meets_box(t, lo, hi);
     ASSERT_EQ(triangle_meets_box(t, lo, hi), expected) << i;
     Vec3 on_t, on_b;
     const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
