@@ -84,18 +84,53 @@ inline TriangleMesh robot_mesh(const std::string& relative) {
   return load_mesh(robots_dir() + "/" + relative);
 }
 
-// All colliding triangle pairs (mesh indices) by brute force, with b carried into a's frame.
-inline std::vector<std::pair<int, int>> brute_force_pairs(const TriangleMesh& a, const TriangleMesh& b,
-                                                          const Transform& b_in_a) {
+// b's triangles carried into a's frame (the coordinates the BVH queries compare).
+inline std::vector<Triangle> carried_triangles(const TriangleMesh& b, const Transform& b_in_a) {
   std::vector<Triangle> tb(b.triangles.size());
   for (std::size_t j = 0; j < tb.size(); ++j) {
     const Triangle t = b.triangle(j);
     tb[j] = Triangle{{b_in_a * t[0], b_in_a * t[1], b_in_a * t[2]}};
   }
+  return tb;
+}
+
+// A triangle's axis-aligned box: the brute-force oracles' filter, exact (min and max of the
+// vertices' own coordinates).
+struct TriangleBox {
+  Vec3 lo, hi;
+  bool apart(const TriangleBox& o) const {
+    return (hi.array() < o.lo.array()).any() || (o.hi.array() < lo.array()).any();
+  }
+  // The squared gap between the boxes, rounded: at most a few ulps above the true one.
+  double gap_squared(const TriangleBox& o) const {
+    const Vec3 gap = (o.lo - hi).cwiseMax(lo - o.hi).cwiseMax(0.0);
+    return gap.squaredNorm();
+  }
+};
+
+inline TriangleBox triangle_box(const Triangle& t) {
+  return {t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
+}
+
+inline std::vector<TriangleBox> triangle_boxes(const std::vector<Triangle>& ts) {
+  std::vector<TriangleBox> out;
+  out.reserve(ts.size());
+  for (const Triangle& t : ts) out.push_back(triangle_box(t));
+  return out;
+}
+
+// All colliding triangle pairs (mesh indices) by brute force, with b carried into a's frame.
+inline std::vector<std::pair<int, int>> brute_force_pairs(const TriangleMesh& a, const TriangleMesh& b,
+                                                          const Transform& b_in_a) {
+  const std::vector<Triangle> tb = carried_triangles(b, b_in_a);
+  const std::vector<TriangleBox> boxes = triangle_boxes(tb);
   std::vector<std::pair<int, int>> out;
   for (std::size_t i = 0; i < a.triangles.size(); ++i) {
     const Triangle ta = a.triangle(i);
+    const TriangleBox box = triangle_box(ta);
     for (std::size_t j = 0; j < tb.size(); ++j) {
+      // Boxes of the vertices' own coordinates that are apart (strictly) hold no common point.
+      if (box.apart(boxes[j])) continue;
       if (triangles_intersect(ta, tb[j])) out.push_back({static_cast<int>(i), static_cast<int>(j)});
     }
   }
@@ -103,16 +138,19 @@ inline std::vector<std::pair<int, int>> brute_force_pairs(const TriangleMesh& a,
 }
 
 // Minimum triangle-pair distance by brute force (the same carried coordinates as the BVH uses).
+// A pair whose boxes are farther apart than the best distance so far (with a margin for the
+// rounding of the boxes' gap) cannot be nearer, and is not measured.
 inline double brute_force_distance(const TriangleMesh& a, const TriangleMesh& b, const Transform& b_in_a) {
   double best = std::numeric_limits<double>::infinity();
-  std::vector<Triangle> tb(b.triangles.size());
-  for (std::size_t j = 0; j < tb.size(); ++j) {
-    const Triangle t = b.triangle(j);
-    tb[j] = Triangle{{b_in_a * t[0], b_in_a * t[1], b_in_a * t[2]}};
-  }
+  const std::vector<Triangle> tb = carried_triangles(b, b_in_a);
+  const std::vector<TriangleBox> boxes = triangle_boxes(tb);
   for (std::size_t i = 0; i < a.triangles.size(); ++i) {
     const Triangle ta = a.triangle(i);
-    for (const Triangle& t : tb) best = std::min(best, triangle_triangle_distance(ta, t).distance);
+    const TriangleBox box = triangle_box(ta);
+    for (std::size_t j = 0; j < tb.size(); ++j) {
+      if (box.gap_squared(boxes[j]) > best * best * (1 + 1e-9)) continue;
+      best = std::min(best, triangle_triangle_distance(ta, tb[j]).distance);
+    }
   }
   return best;
 }
