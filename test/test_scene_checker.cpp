@@ -13,9 +13,11 @@
 #include <optional>
 #include <random>
 
+#include "bvh_collision/checker/object_grid.h"
 #include "bvh_collision/checker/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"
+#include "mesh_fixtures.h"
 #include "planning_scenes.h"
 #include "robot_data.h"
 
@@ -580,6 +582,54 @@ TEST(SceneChecker, OctreeStatesAnswerAsTheGeneralQueries) {
     }
   }
   EXPECT_GT(colliding, 10);
+}
+
+// The object grid passes over an object of a cell's list only when its bound proves that no ball
+// centred in the cell and that small meets it: every object whose own ball test passes
+// (ObjectGrid::ball_meets, true whenever the ball meets it, the oracle here over every object)
+// is offered, for balls anywhere in the grid up to its reach, and for balls within a hair of
+// touching an object (the radius found by bisection on the ball test), turned primitives of every
+// kind and mesh objects among them.
+TEST(ObjectGrid, OffersEveryObjectABallMeets) {
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Environment world(0.05);
+  for (int i = 0; i < 48; ++i) {
+    const Transform pose = test::random_rotation(rng, Vec3(unit(rng) * 2 - 1, unit(rng) * 2 - 1, unit(rng) * 2 - 1));
+    const double a = 0.02 + 0.2 * unit(rng), b = 0.02 + 0.2 * unit(rng);
+    const ObjectShape shapes[] = {ObjectShape::box({a, b, 0.3 * a}), ObjectShape::sphere(a), ObjectShape::cylinder(a, b),
+                                  ObjectShape::capsule(a, b), ObjectShape::cone(a, b),
+                                  ObjectShape::triangles(test::bumpy_sphere(rng, a, 5, 7, 0.2))};
+    world.add_object("o" + std::to_string(i), shapes[i % 6], pose);
+  }
+  const double reach = 0.3;
+  const ObjectGrid grid(world.objects(), Vec3::Constant(-1.2), Vec3::Constant(1.2), reach, 0.1);
+  const int n = static_cast<int>(world.objects().size());
+  int met = 0, offered_in_vain = 0;
+  auto expect_offered = [&](const Vec3& c, double r) {
+    std::vector<char> offered(n, 0);
+    grid.for_each_near(c, r, [&](int o) { offered[o] = 1; });
+    for (int o = 0; o < n; ++o) {
+      if (grid.ball_meets(o, c, r)) {
+        ++met;
+        ASSERT_TRUE(offered[o]) << "object " << o << ", ball at " << c.transpose() << " radius " << r;
+      } else if (offered[o]) {
+        ++offered_in_vain;
+      }
+    }
+  };
+  for (int i = 0; i < 4000; ++i) {
+    const Vec3 c(unit(rng) * 2.4 - 1.2, unit(rng) * 2.4 - 1.2, unit(rng) * 2.4 - 1.2);
+    ASSERT_NO_FATAL_FAILURE(expect_offered(c, reach * unit(rng)));
+    // Touching object o within a hair: the least radius its ball test passes at, by bisection.
+    const int o = static_cast<int>(rng() % n);
+    double lo = 0.0, hi = reach;
+    if (!grid.ball_meets(o, c, hi)) continue;
+    for (int k = 0; k < 60; ++k) (grid.ball_meets(o, c, 0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+    for (const double r : {lo, hi, hi * (1 + 1e-12), lo * (1 - 1e-12)}) ASSERT_NO_FATAL_FAILURE(expect_offered(c, r));
+  }
+  EXPECT_GT(met, 1000);
+  EXPECT_LT(offered_in_vain, 3 * met);  // the cells' bounds pass over most of their lists
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ double squared_box_distance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
 
 ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach,
                        double cell)
-    : origin_(lo), cell_(cell), reach_(reach) {
+    : origin_(lo), cell_(cell), inverse_cell_(1.0 / cell), reach_(reach) {
   for (const CollisionObject& o : objects) {
     Solid s;
     s.to_local = o.pose.inverse();
@@ -43,7 +43,10 @@ ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& 
     s.margin = pose_margin(s.centre.norm() + s.radius);
     solids_.push_back(s);
   }
-  for (int i = 0; i < 3; ++i) n_[i] = std::max(1, static_cast<int>(std::ceil((hi[i] - lo[i]) / cell)));
+  for (int i = 0; i < 3; ++i) {
+    n_[i] = std::max(1, static_cast<int>(std::ceil((hi[i] - lo[i]) / cell)));
+    extent_[i] = n_[i];
+  }
   const std::size_t cells = static_cast<std::size_t>(n_[0]) * n_[1] * n_[2];
   start_.assign(cells + 1, 0);
   // A cell lists an object when the object's box comes within reach of the cell's box (the ball
@@ -71,16 +74,34 @@ ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& 
   for (std::size_t c = 0; c < cells; ++c) start_[c + 1] = start_[c] + static_cast<std::uint32_t>(lists[c].size());
   list_.reserve(start_.back());
   for (const auto& l : lists) list_.insert(list_.end(), l.begin(), l.end());
+  cell_bounds(half_diagonal);
 }
 
-int ObjectGrid::cell_of(const Vec3& p) const {
-  int at[3];
-  for (int i = 0; i < 3; ++i) {
-    const double f = (p[i] - origin_[i]) / cell_;
-    if (!(f >= 0.0) || f >= n_[i]) return -1;  // outside (or not a number): every object
-    at[i] = static_cast<int>(f);
+// A ball centred in a cell and smaller than the cell's distance to an object, less the cell's
+// half diagonal, cannot meet the object: most link balls of a planner's state are such, and
+// pass with no object test. The distance from the cell's centre is the primitive's own, or for
+// a mesh object the larger of its box's and its bounding sphere's; the margin covers its
+// rounding at this scale twice over.
+void ObjectGrid::cell_bounds(double half_diagonal) {
+  apart_.resize(list_.size());
+  clear_.assign(start_.size() - 1, std::numeric_limits<double>::infinity());
+  for (std::size_t c = 0; c + 1 < start_.size(); ++c) {
+    const int x = static_cast<int>(c % n_[0]), y = static_cast<int>(c / n_[0] % n_[1]), z = static_cast<int>(c / n_[0] / n_[1]);
+    const Vec3 centre = origin_ + cell_ * Vec3(x + 0.5, y + 0.5, z + 0.5);
+    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) {
+      const Solid& s = solids_[list_[k]];
+      double d = std::sqrt(squared_box_distance(centre, s.lo, s.hi));
+      if (s.primitive) {
+        const Vec3 p = s.to_local * centre;
+        d = std::max(d, (closest_point(s.shape, p) - p).norm());
+      } else {
+        d = std::max(d, (centre - s.centre).norm() - s.radius);
+      }
+      const double margin = 2.0 * (s.margin + pose_margin(centre.cwiseAbs().sum() + 3.0 * cell_ + d));
+      apart_[k] = d - half_diagonal - margin;
+      clear_[c] = std::min(clear_[c], apart_[k]);
+    }
   }
-  return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
 }
 
 double ObjectGrid::depth(int o, const Vec3& centre) const {

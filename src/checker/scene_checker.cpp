@@ -111,8 +111,10 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   relative_pair_rates();
   interval_chains();
   for (const auto& [a, b] : m.checked_pairs()) {
-    pair_balls_.push_back({a, b, m.bounds()[a].radius, m.bounds()[b].radius, m.paddings()[a] + m.paddings()[b]});
+    pair_balls_.push_back({a, b, m.bounds()[a].radius + m.bounds()[b].radius + m.paddings()[a] + m.paddings()[b]});
   }
+  for (const int l : links_) largest_radius_ = std::max(largest_radius_, m.bounds()[l].radius);
+  octree_ = !env_->octree().empty();
   root_at_origin_ = options.root_pose.R == Mat3::Identity() && options.root_pose.t == Vec3::Zero();
   // Each link's environment first, the links farthest down the chain first, then the self pairs:
   // a planner's states and motions in a scene mostly collide with objects, and with the hand
@@ -314,12 +316,15 @@ void SceneChecker::pose_links(const double* state, Posed& posed) const {
     for (const KinematicsPlan::Step& step : m.kinematics().step_list()) posed.poses[step.link] = options_.root_pose * posed.poses[step.link];
     posed.poses[m.kinematics().root()] = options_.root_pose * posed.poses[m.kinematics().root()];
   }
+  double largest = 0.0;
   for (const int l : links_) {
     const Transform& pose = posed.poses[l];
     const Vec3& c = m.bounds()[l].center;
     for (int i = 0; i < 3; ++i) posed.centres[l][i] = pose.R(i, 0) * c[0] + pose.R(i, 1) * c[1] + pose.R(i, 2) * c[2] + pose.t[i];
     posed.centre_norms[l] = posed.centres[l].norm();
+    largest = std::max(largest, posed.centre_norms[l]);
   }
+  posed.largest_norm = largest;
 }
 
 // ---- SceneChecker: one posed state ----------------------------------------------------------------
@@ -523,18 +528,21 @@ SceneChecker::Answer SceneChecker::component_check(int k, const Posed& s) const 
   if (!options_.environment) return Answer::kFree;
   const int link = k - pairs;
   const Answer objects = link_objects_check(link, s);
-  return objects != Answer::kFree ? objects : link_octree_check(link, s);
+  return objects != Answer::kFree || !octree_ ? objects : link_octree_check(link, s);
 }
 
 SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   const int pairs = static_cast<int>(pair_rates_.size());
   const bool still = s.growth == nullptr && s.pair_growth == nullptr;  // a state, not an interval
+  // pair_check's margin for any pair (its links' centre norms and radii at their largest): a
+  // wider margin only widens the test.
+  const double margin = pose_margin(2.0 * (s.largest_norm + largest_radius_));
   for (const int k : components_) {
     // A state's self pair whose bounding balls are apart is free: pair_check's first test, here
     // without the call (most of a state's 21 panda pairs end there).
     if (k < pairs && still) {
       const PairBalls& p = pair_balls_[k];
-      const double reach = p.ra + p.rb + p.paddings + pose_margin(s.centre_norms[p.a] + s.centre_norms[p.b] + p.ra + p.rb);
+      const double reach = p.reach + margin;
       if ((s.centres[p.a] - s.centres[p.b]).squaredNorm() > reach * reach) continue;
     }
     if (const Answer a = component_check(k, s); a != Answer::kFree) return a;

@@ -20,8 +20,9 @@ class ObjectGrid {
   ObjectGrid() = default;
   ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
 
-  // Calls f(object index) for every object that might lie within `radius` of `centre`: the
-  // cell's list when radius <= reach and the centre lies in the grid, else every object.
+  // Calls f(object index) for every object that might lie within `radius` of `centre`: those
+  // of the cell's list not proven farther (when radius <= reach and the centre lies in the
+  // grid), else every object.
   template <class F>
   void for_each_near(const Vec3& centre, double radius, F&& f) const {
     const int c = radius <= reach_ ? cell_of(centre) : -1;
@@ -29,7 +30,10 @@ class ObjectGrid {
       for (std::size_t o = 0; o < solids_.size(); ++o) f(static_cast<int>(o));
       return;
     }
-    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) f(static_cast<int>(list_[k]));
+    if (radius < clear_[c]) return;
+    for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) {
+      if (radius >= apart_[k]) f(static_cast<int>(list_[k]));
+    }
   }
 
   // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
@@ -53,13 +57,29 @@ class ObjectGrid {
     Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // world box
     double margin = 0.0;  // rounding of the ball test at this object's scale
   };
-  int cell_of(const Vec3& p) const;
+  // (In the header: a planner's state asks it once a link.)
+  int cell_of(const Vec3& p) const {
+    int at[3];
+    for (int i = 0; i < 3; ++i) {
+      // (By the inverse, not divided: a point that rounding puts one cell over lies within
+      // rounding of that cell, and the lists and bounds are built with margins far above that.)
+      const double f = (p[i] - origin_[i]) * inverse_cell_;
+      if (!(f >= 0.0 && f < extent_[i])) return -1;  // outside (or not a number): every object
+      at[i] = static_cast<int>(f);
+    }
+    return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
+  }
+  void cell_bounds(double half_diagonal);
 
   std::vector<Solid> solids_;
   Vec3 origin_ = Vec3::Zero();
-  double cell_ = 1.0, reach_ = 0.0;
+  double cell_ = 1.0, inverse_cell_ = 1.0, reach_ = 0.0;
   int n_[3] = {0, 0, 0};
+  double extent_[3] = {0.0, 0.0, 0.0};  // n_ as doubles
   std::vector<std::uint32_t> start_, list_;
+  // Per list entry, a lower bound on the distance from any point of the cell to the object
+  // (rounding taken off); per cell, the least of its entries' (infinity for none).
+  std::vector<double> apart_, clear_;
 };
 
 }  // namespace bvh_collision

@@ -96,6 +96,7 @@ class SceneChecker {
     std::vector<Transform> poses;
     std::vector<Vec3> centres;
     std::vector<double> centre_norms;  // |centre| per link, for the rounding margins
+    double largest_norm = 0.0;         // of centre_norms (the links with geometry)
     const double* growth = nullptr;
     const double* pair_growth = nullptr;  // per checked pair: how far its links' distance can fall
     const double* from = nullptr;         // the interval's end states (with growth)
@@ -201,6 +202,8 @@ class SceneChecker {
   // link's environment (the pair count plus the link).
   std::vector<int> components_;
   bool root_at_origin_ = true;  // the root pose is the identity: link poses need no product
+  double largest_radius_ = 0.0;  // of the links' bounding radii
+  bool octree_ = false;          // the environment has one
   struct PairRates {
     bool relative = true;  // false: the sum of the two links' own bounds
     std::vector<std::pair<int, double>> weights;  // (state variable, rate)
@@ -208,7 +211,7 @@ class SceneChecker {
   std::vector<PairRates> pair_rates_;  // per checked pair
   struct PairBalls {
     int a, b;
-    double ra, rb, paddings;  // the links' bounding radii, the sum of their paddings
+    double reach;  // the links' bounding radii and paddings, summed
   };
   std::vector<PairBalls> pair_balls_;  // per checked pair
   // Per link with geometry, the moving joints above it, the link's own first: a joint turns
