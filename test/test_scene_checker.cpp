@@ -12,6 +12,8 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "bvh_collision/checker/object_grid.h"
 #include "bvh_collision/checker/scene_checker.h"
@@ -141,6 +143,35 @@ TEST(SceneChecker, AStateRememberedFreeAnswersOnlyForItsChecker) {
   const MotionResult r = scene->check_motion(q.data(), next.data());
   EXPECT_FALSE(r.valid);
   EXPECT_EQ(r.colliding_fraction, 0.0);
+}
+
+// A state with a value that is not a number or infinite has no pose: it is refused by name, as a
+// motion with one is, never answered (the poses would be NaN, and NaN compares as apart). Each
+// variable in turn, the hand among boxes; a state remembered free first, so that memory cannot
+// answer either.
+TEST(SceneChecker, RefusesAStateNotFinite) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  Environment world(0.05);
+  for (int i = 0; i < 8; ++i) world.add_object("box" + std::to_string(i), ObjectShape::box({0.2, 0.2, 0.2}), Transform::Translation(Vec3(0.3 * (i % 4) - 0.45, 0.5 * (i / 4) - 0.25, 0.5)));
+  const SceneChecker scene(checker, std::make_shared<const Environment>(world));
+  std::vector<double> q(model.variable_count(), 0.02);
+  const double ready[] = {0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785};
+  for (int j = 0; j < 7; ++j) q[static_cast<std::size_t>(model.joints()[model.joint_index("panda_joint" + std::to_string(j + 1))].variable)] = ready[j];
+  ASSERT_FALSE(scene.collides(q.data()));
+  for (std::size_t v = 0; v < q.size(); ++v) {
+    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
+      std::vector<double> r = q;
+      r[v] = bad;
+      try {
+        scene.collides(r.data());
+        ADD_FAILURE() << model.variable_names()[v] << " = " << bad << " was answered";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(model.variable_names()[v]), std::string::npos) << e.what();
+      }
+    }
+  }
 }
 
 // Every vertex of every link at any instant of an interval lies within the link's growth of

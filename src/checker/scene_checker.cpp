@@ -9,6 +9,7 @@
 #include <deque>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
@@ -251,7 +252,7 @@ double SceneChecker::chain_speed(int l, const Posed& mid, double half, const Int
     if (chain_joints_[i].turning >= 0) turning_above += std::abs(chain_joints_[i].multiplier * rates.delta[chain_joints_[i].variable]);
   }
   std::vector<double>& sums = *rates.sums;
-  const std::vector<Vec3>& axes = *rates.axes;
+  const std::vector<TurningAxis>& axes = *rates.axes;
   double below = 0.0, slides = 0.0, change = 0.0;
   Vec3 velocity = Vec3::Zero(), spin = Vec3::Zero();
   for (std::size_t i = first; i < end; ++i) {
@@ -264,10 +265,10 @@ double SceneChecker::chain_speed(int l, const Posed& mid, double half, const Int
     } else if (rate > 0.0) {
       turning_above -= rate;
       const Vec3& o = mid.poses[j.child].t;
-      const Vec3& w = axes[j.turning];
+      const Vec3& w = axes[j.turning].w;
       const Vec3 v = c - o;
       const double along = v.dot(w);
-      const double lever = std::sqrt(std::max(0.0, v.squaredNorm() - along * along)) + reach + pose_margin(o.norm());
+      const double lever = std::sqrt(std::max(0.0, v.squaredNorm() - along * along)) + reach + axes[j.turning].origin_margin;
       const double farthest = lever + half * below;  // p's distance from the axis within the interval
       const double levers = below + rate * farthest;
       velocity += d * w.cross(v);
@@ -284,7 +285,10 @@ void SceneChecker::interval_speeds(const Posed& mid, double half, const int* com
                                    const IntervalRates& rates) const {
   rates.sums->resize(chain_joints_.size());
   rates.axes->resize(turning_joints_.size());
-  for (std::size_t t = 0; t < turning_joints_.size(); ++t) (*rates.axes)[t] = mid.poses[turning_joints_[t].first].R * turning_joints_[t].second;
+  for (std::size_t t = 0; t < turning_joints_.size(); ++t) {
+    const Transform& frame = mid.poses[turning_joints_[t].first];
+    (*rates.axes)[t] = {frame.R * turning_joints_[t].second, pose_margin(frame.t.norm())};
+  }
   for (const int l : links_) rates.link_speed[l] = -1.0;
   auto link = [&](int l) {
     if (rates.link_speed[l] < 0.0) rates.link_speed[l] = chain_speed(l, mid, half, rates);
@@ -550,7 +554,20 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   return Answer::kFree;
 }
 
+// Throws std::invalid_argument naming the first variable of `state` that is not finite: such a
+// state has no pose (NaN poses compare as apart everywhere, which would read as free).
+void SceneChecker::require_finite(const double* state, const char* what) const {
+  const std::size_t n = checker_.model().variable_count();
+  double zero = 0.0;  // a NaN when any value is not finite (inf * 0 is one): one test a state
+  for (std::size_t j = 0; j < n; ++j) zero += state[j] * 0.0;
+  if (zero == 0.0) return;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!std::isfinite(state[j])) throw std::invalid_argument(std::string(what) + ": " + checker_.model().variable_names()[j] + " is not finite");
+  }
+}
+
 bool SceneChecker::collides(const double* state) const {
+  require_finite(state, "state check");
   if (known_free(state)) return false;
   thread_local Posed posed;
   pose_links(state, posed);

@@ -73,7 +73,7 @@ struct SceneChecker::MotionScratch {
   // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
   // current interval's (at most those); delta: goal - start.
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
-  std::vector<Vec3> axes;
+  std::vector<TurningAxis> axes;
   std::vector<Interval> done;   // certified intervals (check_motion)
   // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
   // (depth first).
@@ -266,9 +266,8 @@ double SceneChecker::pair_growth(std::size_t pair, const double* start, const do
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
   const std::size_t n = checker_.model().variable_count();
-  for (std::size_t j = 0; j < n; ++j) {
-    if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) throw std::invalid_argument("motion check: " + checker_.model().variable_names()[j] + " is not finite");
-  }
+  require_finite(start, "motion check");
+  require_finite(goal, "motion check");
   MotionResult result;
   MotionScratch& s = motion_scratch();
   s.state.resize(n);

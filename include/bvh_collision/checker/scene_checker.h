@@ -60,7 +60,8 @@ class SceneChecker {
   // `checker` carries them already.
   SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment, const SceneCheckOptions& options = {});
 
-  // Boolean: is `state` (model().variable_count() values) in collision at the tolerance?
+  // Boolean: is `state` (model().variable_count() values) in collision at the tolerance? Throws
+  // std::invalid_argument, naming the variable, for a value that is not finite (as check_motion).
   bool collides(const double* state) const;
   // The straight motion, certified as above (MotionResult::states_checked counts intervals).
   // `earliest`: find the first collision, so that last_valid_fraction is where a planner can go
@@ -163,6 +164,12 @@ class SceneChecker {
   // An interval's rates: per link and per checked pair, how fast they can move (close) per unit
   // fraction over the interval of half-width `half` around `mid` (posed): the midpoint's levers,
   // capped by the motion's chain-length rates. Computed for the components asked only.
+  // A turning joint at an interval's midpoint: its axis, and the rounding margin of its origin
+  // (the same for every link below it: computed once an interval, not once a link).
+  struct TurningAxis {
+    Vec3 w;
+    double origin_margin;
+  };
   struct IntervalRates {
     const double* delta = nullptr;  // goal - start
     const double* link_cap = nullptr;
@@ -170,12 +177,13 @@ class SceneChecker {
     double* link_speed = nullptr;  // out (per link; links not asked for are left negative)
     double* pair_speed = nullptr;  // out (per checked pair)
     std::vector<double>* sums = nullptr;  // working memory: per chain joint
-    std::vector<Vec3>* axes = nullptr;    // working memory: per turning joint, its axis at `mid`
+    std::vector<TurningAxis>* axes = nullptr;  // working memory: per turning joint, at `mid`
   };
   void interval_speeds(const Posed& mid, double half, const int* components, std::size_t count, const IntervalRates& rates) const;
   double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
 
 
+  void require_finite(const double* state, const char* what) const;
   // A state this thread found free with this checker, asked again (a tree's node starts every
   // motion grown from it): known_free answers from memory, remember_free records one.
   bool known_free(const double* state) const;
