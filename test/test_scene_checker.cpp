@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <limits>
 #include <optional>
@@ -145,10 +146,10 @@ TEST(SceneChecker, AStateRememberedFreeAnswersOnlyForItsChecker) {
   EXPECT_EQ(r.colliding_fraction, 0.0);
 }
 
-// A state with a value that is not a number or infinite has no pose: it is refused by name, as a
-// motion with one is, never answered (the poses would be NaN, and NaN compares as apart). Each
-// variable in turn, the hand among boxes; a state remembered free first, so that memory cannot
-// answer either.
+// A state with a value that is not a number or infinite has no pose: every query of one refuses
+// it by name, never answers it (the poses would be NaN, and NaN compares as apart; a self pair's
+// mesh walk then sends every triangle pair to the exact predicates, for minutes). Each variable
+// in turn, the hand among boxes; the state remembered free first, so that memory cannot answer.
 TEST(SceneChecker, RefusesAStateNotFinite) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker& checker = panda();
@@ -164,11 +165,23 @@ TEST(SceneChecker, RefusesAStateNotFinite) {
     for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
       std::vector<double> r = q;
       r[v] = bad;
-      try {
-        scene.collides(r.data());
-        ADD_FAILURE() << model.variable_names()[v] << " = " << bad << " was answered";
-      } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find(model.variable_names()[v]), std::string::npos) << e.what();
+      // The planner's path, and every query of CollisionChecker that takes a state.
+      const std::vector<std::pair<const char*, std::function<void()>>> queries = {
+          {"collides", [&] { scene.collides(r.data()); }},
+          {"scene motion", [&] { scene.check_motion(q.data(), r.data()); }},
+          {"check_self", [&] { checker.check_self(r.data()); }},
+          {"check_environment", [&] { checker.check_environment(r.data(), scene.environment()); }},
+          {"check_batch", [&] { checker.check_batch(r.data(), 1, &scene.environment(), BatchRequest{}); }},
+          {"check_motion", [&] { checker.check_motion(r.data(), q.data(), scene.environment(), MotionRequest{}); }},
+          {"cast_ray", [&] { checker.cast_ray(r.data(), scene.environment(), Vec3::Zero(), Vec3::UnitX(), 1.0); }},
+      };
+      for (const auto& [name, query] : queries) {
+        try {
+          query();
+          ADD_FAILURE() << name << ": " << model.variable_names()[v] << " = " << bad << " was answered";
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find(model.variable_names()[v] + " is not finite"), std::string::npos) << name << ": " << e.what();
+        }
       }
     }
   }

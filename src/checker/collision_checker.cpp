@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <map>
+#include <cmath>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 namespace bvh_collision {
 namespace {
@@ -109,7 +111,18 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
   return best;
 }
 
+void CollisionChecker::require_finite_state(const double* state, const char* what) const {
+  const std::size_t n = m_->robot().variable_count();
+  double zero = 0.0;  // a NaN when any value is not finite (inf * 0 is one): one test a state
+  for (std::size_t j = 0; j < n; ++j) zero += state[j] * 0.0;
+  if (zero == 0.0) return;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!std::isfinite(state[j])) throw std::invalid_argument(std::string(what) + ": " + m_->robot().variable_names()[j] + " is not finite");
+  }
+}
+
 SelfCollisionResult CollisionChecker::check_self(const double* state, const SelfCollisionRequest& request) const {
+  require_finite_state(state, "self check");
   SelfCollisionResult result;
   SelfScratch& scratch = self_scratch();
   std::vector<Transform>& poses = scratch.poses;
@@ -214,6 +227,9 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
   if (env != nullptr) require_carried(*env);
   check_limit("a batch with its configurations", double(count), m_->limits().batch_states, "max_batch_states");
+  for (std::size_t i = 0; i < count; ++i) {
+    require_finite_state(states + i * m_->robot().variable_count(), ("batch check: state " + std::to_string(i)).c_str());
+  }
   std::vector<char> out(count, 0);
   SelfCollisionRequest self;
   self.tolerance = request.tolerance;

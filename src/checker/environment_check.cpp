@@ -127,6 +127,7 @@ std::shared_ptr<const OctreeDistanceField> CollisionChecker::octree_field(const 
 EnvironmentResult CollisionChecker::check_environment(const double* state, const Environment& env,
                                                       const EnvironmentRequest& request) const {
   require_carried(env);
+  require_finite_state(state, "environment check");
   using Field = EnvironmentRequest::DistanceField;
   const bool use_octree = request.octree && !env.octree().empty();
   const std::shared_ptr<const OctreeDistanceField> field =

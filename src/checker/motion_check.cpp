@@ -278,11 +278,8 @@ MotionResult CollisionChecker::check_motion(const double* start, const double* g
   if (!std::isfinite(request.min_clearance) || request.min_clearance < 0.0) {
     throw std::invalid_argument("motion check: min_clearance must be finite and >= 0");
   }
-  for (std::size_t j = 0; j < m_->robot().variable_count(); ++j) {
-    if (!std::isfinite(start[j]) || !std::isfinite(goal[j])) {
-      throw std::invalid_argument("motion check: " + m_->robot().variable_names()[j] + " is not finite");
-    }
-  }
+  require_finite_state(start, "motion check");
+  require_finite_state(goal, "motion check");
   Segment segment(start, goal, m_->robot().variable_count());
   return request.resolution > 0.0 ? motion_in_steps(*this, segment, env, request)
                                   : motion_certified(*this, segment, env, request);

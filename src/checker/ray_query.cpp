@@ -18,6 +18,7 @@ double ray_meets_object(const CollisionObject& object, const Vec3& origin, const
 RayCastResult CollisionChecker::cast_ray(const double* state, const Environment& env, const Vec3& origin,
                                          const Vec3& direction, double max_range, const Transform& root_pose) const {
   require_carried(env);
+  require_finite_state(state, "ray");
   if (!origin.allFinite()) throw std::invalid_argument("ray: the origin is not finite");
   const double norm = direction.norm();
   if (!direction.allFinite() || !(norm > 0.0)) throw std::invalid_argument("ray: the direction must be finite and not zero");

@@ -554,20 +554,8 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
   return Answer::kFree;
 }
 
-// Throws std::invalid_argument naming the first variable of `state` that is not finite: such a
-// state has no pose (NaN poses compare as apart everywhere, which would read as free).
-void SceneChecker::require_finite(const double* state, const char* what) const {
-  const std::size_t n = checker_.model().variable_count();
-  double zero = 0.0;  // a NaN when any value is not finite (inf * 0 is one): one test a state
-  for (std::size_t j = 0; j < n; ++j) zero += state[j] * 0.0;
-  if (zero == 0.0) return;
-  for (std::size_t j = 0; j < n; ++j) {
-    if (!std::isfinite(state[j])) throw std::invalid_argument(std::string(what) + ": " + checker_.model().variable_names()[j] + " is not finite");
-  }
-}
-
 bool SceneChecker::collides(const double* state) const {
-  require_finite(state, "state check");
+  checker_.require_finite_state(state, "state check");
   if (known_free(state)) return false;
   thread_local Posed posed;
   pose_links(state, posed);

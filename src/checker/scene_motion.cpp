@@ -266,8 +266,8 @@ double SceneChecker::pair_growth(std::size_t pair, const double* start, const do
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
   const std::size_t n = checker_.model().variable_count();
-  require_finite(start, "motion check");
-  require_finite(goal, "motion check");
+  checker_.require_finite_state(start, "motion check");
+  checker_.require_finite_state(goal, "motion check");
   MotionResult result;
   MotionScratch& s = motion_scratch();
   s.state.resize(n);

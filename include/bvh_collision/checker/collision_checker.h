@@ -84,6 +84,11 @@ class CollisionChecker {
   // then only these (SelfCollisionRequest::only_pairs). Throws std::out_of_range for a bad index.
   std::vector<std::size_t> pairs_moved_by(const std::vector<int>& variables) const;
 
+  // Throws std::invalid_argument naming the first variable of `state` that is not finite, the
+  // message led by `what` (the query): such a state has no pose, and NaN poses compare as apart
+  // everywhere. Every query of a state calls it first.
+  void require_finite_state(const double* state, const char* what) const;
+
   // `state` holds model().variable_count() values (variable_names() order).
   SelfCollisionResult check_self(const double* state, const SelfCollisionRequest& request = {}) const;
 

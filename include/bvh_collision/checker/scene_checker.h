@@ -183,7 +183,6 @@ class SceneChecker {
   double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
 
 
-  void require_finite(const double* state, const char* what) const;
   // A state this thread found free with this checker, asked again (a tree's node starts every
   // motion grown from it): known_free answers from memory, remember_free records one.
   bool known_free(const double* state) const;
