@@ -6,7 +6,8 @@
 // - State: exact by default (with SceneCheckOptions::states_at_tolerance, collision whenever
 //   some distance is at most its padding, free whenever every one exceeds padding + tolerance).
 //   Objects are found through a grid over the robot's reach (a link's centre names a cell, the
-//   cell lists the objects within reach of it), so 60 objects cost little more than 6; each
+//   cell lists the objects within reach of it, each with a lower bound on its distance from the
+//   cell: a link ball smaller needs no test), so 60 objects cost little more than 6; each
 //   link's proxy spheres are tested against an object's exact primitive before any mesh is
 //   opened: proxies apart from it prove the link apart (they contain it), and a proxy that meets
 //   it sends the link to the exact test (or, at a tolerance the level fits, is the answer).
