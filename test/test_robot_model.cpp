@@ -13,6 +13,7 @@
 
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/bvh/bounding_volumes.h"
+#include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/robot_model.h"
 #include "robot_data.h"
@@ -404,6 +405,60 @@ TEST(RobotModel, MimicAndFreeJoints) {
   plan.compute(&q, poses, &free);
   EXPECT_NEAR(poses[m.link_index("b")].t.y(), -2 * 0.25 + 0.5, 1e-15);
   EXPECT_EQ(poses[m.link_index("f")].t, Vec3(1, 2, 3));
+}
+
+// The plan's pose products (two rows in SSE2 lanes, a revolute step's two turned columns mixed as
+// they are computed) equal, bit for bit, the scalar product parent * fixed with its sums in row
+// order, then the rotation's mix of two columns: what the batch kernel computes in its lanes and
+// what the planner's replayed answers were compared against. Each step from the plan's own parent
+// pose, on every robot, every joint kind the robots have.
+Transform scalar_product(const Transform& a, const Transform& b) {
+  Transform o;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) o.R(r, c) = a.R(r, 0) * b.R(0, c) + a.R(r, 1) * b.R(1, c) + a.R(r, 2) * b.R(2, c);
+    o.t[r] = a.R(r, 0) * b.t[0] + a.R(r, 1) * b.t[1] + a.R(r, 2) * b.t[2] + a.t[r];
+  }
+  return o;
+}
+
+TEST(KinematicsPlan, StepsEqualTheScalarProductsBitForBit) {
+  BVH_REQUIRE_ROBOTS();
+  std::mt19937_64 rng(7);
+  int revolute = 0;
+  for (const char* robot : {"panda", "ur5e", "pr2", "abb_irb2400"}) {
+    SCOPED_TRACE(robot);
+    const RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::robots_dir() + "/" + robot + "/robot.urdf"),
+                                                   PackageResolver({test::robots_dir() + "/" + robot}));
+    const KinematicsPlan plan(model, std::vector<bool>(model.links().size(), true));
+    std::vector<Transform> poses;
+    for (int sample = 0; sample < 50; ++sample) {
+      const std::vector<double> state = random_configuration(model, rng);
+      plan.compute(state.data(), poses);
+      for (const KinematicsPlan::Step& step : plan.step_list()) {
+        const bool turns = step.type == JointType::kRevolute || step.type == JointType::kContinuous;
+        if (!(step.type == JointType::kFixed || (turns && step.axis >= 0))) continue;
+        Transform want = scalar_product(poses[step.parent], step.fixed);
+        if (turns && step.variable >= 0) {
+          double sine, cosine;
+          sin_cos(step.multiplier * state[step.variable] + step.offset, sine, cosine);
+          sine *= step.axis_vector[step.axis];
+          const int i = (step.axis + 1) % 3, j = (step.axis + 2) % 3;
+          for (int r = 0; r < 3; ++r) {
+            const double a = want.R(r, i), b = want.R(r, j);
+            want.R(r, i) = cosine * a + sine * b;
+            want.R(r, j) = cosine * b - sine * a;
+          }
+          ++revolute;
+        }
+        const Transform& got = poses[step.link];
+        for (int e = 0; e < 12; ++e) {
+          const double w = e < 9 ? want.R(e / 3, e % 3) : want.t[e - 9], g = e < 9 ? got.R(e / 3, e % 3) : got.t[e - 9];
+          ASSERT_EQ(w, g) << model.links()[step.link].name << " element " << e;
+        }
+      }
+    }
+  }
+  EXPECT_GT(revolute, 1000);
 }
 
 }  // namespace

@@ -5,8 +5,8 @@
 #include "bvh_collision/narrowphase/tolerance_policy.h"
 
 #include <algorithm>
-#include <map>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -111,11 +111,20 @@ double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform
   return best;
 }
 
+namespace {
+
+// Are all n values finite? (Their sum times zero is a NaN when one is not: inf * 0 is one.)
+bool all_finite(const double* values, std::size_t n) {
+  double zero = 0.0;
+  for (std::size_t j = 0; j < n; ++j) zero += values[j] * 0.0;
+  return zero == 0.0;
+}
+
+}  // namespace
+
 void CollisionChecker::require_finite_state(const double* state, const char* what) const {
   const std::size_t n = m_->robot().variable_count();
-  double zero = 0.0;  // a NaN when any value is not finite (inf * 0 is one): one test a state
-  for (std::size_t j = 0; j < n; ++j) zero += state[j] * 0.0;
-  if (zero == 0.0) return;
+  if (all_finite(state, n)) return;  // the names only on failure
   for (std::size_t j = 0; j < n; ++j) {
     if (!std::isfinite(state[j])) throw std::invalid_argument(std::string(what) + ": " + m_->robot().variable_names()[j] + " is not finite");
   }
@@ -227,8 +236,9 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   if (request.environment && env == nullptr) throw std::invalid_argument("batch check: no environment given");
   if (env != nullptr) require_carried(*env);
   check_limit("a batch with its configurations", double(count), m_->limits().batch_states, "max_batch_states");
-  for (std::size_t i = 0; i < count; ++i) {
-    require_finite_state(states + i * m_->robot().variable_count(), ("batch check: state " + std::to_string(i)).c_str());
+  const std::size_t stride = m_->robot().variable_count();
+  if (!all_finite(states, count * stride)) {  // the row found, and its message built, only on failure
+    for (std::size_t i = 0; i < count; ++i) require_finite_state(states + i * stride, ("batch check: state " + std::to_string(i)).c_str());
   }
   std::vector<char> out(count, 0);
   SelfCollisionRequest self;
@@ -242,7 +252,6 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   // (~48 ms for panda at 2 cm against ~2.7 us saved a state).
   environment.distance_field = count >= kFieldBatch ? EnvironmentRequest::DistanceField::kBuild
                                                     : EnvironmentRequest::DistanceField::kIfKept;
-  const std::size_t stride = m_->robot().variable_count();
   // Links no joint moves (the root's, and those fixed to it) sit where the root pose puts them in
   // every state: checked once for the batch, and a collision there is every state's.
   std::vector<char> moving, fixed;

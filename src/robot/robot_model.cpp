@@ -417,7 +417,8 @@ namespace {
 // parent * fixed * (rotation about +-unit axis K with cosine c and sine s, the sign applied):
 // the rotation mixes only two columns of parent * fixed, mixed here as they are computed rather
 // than stored and read back, two rows at a time (the same operations on each value as the
-// product then the rotation: the same bits, in half the instructions, callgrind).
+// product then the rotation: the same bits, test KinematicsPlan.StepsEqualTheScalarProducts...;
+// panda's pose in 2.2k instructions against 3.2k, callgrind).
 template <int K>
 void compose_axis_rotation(const Transform& parent, const Transform& fixed, double c, double s, Transform& out) {
   constexpr int i = (K + 1) % 3, j = (K + 2) % 3;  // R_K(q) maps e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j

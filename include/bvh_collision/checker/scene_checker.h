@@ -162,15 +162,15 @@ class SceneChecker {
   void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;
   void speeds_over(const double* start, const double* goal, double lo, double hi) const;
-  // An interval's rates: per link and per checked pair, how fast they can move (close) per unit
-  // fraction over the interval of half-width `half` around `mid` (posed): the midpoint's levers,
-  // capped by the motion's chain-length rates. Computed for the components asked only.
   // A turning joint at an interval's midpoint: its axis, and the rounding margin of its origin
   // (the same for every link below it: computed once an interval, not once a link).
   struct TurningAxis {
     Vec3 w;
     double origin_margin;
   };
+  // An interval's rates: per link and per checked pair, how fast they can move (close) per unit
+  // fraction over the interval of half-width `half` around `mid` (posed): the midpoint's levers,
+  // capped by the motion's chain-length rates. Computed for the components asked only.
   struct IntervalRates {
     const double* delta = nullptr;  // goal - start
     const double* link_cap = nullptr;
