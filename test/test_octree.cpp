@@ -107,6 +107,108 @@ TEST(OctreeAgainstOctomap, ScansInAWorkspace) {
   }
 }
 
+// ray_keys, the walk every scan's rays take, against OctoMap's computeRayKeys ray for ray: the
+// same voxels in the same order. Rays of every kind the step's choice of axis meets: random,
+// along an axis or a plane (crossings at infinity), through voxel corners (ties between axes),
+// ends on voxel planes, long rays, rays by the ends of the 16-bit key range, and rays inside one
+// voxel.
+TEST(OctreeAgainstOctomap, EveryRayCrossesOctomapsVoxelsInItsOrder) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> cell(-40, 40), kind(0, 6);
+  int compared = 0, long_walks = 0;
+  for (const double res : {0.01, 0.05, 0.2}) {
+    const OctreeGrid grid(res);
+    octomap::OcTree reference(res);
+    const float r = static_cast<float>(res), edge = static_cast<float>(res * (kOctreeKeyOffset - 3));
+    for (int i = 0; i < 20000; ++i) {
+      ScanPoint a(u(rng()), u(rng()), u(rng())), b(u(rng()), u(rng()), u(rng()));
+      switch (kind(rng())) {
+        case 1: b = a, b[i % 3] += 3.0f * u(rng()); break;                  // along an axis
+        case 2: b = a + ScanPoint(u(rng()), u(rng()), u(rng())), b[i % 3] = a[i % 3]; break;  // in a plane
+        case 3:  // from voxel corner to voxel corner: crossings tie
+          a = r * ScanPoint(float(cell(rng())), float(cell(rng())), float(cell(rng())));
+          b = a + r * float(cell(rng())) * ScanPoint(1.0f, (i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : 2.0f);
+          break;
+        case 4: b = r * ScanPoint(float(cell(rng())), float(cell(rng())), float(cell(rng()))); break;  // end on voxel planes
+        case 5: b = a + 60.0f * ScanPoint(u(rng()), u(rng()), u(rng())); break;  // long
+        case 6:  // by the key range's ends (OctoMap's keys wrap past them, as ours)
+          a = ScanPoint(edge * (i & 1 ? 1.0f : -1.0f), edge * u(rng()), 0.5f * edge * u(rng()));
+          b = a + ScanPoint(5.0f * r * u(rng()), u(rng()), u(rng()));
+          break;
+        default: break;
+      }
+      if (i % 97 == 0) b = a + ScanPoint(0.1f * r, 0.0f, 0.0f);  // within a voxel or just across
+      std::vector<OctreeKey> ours_keys;
+      octomap::KeyRay ray;
+      const bool ours_ok = ray_keys(grid, a, b, ours_keys);
+      const bool theirs_ok = reference.computeRayKeys(octomap::point3d(a.x(), a.y(), a.z()), octomap::point3d(b.x(), b.y(), b.z()), ray);
+      ASSERT_EQ(ours_ok, theirs_ok) << res << " ray " << i;
+      ASSERT_EQ(ours_keys.size(), ray.size()) << res << " ray " << i;
+      std::size_t k = 0;
+      for (auto it = ray.begin(); it != ray.end(); ++it, ++k) {
+        ASSERT_TRUE(ours_keys[k].k[0] == (*it)[0] && ours_keys[k].k[1] == (*it)[1] && ours_keys[k].k[2] == (*it)[2])
+            << res << " ray " << i << " voxel " << k;
+      }
+      ++compared;
+      long_walks += ours_keys.size() > 100;
+    }
+  }
+  EXPECT_EQ(compared, 60000);
+  EXPECT_GT(long_walks, 1000);
+}
+
+// Crossed voxels marked in a bitmap of the scan's box or in the hash set of blocks
+// (ScanOptions::max_dense_voxels = 0): one tree, OctoMap's, in every way a scan is inserted
+// (threads, max_range, a workspace, rays clipped to it with clear-only ones), with sensors inside
+// and outside the workspace, end points on voxel planes at the edges of the box, and clouds
+// whose box is too large for the bitmap (its cube about the sensor, which most rays leave).
+TEST(OctreeAgainstOctomap, BitmapAndSetOfCrossedVoxelsGiveOneTree) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const ScanWorkspace box{ScanPoint(-0.8f, -0.6f, -0.5f), ScanPoint(0.7f, 0.9f, 0.8f)};
+  int compared = 0;
+  for (int mode = 0; mode < 10; ++mode) {
+    const double res = mode % 2 ? 0.04 : 0.05;
+    ScanOptions dense = with(mode & 2 ? 1.2 : -1.0, mode & 1 ? 2 : 1);
+    if (mode >= 4 && mode < 8) dense.workspace = box;
+    dense.clip_rays_to_workspace = mode >= 6 && mode < 8;
+    // A bitmap of 9 x 9 x 9 voxels about the sensor: most rays leave it for the set.
+    if (mode >= 8) dense.max_dense_voxels = 9 * 9 * 9;
+    ScanOptions sparse = dense;
+    sparse.max_dense_voxels = 0;
+    Octree a(res), b(res);
+    octomap::OcTree reference(res);
+    if (dense.workspace && !dense.clip_rays_to_workspace) {
+      octomap::point3d lo(box.min.x(), box.min.y(), box.min.z()), hi(box.max.x(), box.max.y(), box.max.z());
+      reference.setBBXMin(lo);
+      reference.setBBXMax(hi);
+      reference.useBBXLimit(true);
+    }
+    for (int s = 0; s < 3; ++s) {
+      // Outside the workspace on the last scan: its rays enter the box from outside.
+      const ScanPoint origin = s == 2 ? ScanPoint(1.6f, 1.5f, 1.4f) : ScanPoint(0.3f * u(rng()), 0.3f * u(rng()), 0.2f);
+      std::vector<ScanPoint> scan = random_scan(origin, 5000, 1.8), clearing = random_scan(origin, 500, 2.5);
+      // Ends on voxel planes, the box's extremes among them.
+      for (int k = -30; k <= 30; k += 3) scan.push_back(ScanPoint(float(res * k), float(res * (k % 7)), float(res * -30)));
+      if (s == 1) scan.push_back(ScanPoint(250.0f, -3.0f, 1.0f));  // far: a box past the bitmap's limit
+      const std::vector<ScanPoint> none;
+      const std::vector<ScanPoint>& clear_only = dense.clip_rays_to_workspace ? clearing : none;
+      // (The far point's box is too large for a bitmap of it: the cube about the sensor.)
+      EXPECT_TRUE(insert_scan(a, scan, clear_only, origin, dense).bitmap) << "mode " << mode << " scan " << s;
+      EXPECT_FALSE(insert_scan(b, scan, clear_only, origin, sparse).bitmap);
+      if (!dense.clip_rays_to_workspace) {
+        octomap::Pointcloud cloud;
+        for (const ScanPoint& p : scan) cloud.push_back(p.x(), p.y(), p.z());
+        reference.insertPointCloud(cloud, octomap::point3d(origin.x(), origin.y(), origin.z()), dense.max_range);
+      }
+    }
+    ASSERT_EQ(ours(a), ours(b)) << "mode " << mode;
+    if (!dense.clip_rays_to_workspace) ASSERT_EQ(ours(a), theirs(reference)) << "mode " << mode;
+    EXPECT_GT(a.leaves().size(), 1000u) << "mode " << mode;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 10);
+}
+
 TEST(OctreeKeys, SeedIndexFromCoordinates) {
   const OctreeGrid grid(0.05);
   std::uniform_real_distribution<double> u(-50.0, 50.0);
@@ -191,6 +293,45 @@ TEST(VoxelSet, AgainstStdSet) {
     EXPECT_EQ(difference.contains(k), !in_b);
   }
   EXPECT_EQ(difference.size(), only_a);
+}
+
+// The bitmap of a box of keys against std::set: inserts inside and outside the box (refused),
+// membership, union, and every key handed to a VoxelSet once, for boxes of odd sizes whose rows
+// start and end inside words, one voxel wide, and at the ends of the key range.
+TEST(VoxelBitGrid, AgainstStdSet) {
+  const std::vector<std::pair<OctreeKey, OctreeKey>> boxes = {
+      {OctreeKey{{32700, 32710, 32720}}, OctreeKey{{32730, 32722, 32790}}},
+      {OctreeKey{{0, 0, 0}}, OctreeKey{{6, 70, 129}}},
+      {OctreeKey{{65530, 100, 65400}}, OctreeKey{{65535, 100, 65535}}},
+      {OctreeKey{{5, 5, 5}}, OctreeKey{{5, 5, 5}}}};
+  for (const auto& [lo, hi] : boxes) {
+    ASSERT_EQ(VoxelBitGrid::volume(lo, hi), std::uint64_t(hi.k[0] - lo.k[0] + 1) * (hi.k[1] - lo.k[1] + 1) * (hi.k[2] - lo.k[2] + 1));
+    VoxelBitGrid a(lo, hi), b(lo, hi);
+    std::set<OctreeKey> ra, rb;
+    auto around = [&](int i) {
+      std::uniform_int_distribution<int> d(std::max(0, lo.k[i] - 2), std::min(65535, hi.k[i] + 2));
+      return static_cast<std::uint16_t>(d(rng()));
+    };
+    int refused = 0;
+    for (int n = 0; n < 5000; ++n) {
+      const OctreeKey k{{around(0), around(1), around(2)}};
+      bool inside = true;
+      for (int i = 0; i < 3; ++i) inside = inside && k.k[i] >= lo.k[i] && k.k[i] <= hi.k[i];
+      VoxelBitGrid& grid = n % 3 ? a : b;
+      ASSERT_EQ(grid.insert(k.k[0], k.k[1], k.k[2]), inside);
+      refused += !inside;
+      if (inside) (n % 3 ? ra : rb).insert(k);
+    }
+    EXPECT_GT(refused, 0);
+    EXPECT_EQ(a.size(), ra.size());
+    for (const OctreeKey& k : rb) EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+    a.insert_all(b);
+    ra.insert(rb.begin(), rb.end());
+    VoxelSet set;
+    a.append_to(set);
+    EXPECT_EQ(set.size(), ra.size());
+    for (const OctreeKey& k : ra) ASSERT_TRUE(set.contains(k) && a.contains(k));
+  }
 }
 
 // The one-descent batch update against one update per key (itself checked against OctoMap):

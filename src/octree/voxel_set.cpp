@@ -128,4 +128,58 @@ std::vector<OctreeKey> VoxelSet::sorted_keys() const {
   return keys;
 }
 
+VoxelBitGrid::VoxelBitGrid(const OctreeKey& min, const OctreeKey& max) {
+  for (int i = 0; i < 3; ++i) {
+    min_[i] = min.k[i];
+    size_[i] = max.k[i] >= min.k[i] ? static_cast<unsigned>(max.k[i] - min.k[i] + 1) : 0u;
+  }
+  stride_y_ = size_[2];
+  stride_x_ = std::uint64_t{size_[1]} * size_[2];
+  words_.assign((volume(min, max) + 63) / 64, 0);
+}
+
+std::uint64_t VoxelBitGrid::volume(const OctreeKey& min, const OctreeKey& max) {
+  std::uint64_t v = 1;
+  for (int i = 0; i < 3; ++i) v *= max.k[i] >= min.k[i] ? std::uint64_t(max.k[i] - min.k[i] + 1) : 0;
+  return v;
+}
+
+bool VoxelBitGrid::contains(const OctreeKey& key) const {
+  const auto ux = static_cast<unsigned>(key.k[0] - min_[0]), uy = static_cast<unsigned>(key.k[1] - min_[1]),
+             uz = static_cast<unsigned>(key.k[2] - min_[2]);
+  if (ux >= size_[0] || uy >= size_[1] || uz >= size_[2]) return false;
+  const std::uint64_t i = ux * stride_x_ + uy * stride_y_ + uz;
+  return (words_[i >> 6] >> (i & 63)) & 1;
+}
+
+void VoxelBitGrid::insert_all(const VoxelBitGrid& other) {
+  for (std::size_t w = 0; w < words_.size(); ++w) words_[w] |= other.words_[w];
+}
+
+std::size_t VoxelBitGrid::size() const {
+  std::size_t n = 0;
+  for (const std::uint64_t w : words_) n += static_cast<std::size_t>(__builtin_popcountll(w));
+  return n;
+}
+
+// Row by row (x, then y): a row's voxels are consecutive bits, and consecutive keys of a row
+// mostly share the set's block.
+void VoxelBitGrid::append_to(VoxelSet& set) const {
+  for (unsigned x = 0; x < size_[0]; ++x) {
+    for (unsigned y = 0; y < size_[1]; ++y) {
+      const std::uint64_t first = x * stride_x_ + y * stride_y_, end = first + size_[2];
+      for (std::uint64_t w = first >> 6; w <= (end - 1) >> 6 && end > first; ++w) {
+        std::uint64_t bits = words_[w];
+        if (w == first >> 6) bits &= ~std::uint64_t{0} << (first & 63);
+        if (w == (end - 1) >> 6 && (end & 63) != 0) bits &= ~(~std::uint64_t{0} << (end & 63));
+        for (; bits != 0; bits &= bits - 1) {
+          const std::uint64_t z = w * 64 + static_cast<unsigned>(__builtin_ctzll(bits)) - first;
+          set.insert(OctreeKey{{static_cast<std::uint16_t>(min_[0] + static_cast<int>(x)), static_cast<std::uint16_t>(min_[1] + static_cast<int>(y)),
+                                static_cast<std::uint16_t>(min_[2] + static_cast<int>(z))}});
+        }
+      }
+    }
+  }
+}
+
 }  // namespace bvh_collision

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -37,6 +38,12 @@ struct ScanOptions {
   // voxels it crosses inside the workspace (up to max_range); an end point inside the box and
   // within range is inserted as before. False: OctoMap's bounding-box rule, tree for tree.
   bool clip_rays_to_workspace = false;
+  // Memory for the crossed voxels: each thread marks those in the box of the sensor and the end
+  // points (within the workspace) in a bitmap of that box, one bit a voxel, when it holds at most
+  // this many voxels (the default, 2^26, is 8 MB), else in a bitmap of the cube of this many voxels
+  // about the sensor; the others in a hash set of 8 x 8 x 8 blocks. The tree is the same either
+  // way; 0 takes the set for all.
+  std::uint64_t max_dense_voxels = std::uint64_t{1} << 26;
   // Points per scan (end points and clear-only ones together) and voxels per ray (max_range /
   // resolution, when max_range is given; without it a ray stays inside the 16-bit key range):
   // insert_scan throws LimitExceeded beyond them, before it changes anything.
@@ -50,6 +57,7 @@ struct ScanStats {
   std::size_t skipped_workspace = 0;  // outside the workspace box (or beyond max_range with one)
   std::size_t occupied = 0;           // voxels updated as occupied
   std::size_t free = 0;               // voxels updated as free
+  bool bitmap = false;                // crossed voxels marked in a bitmap of the scan's box (max_dense_voxels)
 };
 
 // One scan, as octomap::OcTree::insertPointCloud (with setBBXMin/Max and useBBXLimit when a
