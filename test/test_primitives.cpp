@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <string>
 
@@ -239,6 +240,110 @@ TEST(Primitives, CylinderAgainstBoxSphereCylinderAndMeshWithinTheSampledInterval
 
 TEST(Primitives, ConeAgainstBoxSphereCylinderConeAndMeshWithinTheSampledInterval) {
   against_others_within_the_sampled_interval(Primitive::cone(0.12, 0.4));
+}
+
+// ------------------------------------------------ a mesh's boolean hit
+
+// A boolean mesh-primitive test ends at the first triangle with a corner inside the primitive,
+// with no convex distance; asked for a contact it takes the convex distance of every triangle.
+// Both answer alike over a bumpy sphere against every primitive, from deep inside to apart, with
+// and without padding; the sampled-interval tests above check the latter against the geometry.
+TEST(MeshAgainstPrimitive, ABooleanHitAnswersAsTheConvexDistances) {
+  const TriangleMesh mesh = test::bumpy_sphere(rng(), 0.1, 8, 12, 0.3);
+  const Bvh<Obb> bvh = Bvh<Obb>::build(mesh);
+  const Primitive shapes[] = {Primitive::box(Vec3(0.1, 0.06, 0.04)), Primitive::sphere(0.05), Primitive::cylinder(0.04, 0.2),
+                              Primitive::capsule(0.03, 0.1), Primitive::cone(0.06, 0.12)};
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0, misses = 0;
+  for (int i = 0; i < test::sized(2000); ++i) {
+    const Primitive& p = shapes[i % 5];
+    const Transform pose = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), u(rng())) * 0.2);
+    for (const double padding : {0.0, 0.01}) {
+      CollisionRequest boolean;
+      boolean.padding = padding;
+      CollisionRequest contact = boolean;
+      contact.max_contacts = 1;
+      const bool hit = collide(bvh, Transform::Identity(), p, pose, boolean).collision;
+      EXPECT_EQ(hit, collide(bvh, Transform::Identity(), p, pose, contact).collision) << i << " padding " << padding;
+      (hit ? hits : misses) += 1;
+    }
+  }
+  EXPECT_GT(hits, test::sized(2000) / 4);
+  EXPECT_GT(misses, test::sized(2000) / 4);
+}
+
+// ------------------------------------------------ distances within a slack
+
+// The distance from p (world) to a triangle (world).
+double point_triangle(const Triangle& t, const Vec3& p) { return (closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm(); }
+
+// A distance asked within a slack (convex_distance's `slack`; a mesh's DistanceRequest::tolerance)
+// may stop early, and what it reports still holds: the bound never exceeds the distance asked to
+// the last digit (whose witnesses are two points of the sets: the truth is at most that), it is
+// within the slack of it, and the reported distance is that of two points of the sets. Curved
+// primitives against a triangle, a hull and one another, 0.1 mm to 5 cm apart, where exact
+// GJK creeps towards the curved surface and the certified bound needs a search of directions:
+// within 10 um it asks under half the support points.
+TEST(ConvexDistance, ASlackStopsWithinItAndTheBoundStillHolds) {
+  const Primitive curved[] = {Primitive::cylinder(0.08, 0.3), Primitive::cone(0.12, 0.3), Primitive::capsule(0.05, 0.2),
+                              Primitive::sphere(0.1)};
+  std::uniform_real_distribution<double> u(-1.0, 1.0), gap_exponent(-4.0, std::log10(0.05));
+  const TriangleMesh bumpy = test::bumpy_sphere(rng(), 0.12, 6, 8, 0.2);
+  const ConvexHull hull = convex_hull(bumpy.vertices);
+  const Bvh<Obb> bvh = Bvh<Obb>::build(bumpy);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  long exact_queries = 0, loose_queries = 0;
+  int cases = 0;
+  for (int i = 0; i < test::sized(600); ++i) {
+    const Primitive& a = curved[i % 4];
+    const Triangle tri{Vec3(u(rng()), u(rng()), u(rng())) * 0.2, Vec3(u(rng()), u(rng()), u(rng())) * 0.2,
+                       Vec3(u(rng()), u(rng()), u(rng())) * 0.2};
+    const int kind = (i / 4) % 3;  // a triangle, a hull, another curved primitive
+    const ConvexShape b = kind == 0 ? ConvexShape::of(tri) : kind == 1 ? ConvexShape::of(hull) : ConvexShape::of(curved[(i / 12) % 4]);
+    // Placed along a random direction at a chosen gap: b's pose moved until the exact distance
+    // is about that gap (one correction along the witnesses' line).
+    Transform b_in_a = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), u(rng())).normalized() * 0.6);
+    ConvexDistance exact = convex_distance(ConvexShape::of(a), b, b_in_a);
+    if (exact.intersecting) continue;
+    const double gap = std::pow(10.0, gap_exponent(rng()));
+    b_in_a.t += (exact.on_a - exact.on_b).normalized() * (exact.distance - gap);
+    exact = convex_distance(ConvexShape::of(a), b, b_in_a);
+    if (exact.intersecting) continue;
+    ++cases;
+    exact_queries += exact.support_queries;
+    const double scale = extent(ConvexShape::of(a)) + extent(b) + b_in_a.t.norm();
+    for (const double slack : {1e-6, 1e-5, 1e-4}) {
+      const ConvexDistance loose = convex_distance(ConvexShape::of(a), b, b_in_a, nan, slack);
+      if (slack == 1e-5) loose_queries += loose.support_queries;
+      const std::string where = "case " + std::to_string(i) + " slack " + std::to_string(slack);
+      EXPECT_LE(loose.lower_bound, exact.distance + 1e-14 * scale) << where;
+      EXPECT_GE(loose.lower_bound, exact.lower_bound - slack - 1e-14 * scale) << where;
+      EXPECT_GE(loose.distance, exact.lower_bound - 1e-14 * scale) << where;
+      EXPECT_LE(loose.distance, exact.distance + slack + 1e-14 * scale) << where;
+      // The witnesses are points of the sets (a's in its frame, b's placed by b_in_a).
+      EXPECT_LE(point_primitive(a, Transform::Identity(), loose.on_a), 1e-12) << where;
+      if (kind == 0) {
+        EXPECT_LE(point_triangle(tri, b_in_a.inverse() * loose.on_b), 1e-12) << where;
+      } else if (kind == 2) {
+        EXPECT_LE(point_primitive(b.primitive, b_in_a, loose.on_b), 1e-12) << where;
+      }
+    }
+  }
+  EXPECT_GE(cases, test::sized(600) / 2);
+  EXPECT_LT(2 * loose_queries, exact_queries) << loose_queries << " support points within 10 um against " << exact_queries;
+  std::cout << cases << " placements: " << exact_queries << " support points exact, " << loose_queries << " within 10 um\n";
+  // The mesh through its BVH at a tolerance: at most the tolerance above its exact distance,
+  // never below it, each triangle asked within the tolerance.
+  for (int i = 0; i < test::sized(60); ++i) {
+    const Primitive& a = curved[i % 4];
+    const Transform pa = test::random_rotation(rng(), Vec3(u(rng()), u(rng()), u(rng())).normalized() * (0.3 + 0.05 * std::abs(u(rng()))));
+    const double exact = distance(bvh, Transform::Identity(), a, pa).distance;
+    DistanceRequest request;
+    request.tolerance = 1e-4;
+    const double loose = distance(bvh, Transform::Identity(), a, pa, request).distance;
+    EXPECT_GE(loose, exact - 1e-9 * exact - 1e-12) << i;  // (the exact one is certified to 1e-9 of itself)
+    EXPECT_LE(loose, exact + request.tolerance + 1e-12) << i;
+  }
 }
 
 // ------------------------------------------------ constructed contacts, scales and offsets

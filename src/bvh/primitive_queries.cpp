@@ -5,6 +5,7 @@
 
 #include "bvh_collision/bvh/traversal.h"
 #include "bvh_collision/geometry/convex_distance.h"
+#include "bvh_collision/geometry/safety_margin.h"
 
 namespace bvh_collision {
 namespace {
@@ -30,6 +31,19 @@ bool one_holds_the_other(const Bvh<Obb>& mesh, const Primitive& p, const Transfo
   }
   where = p_in_mesh.t;
   return solids && mesh.closed() && contains_point(mesh, p_in_mesh.t, &stats);
+}
+
+// Does a corner of the triangle (mesh frame) lie inside the primitive (posed in the mesh frame by
+// p_in_mesh) by more than the rounding of carrying it into the primitive's frame? Then the mesh
+// meets the solid there, at any padding. Most triangles a deep collision reaches have one, and the
+// test costs a few dozen operations against a convex distance's thousands (a tenth of a planner's
+// colliding states, with the copies GJK no longer makes).
+bool corner_inside(const Triangle& t, const Primitive& p, const Transform& p_in_mesh) {
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 local = p_in_mesh.R.transpose() * (t[k] - p_in_mesh.t);
+    if (inscribed_depth(p, local) > pose_margin(t[k].norm() + p_in_mesh.t.norm() + local.norm())) return true;
+  }
+  return false;
 }
 
 MeshContact contact_from(const ConvexDistance& d, const Triangle& t, const Transform& pose_mesh, const Vec3& p_centre,
@@ -63,6 +77,10 @@ CollisionResult collide(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++result.stats.primitive_tests;
       const Triangle& t = mesh.triangles()[i];
+      if (request.max_contacts == 0 && corner_inside(t, primitive, rel)) {  // boolean: no convex distance needed
+        result.collision = true;
+        return true;
+      }
       const ConvexDistance d = convex_distance(ConvexShape::of(t), shape, rel, request.padding);
       if (d.lower_bound > request.padding) continue;
       result.collision = true;
@@ -101,7 +119,10 @@ DistanceResult distance(const Bvh<Obb>& mesh, const Transform& pose_mesh, const 
   auto leaf = [&](const BvhNode<Obb>& n) {
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++result.stats.primitive_tests;
-      const ConvexDistance d = convex_distance(ConvexShape::of(mesh.triangles()[i]), shape, rel);
+      // (Each triangle within the tolerance too: what it reports is still a pair of points, at most
+      // the tolerance farther apart than the triangle is.)
+      const ConvexDistance d = convex_distance(ConvexShape::of(mesh.triangles()[i]), shape, rel,
+                                               std::numeric_limits<double>::quiet_NaN(), request.tolerance);
       if (d.distance < best) {
         best = d.distance;
         result.distance = d.distance;

@@ -18,15 +18,6 @@ struct Simplex {
   int ia[4], ib[4];
   double weight[4];
 
-  void keep(std::initializer_list<int> which, std::initializer_list<double> weights) {
-    Simplex s;
-    auto wt = weights.begin();
-    for (const int k : which) {
-      s.w[s.n] = w[k], s.a[s.n] = a[k], s.b[s.n] = b[k], s.ia[s.n] = ia[k], s.ib[s.n] = ib[k];
-      s.weight[s.n++] = *wt++;
-    }
-    *this = s;
-  }
   Vec3 point() const {
     Vec3 v = Vec3::Zero();
     for (int k = 0; k < n; ++k) v += weight[k] * w[k];
@@ -34,51 +25,81 @@ struct Simplex {
   }
 };
 
-void closest_on_segment(Simplex& s, int i, int j) {
+// The sub-simplex whose point is closest to the origin, as the vertices it keeps (in increasing
+// order) and their weights: computed without touching the simplex, so that the faces of a
+// tetrahedron are compared, and the simplex GJK had before a step is kept, with no copy.
+struct Reduction {
+  int n = 0;
+  int keep[4] = {0, 0, 0, 0};
+  double weight[4] = {0, 0, 0, 0};
+
+  Reduction() = default;
+  Reduction(std::initializer_list<int> which, std::initializer_list<double> weights) {
+    auto wt = weights.begin();
+    for (const int k : which) keep[n] = k, weight[n++] = *wt++;
+  }
+  // The same sums in the same order as Simplex::point() of the reduced simplex: the same bits.
+  Vec3 point(const Simplex& s) const {
+    Vec3 v = Vec3::Zero();
+    for (int k = 0; k < n; ++k) v += weight[k] * s.w[keep[k]];
+    return v;
+  }
+};
+
+// `from` reduced to `r`, into `to` (another simplex).
+void reduce(const Simplex& from, const Reduction& r, Simplex& to) {
+  to.n = r.n;
+  for (int k = 0; k < r.n; ++k) {
+    const int i = r.keep[k];
+    to.w[k] = from.w[i], to.a[k] = from.a[i], to.b[k] = from.b[i], to.ia[k] = from.ia[i], to.ib[k] = from.ib[i];
+    to.weight[k] = r.weight[k];
+  }
+}
+
+Reduction closest_on_segment(const Simplex& s, int i, int j) {
   const Vec3 d = s.w[j] - s.w[i];
   const double len2 = d.squaredNorm();
   const double t = len2 > 0 ? -s.w[i].dot(d) / len2 : 0.0;
-  if (t <= 0) return s.keep({i}, {1.0});
-  if (t >= 1) return s.keep({j}, {1.0});
-  s.keep({i, j}, {1 - t, t});
+  if (t <= 0) return {{i}, {1.0}};
+  if (t >= 1) return {{j}, {1.0}};
+  return {{i, j}, {1 - t, t}};
 }
 
 // The Voronoi-region walk of the closest point of triangle (i, j, k) to the origin.
-void closest_on_triangle(Simplex& s, int i, int j, int k) {
+Reduction closest_on_triangle(const Simplex& s, int i, int j, int k) {
   const Vec3 &A = s.w[i], &B = s.w[j], &C = s.w[k];
   const Vec3 ab = B - A, ac = C - A;
   const double d1 = -ab.dot(A), d2 = -ac.dot(A);
-  if (d1 <= 0 && d2 <= 0) return s.keep({i}, {1.0});
+  if (d1 <= 0 && d2 <= 0) return {{i}, {1.0}};
   const double d3 = -ab.dot(B), d4 = -ac.dot(B);
-  if (d3 >= 0 && d4 <= d3) return s.keep({j}, {1.0});
+  if (d3 >= 0 && d4 <= d3) return {{j}, {1.0}};
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const double t = d1 / (d1 - d3);
-    return s.keep({i, j}, {1 - t, t});
+    return {{i, j}, {1 - t, t}};
   }
   const double d5 = -ab.dot(C), d6 = -ac.dot(C);
-  if (d6 >= 0 && d5 <= d6) return s.keep({k}, {1.0});
+  if (d6 >= 0 && d5 <= d6) return {{k}, {1.0}};
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const double t = d2 / (d2 - d6);
-    return s.keep({i, k}, {1 - t, t});
+    return {{i, k}, {1 - t, t}};
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
     const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return s.keep({j, k}, {1 - t, t});
+    return {{j, k}, {1 - t, t}};
   }
   const double sum = va + vb + vc;
   if (!(sum > 0)) return closest_on_segment(s, i, j);  // degenerate triangle
   const double v = vb / sum, w = vc / sum;
-  s.keep({i, j, k}, {1 - v - w, v, w});
+  return {{i, j, k}, {1 - v - w, v, w}};
 }
 
 // Closest point of the tetrahedron to the origin: the best over the faces the origin is outside
 // of. Returns false when the origin is inside (the sets intersect).
-bool closest_on_tetrahedron(Simplex& s) {
+bool closest_on_tetrahedron(const Simplex& s, Reduction& best) {
   static const int kFaces[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
-  Simplex best;
   double best_d = std::numeric_limits<double>::infinity();
   bool outside_any = false;
   for (const auto& f : kFaces) {
@@ -87,13 +108,10 @@ bool closest_on_tetrahedron(Simplex& s) {
     // Outside this face, or the tetrahedron is too flat to tell: try the face.
     if (side_origin * side_other > 0) continue;
     outside_any = true;
-    Simplex t = s;
-    closest_on_triangle(t, f[0], f[1], f[2]);
-    if (const double d = t.point().squaredNorm(); d < best_d) best_d = d, best = t;
+    const Reduction t = closest_on_triangle(s, f[0], f[1], f[2]);
+    if (const double d = t.point(s).squaredNorm(); d < best_d) best_d = d, best = t;
   }
-  if (!outside_any) return false;
-  s = best;
-  return true;
+  return outside_any;
 }
 
 
@@ -114,12 +132,19 @@ struct GjkEnd {
 
 // GJK on the Minkowski difference a - b. `support_a(d)` and `support_b(d)` give the farthest
 // points along d, both in a's frame. With a finite `decide_at`, stops once |v| <= decide_at (the
-// sets are that close) or the gap along v exceeds decide_at + margin (they are farther).
+// sets are that close) or the gap along v exceeds decide_at + margin (they are farther). With a
+// positive `slack`, stops once |v| exceeds the gap along v by at most the slack: the simplex's
+// point is then within it of the distance.
+// Two simplices take turns: a step appends w to the current one (its first n points stay what
+// they were, so dropping w again gives back the simplex before the step) and reduces it into the
+// other.
 template <class SupportA, class SupportB>
 GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& start, double scale, double decide_at,
-           double margin) {
+           double margin, double slack = 0.0) {
   GjkEnd end;
-  Simplex& s = end.s;
+  Simplex spare;
+  Simplex* s = &end.s;
+  Simplex* next_s = &spare;
   Vec3 v = start;
   const bool deciding = std::isfinite(decide_at);
   for (int iteration = 0; iteration < 128; ++iteration) {
@@ -133,42 +158,50 @@ GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& sta
       end.support_b = pb.p;
       break;
     }
-    if (s.n > 0 && vv - v.dot(w) <= 1e-15 * vv) break;  // w brings v no closer: converged
+    if (s->n > 0 && vv - v.dot(w) <= 1e-15 * vv) break;  // w brings v no closer: converged
+    if (slack > 0.0 && s->n > 0 && std::sqrt(vv) - (v.dot(w) / std::sqrt(vv) - margin) <= slack) break;  // close enough
     bool repeated = false;
-    for (int k = 0; k < s.n; ++k) {
+    for (int k = 0; k < s->n; ++k) {
       // Vertex sets repeat by index; a continuous support point only by value.
       const bool indexed = pa.index >= 0 && pb.index >= 0;
-      repeated = repeated || (indexed ? s.ia[k] == pa.index && s.ib[k] == pb.index : s.w[k] == w);
+      repeated = repeated || (indexed ? s->ia[k] == pa.index && s->ib[k] == pb.index : s->w[k] == w);
     }
     if (repeated) break;
-    const Simplex before = s;
-    s.w[s.n] = w, s.a[s.n] = pa.p, s.b[s.n] = pb.p, s.ia[s.n] = pa.index, s.ib[s.n] = pb.index, s.weight[s.n] = 0.0;
-    ++s.n;
-    if (s.n == 1) s.keep({0}, {1.0});
-    if (s.n == 2) closest_on_segment(s, 0, 1);
-    if (s.n == 3) closest_on_triangle(s, 0, 1, 2);
-    if (s.n == 4 && !closest_on_tetrahedron(s)) {
+    const int before = s->n;  // s with its first `before` points: the simplex that gave v
+    s->w[before] = w, s->a[before] = pa.p, s->b[before] = pb.p, s->ia[before] = pa.index, s->ib[before] = pb.index;
+    s->weight[before] = 0.0;
+    s->n = before + 1;
+    Reduction r;
+    if (s->n == 1) r = {{0}, {1.0}};
+    if (s->n == 2) r = closest_on_segment(*s, 0, 1);
+    if (s->n == 3) r = closest_on_triangle(*s, 0, 1, 2);
+    if (s->n == 4 && !closest_on_tetrahedron(*s, r)) {
       // The origin in the tetrahedron, unless rounding flattened it: a w that is still on the far
       // side of v separates the sets, so that is convergence on a curved surface, not contact.
       if (vv > 0.0 && v.dot(w) > margin * std::sqrt(vv)) {
-        s = before;
+        s->n = before;
         break;
       }
-      end.intersecting = true;
+      end.intersecting = true;  // (with the four points, w's weight 0)
       break;
     }
-    const Vec3 next = s.point();
+    const Vec3 next = r.point(*s);
     if (next.squaredNorm() <= 1e-30 * scale * scale) {
+      reduce(*s, r, *next_s);
+      std::swap(s, next_s);
       end.intersecting = true;
       break;
     }
-    if (s.n > 1 && next.squaredNorm() >= vv) {  // no progress: rounding has the last word
-      s = before;  // the simplex that gave v, so the witnesses are v apart
+    if (r.n > 1 && next.squaredNorm() >= vv) {  // no progress: rounding has the last word
+      s->n = before;  // the simplex that gave v, so the witnesses are v apart
       break;
     }
+    reduce(*s, r, *next_s);
+    std::swap(s, next_s);
     v = next;
     if (deciding && vv <= decide_at * decide_at) break;  // this close: decided
   }
+  if (s != &end.s) end.s = *s;
   return end;
 }
 
@@ -368,7 +401,8 @@ double extent(const ConvexShape& s) {
   return 0.0;
 }
 
-ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double decide_at) {
+ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double decide_at,
+                               double slack) {
   ConvexDistance out;
   auto empty = [](const ConvexShape& s) { return s.kind == ConvexShape::Kind::kHull && s.hull->empty(); };
   if (empty(a) || empty(b)) {
@@ -376,8 +410,12 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
     return out;
   }
   const Mat3 Rt = b_in_a.R.transpose();
-  auto support_a = [&](const Vec3& d) { return own_support(a, d); };
+  auto support_a = [&](const Vec3& d) {
+    ++out.support_queries;
+    return own_support(a, d);
+  };
   auto support_b = [&](const Vec3& d) {
+    ++out.support_queries;
     const SupportPoint p = own_support(b, Rt * d);
     return SupportPoint{b_in_a * p.p, p.index};
   };
@@ -389,7 +427,8 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
     return gap - margin - 1e-15 * std::abs(gap);
   };
   const Vec3 start = b_in_a.t.norm() > 0 ? Vec3(-b_in_a.t) : Vec3(Vec3::UnitX());
-  const GjkEnd end = gjk(support_a, support_b, start, scale, decide_at, margin);
+  slack = std::isfinite(slack) ? std::max(slack, 0.0) : 0.0;
+  const GjkEnd end = gjk(support_a, support_b, start, scale, decide_at, margin, slack);
   if (end.separated) {
     // Farther than asked along v: the gap along v is the certified answer; the support points
     // are a pair of points of the sets, so their distance bounds the true one from above.
@@ -422,15 +461,16 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
   Vec3 faces[3];
   for (int k = 0, n = face_directions(a, Mat3::Identity(), faces); k < n; ++k) consider(faces[k]);
   for (int k = 0, n = face_directions(b, b_in_a.R, faces); k < n; ++k) consider(faces[k]);
-  const bool decided = std::isfinite(decide_at) && (bound > decide_at || out.distance <= decide_at);
+  const bool decided = (std::isfinite(decide_at) && (bound > decide_at || out.distance <= decide_at)) ||
+                       out.distance - bound <= slack;
   const double loose = out.distance - bound;
   if (!decided && (curved(a) || curved(b)) && loose > 1e-13 * scale + 1e-9 * out.distance) {
     // The direction error behind the loss: about sqrt(loss / curvature radius) for a curved face.
     const double step = std::clamp(std::sqrt(loose / std::max(scale, 1e-300)), 1e-10, 0.1);
-    const double tight = out.distance - 1e-13 * scale - 1e-9 * out.distance;
+    const double tight = out.distance - std::max(1e-13 * scale + 1e-9 * out.distance, slack);
     bound = refine_direction(gap_along, best_n, bound, step, std::isfinite(decide_at) ? decide_at : tight);
   }
-  if ((curved(a) || curved(b)) && out.distance - bound > 1e-15 * scale) {
+  if ((curved(a) || curved(b)) && out.distance - bound > std::max(1e-15 * scale, slack)) {
     polish_witnesses(a, b, b_in_a, 1e-15 * scale, out);
   }
   out.lower_bound = std::max(0.0, bound);

@@ -64,10 +64,10 @@ bool primitives_collide(const ShapeRef& a, const Transform& pa, const ShapeRef& 
 }
 
 double primitives_distance(const ShapeRef& a, const Transform& pa, const ShapeRef& b, const Transform& pb, double,
-                           bool, Vec3& wa, Vec3& wb, QueryStats& stats, double) {
+                           bool, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) {
   ++stats.primitive_tests;
-  const ConvexDistance d =
-      convex_distance(ConvexShape::of(a.primitive), ConvexShape::of(b.primitive), relative_transform(pa, pb));
+  const ConvexDistance d = convex_distance(ConvexShape::of(a.primitive), ConvexShape::of(b.primitive),
+                                           relative_transform(pa, pb), std::numeric_limits<double>::quiet_NaN(), tolerance);
   wa = pa * d.on_a;
   wb = pa * (d.intersecting ? d.on_a : d.on_b);
   return d.intersecting ? 0.0 : d.distance;
@@ -165,7 +165,7 @@ double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const 
   if (hull.lower_bound >= best - tolerance) return std::max(hull.lower_bound, best);
   // Nearer than `best`: the search may have stopped there, before the closest points that the
   // surface test needs.
-  hull = convex_distance(hull_shape, primitive, p_in_mesh);
+  hull = convex_distance(hull_shape, primitive, p_in_mesh, std::numeric_limits<double>::quiet_NaN(), tolerance);
   double upper = best;
   Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
   if (hull.lower_bound > 0.0) {

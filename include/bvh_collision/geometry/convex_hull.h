@@ -47,6 +47,7 @@ struct ConvexDistance {
   Vec3 on_b = Vec3::Zero();   // witness on b's hull, in a's frame
   int vertex_a = -1;          // when on_a is a vertex of a's hull: its index, else -1
   int vertex_b = -1;          // when on_b is a vertex of b's hull: its index, else -1
+  int support_queries = 0;    // support points asked of either set (the work done; ConvexShape queries)
 };
 
 // GJK on the two vertex sets. The lower bound does not trust GJK's arithmetic: it is the gap
