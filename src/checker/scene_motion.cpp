@@ -73,6 +73,7 @@ struct SceneChecker::MotionScratch {
   // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
   // current interval's (at most those); delta: goal - start.
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
+  std::vector<double> chain_delta, turning_total;  // chain_deltas' (once a motion)
   std::vector<TurningAxis> axes;
   std::vector<Interval> done;   // certified intervals (check_motion)
   // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
@@ -105,8 +106,8 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   s.to.assign(at(hi), at(hi) + s.state.size());
   pose_links(at(mid), posed);
   std::vector<int>& arena = s.pending;
-  IntervalRates rates{s.delta.data(), s.speed.data(), s.pair_speed.data(), s.interval_speed.data(), s.interval_pair_speed.data(),
-                      &s.sums, &s.axes};
+  IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
+                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
   interval_speeds(posed, half, arena.data() + first, count, rates);
   const int pairs = static_cast<int>(pair_rates_.size());
   for (std::size_t j = first; j < first + count; ++j) {
@@ -219,6 +220,7 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
   for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
   s.delta.resize(checker_.model().variable_count());
   for (std::size_t j = 0; j < s.delta.size(); ++j) s.delta[j] = goal[j] - start[j];
+  chain_deltas(s.delta.data(), s.chain_delta, s.turning_total);
   s.interval_speed.assign(s.speed.size(), 0.0);
   s.interval_pair_speed.assign(pair_rates_.size(), 0.0);
   s.growth.assign(m.shapes().size(), 0.0);
@@ -247,8 +249,8 @@ void SceneChecker::speeds_over(const double* start, const double* goal, double l
   std::vector<int> every(pair_rates_.size());
   std::iota(every.begin(), every.end(), 0);
   for (const int l : links_) every.push_back(static_cast<int>(pair_rates_.size()) + l);
-  const IntervalRates rates{s.delta.data(), s.speed.data(), s.pair_speed.data(), s.interval_speed.data(), s.interval_pair_speed.data(),
-                            &s.sums, &s.axes};
+  const IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
+                            s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
   interval_speeds(posed, 0.5 * (hi - lo), every.data(), every.size(), rates);
 }
 

@@ -161,11 +161,12 @@ class SceneChecker {
   void relative_pair_rates();
   void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;
+  void chain_deltas(const double* delta, std::vector<double>& chain_delta, std::vector<double>& turning_total) const;
   void speeds_over(const double* start, const double* goal, double lo, double hi) const;
   // A turning joint at an interval's midpoint: its axis, and the rounding margin of its origin
   // (the same for every link below it: computed once an interval, not once a link).
   struct TurningAxis {
-    Vec3 w;
+    Vec3 w, origin;
     double origin_margin;
   };
   // An interval's rates: per link and per checked pair, how fast they can move (close) per unit
@@ -173,6 +174,8 @@ class SceneChecker {
   // capped by the motion's chain-length rates. Computed for the components asked only.
   struct IntervalRates {
     const double* delta = nullptr;  // goal - start
+    const double* chain_delta = nullptr;    // per chain joint: its change over the motion (multiplier applied)
+    const double* turning_total = nullptr;  // per link: the sum of |chain_delta| over its turning joints
     const double* link_cap = nullptr;
     const double* pair_cap = nullptr;
     double* link_speed = nullptr;  // out (per link; links not asked for are left negative)
