@@ -634,18 +634,26 @@ TEST(SceneChecker, OctreeStatesAnswerAsTheGeneralQueries) {
 // is offered, for balls anywhere in the grid up to its reach, and for balls within a hair of
 // touching an object (the radius found by bisection on the ball test), turned primitives of every
 // kind and mesh objects among them.
-TEST(ObjectGrid, OffersEveryObjectABallMeets) {
-  std::mt19937_64 rng(43);
+// `count` objects turned and placed at random within a metre of the origin, of the first `kinds`
+// of: box, sphere, cylinder, capsule, cone, mesh (in turn).
+Environment random_objects(std::mt19937_64& rng, int count, int kinds) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   Environment world(0.05);
-  for (int i = 0; i < 48; ++i) {
+  for (int i = 0; i < count; ++i) {
     const Transform pose = test::random_rotation(rng, Vec3(unit(rng) * 2 - 1, unit(rng) * 2 - 1, unit(rng) * 2 - 1));
     const double a = 0.02 + 0.2 * unit(rng), b = 0.02 + 0.2 * unit(rng);
     const ObjectShape shapes[] = {ObjectShape::box({a, b, 0.3 * a}), ObjectShape::sphere(a), ObjectShape::cylinder(a, b),
                                   ObjectShape::capsule(a, b), ObjectShape::cone(a, b),
                                   ObjectShape::triangles(test::bumpy_sphere(rng, a, 5, 7, 0.2))};
-    world.add_object("o" + std::to_string(i), shapes[i % 6], pose);
+    world.add_object("o" + std::to_string(i), shapes[i % kinds], pose);
   }
+  return world;
+}
+
+TEST(ObjectGrid, OffersEveryObjectABallMeets) {
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Environment world = random_objects(rng, 48, 6);
   const double reach = 0.3;
   const ObjectGrid grid(world.objects(), Vec3::Constant(-1.2), Vec3::Constant(1.2), reach, 0.1);
   const int n = static_cast<int>(world.objects().size());
@@ -674,6 +682,68 @@ TEST(ObjectGrid, OffersEveryObjectABallMeets) {
   }
   EXPECT_GT(met, 1000);
   EXPECT_LT(offered_in_vain, 3 * met);  // the cells' bounds pass over most of their lists
+}
+
+// A walk that carries its balls into a primitive's frame at once (ObjectGrid::local_ball_meets,
+// local_depth) answers as the world tests do, against closed forms of the point's distance and
+// depth: a ball that meets the primitive (its centre within the radius of it) is always reported,
+// one a micrometre beyond never is, and the depth is never more than the point's; for balls
+// placed by a link pose and carried by to_local(o) * pose, as scene_checker's walk places them.
+TEST(ObjectGrid, BallsInAPrimitivesFrameAnswerAsInTheWorld) {
+  std::mt19937_64 rng(47);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Environment world = random_objects(rng, 40, 4);
+  const ObjectGrid grid(world.objects(), Vec3::Constant(-1.2), Vec3::Constant(1.2), 0.3, 0.1);
+  int met = 0, missed = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const int o = static_cast<int>(rng() % world.objects().size());
+    ASSERT_TRUE(grid.exact_ball_test(o));
+    const Transform link = test::random_rotation(rng, Vec3(unit(rng) * 2 - 1, unit(rng) * 2 - 1, unit(rng) * 2 - 1));
+    // Near the object (within 5 cm of its box), given in the link's frame.
+    const double extent = world.objects()[o].bound_radius + 0.05;
+    const Vec3 near = world.objects()[o].pose * (Vec3(unit(rng) * 2 - 1, unit(rng) * 2 - 1, unit(rng) * 2 - 1) * extent);
+    const Vec3 centre_in_link = link.inverse() * near;
+    const Vec3 world_centre = link * centre_in_link;
+    const Vec3 local = (grid.to_local(o) * link) * centre_in_link;
+    const Vec3 q = world.objects()[o].pose.inverse() * world_centre;  // the oracle's own carry
+    const ShapeRef exact = exact_shape_of(world.objects()[o]);
+    const Primitive p = *exact_primitive(exact);
+    double distance = 0.0, depth = 0.0;
+    switch (p.kind) {
+      case Primitive::Kind::kBox:
+        distance = (q.cwiseAbs() - p.half).cwiseMax(0.0).norm();
+        depth = (p.half - q.cwiseAbs()).minCoeff();
+        break;
+      case Primitive::Kind::kSphere:
+        distance = std::max(0.0, q.norm() - p.radius);
+        depth = p.radius - q.norm();
+        break;
+      case Primitive::Kind::kCylinder:
+        distance = std::hypot(std::max(0.0, std::hypot(q.x(), q.y()) - p.radius), std::max(0.0, std::abs(q.z()) - p.half_length));
+        depth = std::min(p.radius - std::hypot(q.x(), q.y()), p.half_length - std::abs(q.z()));
+        break;
+      default: {  // capsule
+        const double z = std::clamp(q.z(), -p.half_length, p.half_length);
+        distance = std::max(0.0, (q - Vec3(0, 0, z)).norm() - p.radius);
+        depth = p.radius - (q - Vec3(0, 0, z)).norm();
+      }
+    }
+    const double margin = pose_margin(link.t.norm() + centre_in_link.norm());
+    for (const double r : {0.0, 0.01, 0.1 * unit(rng)}) {
+      const bool meets = grid.local_ball_meets(o, local, r, margin);
+      if (distance <= r) {
+        ++met;
+        ASSERT_TRUE(meets) << "object " << o << " distance " << distance << " radius " << r;
+      } else if (distance > r + 1e-6) {
+        ++missed;
+        ASSERT_FALSE(meets) << "object " << o << " distance " << distance << " radius " << r;
+      }
+    }
+    ASSERT_LE(grid.local_depth(o, local, margin), std::max(depth, 0.0) + 1e-15) << "object " << o;
+    if (depth > 1e-6) EXPECT_GT(grid.local_depth(o, local, margin), depth - 1e-6) << "object " << o;
+  }
+  EXPECT_GT(met, 2000);
+  EXPECT_GT(missed, 2000);
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& 
     const ShapeRef exact = exact_shape_of(o);
     s.primitive = exact_primitive(exact) != nullptr;
     s.shape = exact.primitive;
+    if (s.primitive) s.half = half_extents(s.shape);
     s.centre = o.pose * o.bound_center;
     s.radius = o.bound_radius;
     world_box(o.pose, s.primitive ? Vec3::Zero() : o.bound_center,
@@ -109,6 +110,20 @@ double ObjectGrid::depth(int o, const Vec3& centre) const {
   if (!s.primitive) return -std::numeric_limits<double>::infinity();
   // Less the rounding of the transform and of the depth at this scale.
   return inscribed_depth(s.shape, s.to_local * centre) - 2.0 * (s.margin + pose_margin(centre.norm()));
+}
+
+// (Less a margin twice that of the world tests: the composed transform rounds at the scale of
+// both the object's and the pose's coordinates, far below either margin.)
+bool ObjectGrid::local_ball_meets(int o, const Vec3& p, double radius, double margin) const {
+  const Solid& s = solids_[o];
+  const double reach = radius + 2.0 * (s.margin + margin) + pose_margin(p.cwiseAbs().sum());
+  if ((p.cwiseAbs() - s.half).cwiseMax(0.0).squaredNorm() > reach * reach) return false;  // the primitive's box
+  return (closest_point(s.shape, p) - p).squaredNorm() <= reach * reach;
+}
+
+double ObjectGrid::local_depth(int o, const Vec3& p, double margin) const {
+  const Solid& s = solids_[o];
+  return inscribed_depth(s.shape, p) - 2.0 * (s.margin + margin + pose_margin(p.norm()));
 }
 
 bool ObjectGrid::ball_meets(int o, const Vec3& centre, double radius) const {

@@ -44,6 +44,15 @@ class ObjectGrid {
   double depth(int o, const Vec3& centre) const;
   // Is the ball's test against object `o` exact (a primitive), or only its bounding sphere's?
   bool exact_ball_test(int o) const { return solids_[o].primitive; }
+
+  // The same tests in the frame of a primitive object (exact_ball_test(o)), for a walk that
+  // carries its balls there at once (one transform a ball, not two): `to_local(o) * pose` places
+  // them, and `margin` is the rounding of the world centres they stand for (the pose's margin;
+  // the object's own is added here). True whenever the ball meets the primitive.
+  const Transform& to_local(int o) const { return solids_[o].to_local; }
+  bool local_ball_meets(int o, const Vec3& p, double radius, double margin) const;
+  // A lower bound on how deep the local point lies inside the primitive (<= 0 outside).
+  double local_depth(int o, const Vec3& p, double margin) const;
   std::size_t size() const { return solids_.size(); }
   std::size_t cells() const { return start_.empty() ? 0 : start_.size() - 1; }
 
@@ -51,6 +60,7 @@ class ObjectGrid {
   struct Solid {
     Transform to_local;  // world -> object frame
     Primitive shape;     // exact when `primitive`
+    Vec3 half = Vec3::Zero();  // its box's half extents (own frame)
     bool primitive = false;
     Vec3 centre = Vec3::Zero();  // world bounding sphere
     double radius = 0.0;
