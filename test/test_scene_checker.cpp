@@ -633,7 +633,7 @@ TEST(SceneChecker, OctreeStatesAnswerAsTheGeneralQueries) {
 // (ObjectGrid::ball_meets, true whenever the ball meets it, the oracle here over every object)
 // is offered, for balls anywhere in the grid up to its reach, and for balls within a hair of
 // touching an object (the radius found by bisection on the ball test), turned primitives of every
-// kind and mesh objects among them.
+// kind and mesh objects among them. A ball the grid calls clear (ObjectGrid::clear) meets none.
 // `count` objects turned and placed at random within a metre of the origin, of the first `kinds`
 // of: box, sphere, cylinder, capsule, cone, mesh (in turn).
 Environment random_objects(std::mt19937_64& rng, int count, int kinds) {
@@ -657,14 +657,17 @@ TEST(ObjectGrid, OffersEveryObjectABallMeets) {
   const double reach = 0.3;
   const ObjectGrid grid(world.objects(), Vec3::Constant(-1.2), Vec3::Constant(1.2), reach, 0.1);
   const int n = static_cast<int>(world.objects().size());
-  int met = 0, offered_in_vain = 0;
+  int met = 0, offered_in_vain = 0, cleared = 0;
   auto expect_offered = [&](const Vec3& c, double r) {
     std::vector<char> offered(n, 0);
     grid.for_each_near(c, r, [&](int o) { offered[o] = 1; });
+    const bool clear = grid.clear(c, r);  // (the state check's shortcut: nothing offered)
+    cleared += clear;
     for (int o = 0; o < n; ++o) {
       if (grid.ball_meets(o, c, r)) {
         ++met;
         ASSERT_TRUE(offered[o]) << "object " << o << ", ball at " << c.transpose() << " radius " << r;
+        ASSERT_FALSE(clear) << "object " << o << ", ball at " << c.transpose() << " radius " << r;
       } else if (offered[o]) {
         ++offered_in_vain;
       }
@@ -682,6 +685,7 @@ TEST(ObjectGrid, OffersEveryObjectABallMeets) {
   }
   EXPECT_GT(met, 1000);
   EXPECT_LT(offered_in_vain, 3 * met);  // the cells' bounds pass over most of their lists
+  EXPECT_GT(cleared, 1000);
 }
 
 // A walk that carries its balls into a primitive's frame at once (ObjectGrid::local_ball_meets,

@@ -36,6 +36,14 @@ class ObjectGrid {
     }
   }
 
+  // Is every object proven farther than `radius` from `centre` by the centre's cell (for_each_near
+  // would offer none)? False when it cannot tell.
+  bool clear(const Vec3& centre, double radius) const {
+    if (solids_.empty()) return true;
+    const int c = radius <= reach_ ? cell_of(centre) : -1;
+    return c >= 0 && radius < clear_[c];
+  }
+
   // Does the ball meet object `o`? True whenever it does (rounding margins included); for a mesh
   // object, whenever the ball meets its bounding sphere.
   bool ball_meets(int o, const Vec3& centre, double radius) const;

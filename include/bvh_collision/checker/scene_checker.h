@@ -214,6 +214,7 @@ class SceneChecker {
   std::vector<int> components_;
   bool root_at_origin_ = true;  // the root pose is the identity: link poses need no product
   double largest_radius_ = 0.0;  // of the links' bounding radii
+  std::vector<double> link_reach_;  // per link: its bounding radius and padding
   bool octree_ = false;          // the environment has one
   struct PairRates {
     bool relative = true;  // false: the sum of the two links' own bounds
