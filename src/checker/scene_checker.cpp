@@ -51,11 +51,6 @@ struct FreeStates {
   std::size_t n = 0;
 };
 
-FreeStates& free_states() {
-  thread_local FreeStates f;
-  return f;
-}
-
 std::size_t slot_of(const double* state, std::size_t n) {
   std::uint64_t h = 0x9E3779B97F4A7C15ULL;
   for (std::size_t j = 0; j < n; ++j) {
@@ -69,25 +64,44 @@ std::size_t slot_of(const double* state, std::size_t n) {
 
 }  // namespace
 
+// A thread's memory for state checks: the free states, and the posed state (one thread_local
+// reached once a check, not at every use: in a shared library each use after a call costs a call
+// to __tls_get_addr).
+struct SceneChecker::StateScratch {
+  FreeStates free;
+  Posed posed;
+};
+
+[[gnu::noinline]] SceneChecker::StateScratch& SceneChecker::state_scratch() {
+  thread_local StateScratch s;
+  return s;
+}
+
 bool SceneChecker::known_free(const double* state) const {
-  const FreeStates& f = free_states();
-  const std::size_t n = checker_.model().variable_count();
-  if (f.n != n) return false;
-  const std::size_t k = slot_of(state, n);
-  return f.serial[k] == serial_ && std::memcmp(f.values.data() + k * n, state, n * sizeof(double)) == 0;
+  return known_free(state_scratch(), state, slot_of(state, checker_.model().variable_count()));
+}
+
+bool SceneChecker::known_free(const StateScratch& scratch, const double* state, std::size_t slot) const {
+  const FreeStates& f = scratch.free;
+  const std::size_t n = f.n;
+  return n == checker_.model().variable_count() && f.serial[slot] == serial_ &&
+         std::memcmp(f.values.data() + slot * n, state, n * sizeof(double)) == 0;
 }
 
 void SceneChecker::remember_free(const double* state) const {
-  FreeStates& f = free_states();
+  remember_free(state_scratch(), state, slot_of(state, checker_.model().variable_count()));
+}
+
+void SceneChecker::remember_free(StateScratch& scratch, const double* state, std::size_t slot) const {
+  FreeStates& f = scratch.free;
   const std::size_t n = checker_.model().variable_count();
   if (f.n != n) {
     f.n = n;
     f.values.assign(FreeStates::kSlots * n, 0.0);
     f.serial.fill(0);
   }
-  const std::size_t k = slot_of(state, n);
-  f.serial[k] = serial_;
-  std::memcpy(f.values.data() + k * n, state, n * sizeof(double));
+  f.serial[slot] = serial_;
+  std::memcpy(f.values.data() + slot * n, state, n * sizeof(double));
 }
 
 SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment,
@@ -602,15 +616,17 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
 
 bool SceneChecker::collides(const double* state) const {
   checker_.require_finite_state(state, "state check");
-  if (known_free(state)) return false;
-  thread_local Posed posed;
+  StateScratch& scratch = state_scratch();
+  const std::size_t slot = slot_of(state, checker_.model().variable_count());  // (hashed once)
+  if (known_free(scratch, state, slot)) return false;
+  Posed& posed = scratch.posed;
   pose_links(state, posed);
   posed.growth = nullptr;
   posed.pair_growth = nullptr;
   posed.tolerant_flag = options_.states_at_tolerance;
   posed.ends = nullptr;
   if (check_posed(posed) != Answer::kFree) return true;
-  remember_free(state);
+  remember_free(scratch, state, slot);
   return false;
 }
 

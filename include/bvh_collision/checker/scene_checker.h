@@ -191,6 +191,10 @@ class SceneChecker {
   // motion grown from it): known_free answers from memory, remember_free records one.
   bool known_free(const double* state) const;
   void remember_free(const double* state) const;
+  struct StateScratch;
+  static StateScratch& state_scratch();
+  bool known_free(const StateScratch& scratch, const double* state, std::size_t slot) const;  // slot: slot_of(state)
+  void remember_free(StateScratch& scratch, const double* state, std::size_t slot) const;
 
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;
