@@ -43,9 +43,10 @@ inline CollisionChecker load_checker(const std::string& robot, const CheckerOpti
   return CollisionChecker(std::move(model), std::move(acm), with_test_proxy_cache(options));
 }
 
-// Panda as MoveIt sets it up: adjacent links and its SRDF's disabled pairs allowed.
-inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) {
-  const std::string dir = robots_dir() + "/panda";
+// A robot of ../shared/robots as MoveIt sets it up: adjacent links and its SRDF's disabled pairs
+// allowed.
+inline CollisionChecker load_as_moveit(const std::string& robot, const CheckerOptions& options = {}) {
+  const std::string dir = robots_dir() + "/" + robot;
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(dir + "/robot.urdf"), PackageResolver({dir}));
   AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
   std::ifstream srdf(dir + "/robot.srdf");
@@ -54,6 +55,8 @@ inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) {
   apply_srdf(parse_srdf(text.str(), &model), model, acm);
   return CollisionChecker(std::move(model), std::move(acm), with_test_proxy_cache(options));
 }
+
+inline CollisionChecker panda_as_moveit(const CheckerOptions& options = {}) { return load_as_moveit("panda", options); }
 
 // Panda as above with the node's proxy levels (5, 10, 20 mm), built once per test binary.
 inline const CollisionChecker& panda_with_proxies() {

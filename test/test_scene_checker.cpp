@@ -107,6 +107,60 @@ TEST(SceneChecker, StatesAnswerAsTheGeneralQueries) {
   EXPECT_LT(colliding, states - states / 10);
 }
 
+// A state's components are sieved 64 at a time (check_still): PR2, some fifty links with
+// geometry and hundreds of checked pairs beside its SRDF's, spans many blocks; each state answers as the
+// general queries, self pairs alone and with a scene's objects.
+TEST(SceneChecker, StatesOfARobotOfManyBlocksAnswerAsTheGeneralQueries) {
+  BVH_REQUIRE_ROBOTS();
+  static const CollisionChecker checker = test::load_as_moveit("pr2");
+  const auto& shapes = checker.collision_model().shapes();
+  const std::size_t links = static_cast<std::size_t>(std::count_if(shapes.begin(), shapes.end(), [](const auto& s) { return !s.empty(); }));
+  const std::size_t components = checker.collision_model().checked_pairs().size() + links;
+  ASSERT_GT(components, 4u * 64u) << "the sieve's blocks are what this test is for";
+  std::mt19937_64 rng(17);
+  std::size_t states = 0, colliding = 0, self_colliding = 0;
+  for (int scene = 0; scene < 2; ++scene) {
+    // Boxes, spheres and cylinders in front of PR2, around the height of its arms.
+    Environment world(0.05);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int o = 0; o < 12; ++o) {
+      const Vec3 at(0.45 + 0.5 * unit(rng), -0.7 + 1.4 * unit(rng), 0.5 + 0.7 * unit(rng));
+      const double size = 0.04 + 0.12 * unit(rng);
+      const ObjectShape shape = o % 3 == 0 ? ObjectShape::box(Vec3(size, 2 * size, size / 2))
+                                : o % 3 == 1 ? ObjectShape::sphere(size / 2)
+                                             : ObjectShape::cylinder(size / 3, 2 * size);
+      world.add_object("object_" + std::to_string(o), shape, Transform{Eigen::AngleAxisd(3.0 * unit(rng), Vec3(unit(rng), unit(rng), 0.5).normalized()).toRotationMatrix(), at});
+    }
+    const auto env = std::make_shared<const Environment>(world);
+    SceneCheckOptions placed;
+    placed.root_pose = Transform::Translation(Vec3(0.02, -0.03, 0.01));  // (not the identity: the poses' product)
+    const SceneChecker both(checker, env, placed);
+    placed.environment = false;
+    const SceneChecker self(checker, env, placed);
+    for (int i = 0; i < test::sized(150); ++i, ++states) {
+      // Every other state within half a radian of the zero pose (a random PR2 pose nearly always
+      // folds its arms into its body).
+      std::vector<double> q = random_configuration(checker.model(), rng);
+      if (i % 2 == 0) {
+        for (double& v : q) v *= 0.5 / M_PI;
+      }
+      const bool self_truth = checker.check_self(q.data()).collision;
+      EnvironmentRequest request;
+      request.contacts = false;
+      request.root_pose = placed.root_pose;
+      const bool truth = self_truth || checker.check_environment(q.data(), *env, request).collision;
+      colliding += truth;
+      self_colliding += self_truth;
+      ASSERT_EQ(self.collides(q.data()), self_truth) << "scene " << scene << " state " << i;
+      ASSERT_EQ(both.collides(q.data()), truth) << "scene " << scene << " state " << i;
+    }
+  }
+  std::cout << states << " PR2 states, " << colliding << " colliding, " << self_colliding << " with itself\n";
+  EXPECT_GT(self_colliding, states / 20);     // the pairs' blocks decide some
+  EXPECT_GT(colliding - self_colliding, states / 20);  // and the links' some
+  EXPECT_GT(states - colliding, states / 10);
+}
+
 // A state found free is remembered by the thread (a planner asks for it again as the start of
 // its motions) and answered from memory only by the checker that found it: not by another one
 // alive beside it, nor by one built in the same storage after it (a pointer would call those the
@@ -744,7 +798,9 @@ TEST(ObjectGrid, BallsInAPrimitivesFrameAnswerAsInTheWorld) {
       }
     }
     ASSERT_LE(grid.local_depth(o, local, margin), std::max(depth, 0.0) + 1e-15) << "object " << o;
-    if (depth > 1e-6) EXPECT_GT(grid.local_depth(o, local, margin), depth - 1e-6) << "object " << o;
+    if (depth > 1e-6) {
+      EXPECT_GT(grid.local_depth(o, local, margin), depth - 1e-6) << "object " << o;
+    }
   }
   EXPECT_GT(met, 2000);
   EXPECT_GT(missed, 2000);

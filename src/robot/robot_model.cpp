@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "bvh_collision/geometry/sin_cos.h"
+#include "bvh_collision/geometry/split_column.h"
 #include "bvh_collision/robot/mesh_loader.h"
 #include "bvh_collision/robot/urdf_validation.h"
 
@@ -246,39 +247,7 @@ int RobotModel::joint_index(const std::string& name) const {
 
 namespace {
 
-// Products of poses, written out: at -O2 GCC leaves Eigen's small products as calls and keeps
-// loops over three rows, at twice the instructions. A column is held as rows 0-1 in one SSE2
-// register and row 2 alone (the baseline x86-64 has two lanes): lane arithmetic rounds as scalar
-// arithmetic does, and the sums keep one order, so the poses are the scalar products bit for bit
-// (and the batch kernel's, checker/proxy_batch_kernel.h).
-typedef double TwoRows __attribute__((vector_size(16)));
-
-struct SplitColumn {
-  TwoRows top;
-  double bottom;
-};
-
-[[gnu::always_inline]] inline SplitColumn load_column(const double* col) {
-  SplitColumn c;
-  std::memcpy(&c.top, col, sizeof c.top);
-  c.bottom = col[2];
-  return c;
-}
-
-[[gnu::always_inline]] inline void store_column(const SplitColumn& c, double* col) {
-  std::memcpy(col, &c.top, sizeof c.top);
-  col[2] = c.bottom;
-}
-
-// The rotation a's columns times the column b: every product of poses here is these sums, in
-// this order (row r: a(r,0) b0 + a(r,1) b1 + a(r,2) b2), as the batch kernel's are.
-[[gnu::always_inline]] inline SplitColumn times(const SplitColumn* a, const double* b) {
-  return {a[0].top * b[0] + a[1].top * b[1] + a[2].top * b[2], a[0].bottom * b[0] + a[1].bottom * b[1] + a[2].bottom * b[2]};
-}
-
-[[gnu::always_inline]] inline void load_rotation(const Mat3& r, SplitColumn* columns) {
-  for (int c = 0; c < 3; ++c) columns[c] = load_column(r.col(c).data());
-}
+// Products of poses written out as split columns (geometry/split_column.h).
 
 // out.t = a.R b.t + a.t, from a's columns.
 [[gnu::always_inline]] inline void translate(const SplitColumn* a, const Transform& at, const Transform& b, Transform& out) {
@@ -458,7 +427,11 @@ void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, std::size_t fi
 
 }  // namespace
 
-void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
+// Built twice, the CPU choosing at load time: with AVX's three-operand forms the split columns
+// need no register copies (a ninth fewer instructions a panda pose, callgrind), and no fused
+// multiply-add is enabled, so both give the same bits. Flattened: a clone inlines only what it
+// is given.
+__attribute__((target_clones("avx2", "default"), flatten)) void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
                              const std::vector<Transform>* free_joint_poses) const {
   poses.resize(links_);
   poses[root_] = Transform();

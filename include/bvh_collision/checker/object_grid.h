@@ -77,15 +77,14 @@ class ObjectGrid {
   };
   // (In the header: a planner's state asks it once a link.)
   int cell_of(const Vec3& p) const {
-    int at[3];
-    for (int i = 0; i < 3; ++i) {
-      // (By the inverse, not divided: a point that rounding puts one cell over lies within
-      // rounding of that cell, and the lists and bounds are built with margins far above that.)
-      const double f = (p[i] - origin_[i]) * inverse_cell_;
-      if (!(f >= 0.0 && f < extent_[i])) return -1;  // outside (or not a number): every object
-      at[i] = static_cast<int>(f);
-    }
-    return (at[2] * n_[1] + at[1]) * n_[0] + at[0];
+    // (By the inverse, not divided: a point that rounding puts one cell over lies within
+    // rounding of that cell, and the lists and bounds are built with margins far above that.
+    // The three axes written out: GCC keeps a loop over them.)
+    const double x = (p[0] - origin_[0]) * inverse_cell_, y = (p[1] - origin_[1]) * inverse_cell_,
+                 z = (p[2] - origin_[2]) * inverse_cell_;
+    const bool inside = (x >= 0.0) & (x < extent_[0]) & (y >= 0.0) & (y < extent_[1]) & (z >= 0.0) & (z < extent_[2]);
+    if (!inside) return -1;  // outside (or not a number): every object
+    return (static_cast<int>(z) * n_[1] + static_cast<int>(y)) * n_[0] + static_cast<int>(x);
   }
   void cell_bounds(double half_diagonal);
 

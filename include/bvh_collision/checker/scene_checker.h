@@ -134,6 +134,7 @@ class SceneChecker {
   static MotionScratch& motion_scratch();
 
   Answer check_posed(const Posed& posed) const;
+  Answer check_still(const Posed& posed) const;  // check_posed for a state (no growth)
   // One component: a checked self pair or one link against the environment (components_).
   Answer component_check(int k, const Posed& posed) const;
   bool exact_distance_pays(const Posed& s, double growth, double error) const;
