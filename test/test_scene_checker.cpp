@@ -107,9 +107,9 @@ TEST(SceneChecker, StatesAnswerAsTheGeneralQueries) {
   EXPECT_LT(colliding, states - states / 10);
 }
 
-// A state's components are sieved 64 at a time (check_still): PR2, some fifty links with
-// geometry and hundreds of checked pairs beside its SRDF's, spans many blocks; each state answers as the
-// general queries, self pairs alone and with a scene's objects.
+// A state's components are sieved 64 at a time (check_still). Panda's fit in one block; PR2 (some
+// fifty links with geometry, hundreds of checked pairs once its SRDF's are allowed) spans
+// several. Each state answers as the general queries, self pairs alone and with objects.
 TEST(SceneChecker, StatesOfARobotOfManyBlocksAnswerAsTheGeneralQueries) {
   BVH_REQUIRE_ROBOTS();
   static const CollisionChecker checker = test::load_as_moveit("pr2");
