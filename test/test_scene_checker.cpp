@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <limits>
@@ -198,6 +199,72 @@ TEST(SceneChecker, AStateRememberedFreeAnswersOnlyForItsChecker) {
   const MotionResult r = scene->check_motion(q.data(), next.data());
   EXPECT_FALSE(r.valid);
   EXPECT_EQ(r.colliding_fraction, 0.0);
+}
+
+// A motion asked again (OMPL's simplifier asks a tenth of its motions twice) is answered from the
+// thread's memory: the answer the check gave, with no interval checked; only for the same checker,
+// the same kind of question (boolean or earliest) and the same ends bit for bit. Checked against
+// a second checker of the same scene, which has no memory of these motions, over random motions
+// in a planning scene, asked in rounds of 50 (100 questions: slots are shared and reused).
+bool same_answer(const MotionResult& a, const MotionResult& b) {
+  return a.valid == b.valid && a.certified == b.certified && a.colliding_fraction == b.colliding_fraction &&
+         a.last_valid_fraction == b.last_valid_fraction && a.message == b.message;
+}
+
+TEST(SceneChecker, AMotionAskedAgainIsAnsweredFromMemory) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const auto env = std::make_shared<const Environment>(test::generate_scene(11, 12).environment());
+  const auto empty = std::make_shared<const Environment>(Environment(0.05));
+  SceneCheckOptions options;
+  options.tolerance = 0.01;
+  const SceneChecker scene(checker, env, options), fresh(checker, env, options), other(checker, empty, options);
+  std::mt19937_64 rng(29);
+  std::size_t questions = 0, remembered = 0, colliding = 0;
+  for (int round = 0; round < 6; ++round) {
+    std::vector<std::vector<double>> states;
+    states.push_back(random_configuration(checker.model(), rng));
+    while (states.size() < 51) {  // steps a fifth of the way to a random state: some free, some not
+      std::vector<double> q = random_configuration(checker.model(), rng);
+      for (std::size_t j = 0; j < q.size(); ++j) q[j] = states.back()[j] + 0.2 * (q[j] - states.back()[j]);
+      states.push_back(q);
+    }
+    std::vector<MotionResult> first;  // boolean, then earliest, per motion
+    for (std::size_t i = 0; i + 1 < states.size(); ++i) {
+      for (const bool earliest : {false, true}) {
+        first.push_back(scene.check_motion(states[i].data(), states[i + 1].data(), earliest));
+        ASSERT_GT(first.back().states_checked, 0u) << "motion " << i;  // never asked before
+        colliding += !first.back().valid;
+      }
+    }
+    for (std::size_t i = 0; i + 1 < states.size(); ++i) {
+      for (const bool earliest : {false, true}) {
+        const MotionResult& before = first[2 * i + earliest];
+        const MotionResult again = scene.check_motion(states[i].data(), states[i + 1].data(), earliest);
+        ASSERT_TRUE(same_answer(again, before)) << "motion " << i;
+        ASSERT_TRUE(same_answer(fresh.check_motion(states[i].data(), states[i + 1].data(), earliest), before)) << "motion " << i;
+        remembered += again.states_checked == 0;
+        ++questions;
+      }
+    }
+    for (std::size_t i = 0; i + 1 < states.size(); ++i) {
+      // Another scene asked the same motion answers for its own scene, from its own check.
+      EXPECT_GT(other.check_motion(states[i].data(), states[i + 1].data()).states_checked, 0u) << "motion " << i;
+      // Ends one bit apart are another motion.
+      std::vector<double> goal = states[i + 1];
+      goal[0] = std::nextafter(goal[0], 10.0);
+      EXPECT_GT(scene.check_motion(states[i].data(), goal.data()).states_checked, 0u) << "motion " << i;
+      // Asked back to back, a motion is always remembered.
+      const MotionResult b = scene.check_motion(states[i].data(), goal.data());
+      EXPECT_EQ(b.states_checked, 0u) << "motion " << i;
+      EXPECT_TRUE(same_answer(b, fresh.check_motion(states[i].data(), goal.data()))) << "motion " << i;
+    }
+  }
+  std::cout << remembered << " of " << questions << " motions asked again were answered from memory; " << colliding
+            << " of them collide\n";
+  EXPECT_GT(colliding, questions / 10);
+  EXPECT_LT(colliding, questions - questions / 10);
+  EXPECT_GT(remembered, questions / 2);  // the rest: their slot taken by a later question of the round
 }
 
 // A state with a value that is not a number or infinite has no pose: every query of one refuses

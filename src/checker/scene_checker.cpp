@@ -52,15 +52,36 @@ struct FreeStates {
   std::size_t n = 0;
 };
 
-std::size_t slot_of(const double* state, std::size_t n) {
-  std::uint64_t h = 0x9E3779B97F4A7C15ULL;
+std::uint64_t hash_of(const double* values, std::size_t n, std::uint64_t h = 0x9E3779B97F4A7C15ULL) {
   for (std::size_t j = 0; j < n; ++j) {
     std::uint64_t bits;
-    std::memcpy(&bits, state + j, sizeof bits);
+    std::memcpy(&bits, values + j, sizeof bits);
     h = (h ^ bits) * 0xBF58476D1CE4E5B9ULL;
     h ^= h >> 31;
   }
-  return static_cast<std::size_t>(h % FreeStates::kSlots);
+  return h;
+}
+
+std::size_t slot_of(const double* state, std::size_t n) { return static_cast<std::size_t>(hash_of(state, n) % FreeStates::kSlots); }
+
+// The motions a thread last answered, one slot per hash of their ends and kind (boolean or
+// earliest): OMPL's path simplifier asks again for motions it asked before (reduceVertices draws
+// the same pairs of vertices in each of its passes; checkAndRepair checks again every segment of
+// the path it made). Like FreeStates, a slot answers only for the same checker and the same ends
+// bit for bit, with the answer the check gave. On the planning benchmark's 21,334 motions of its
+// 10 mm planner, 3,295 were asked before, 22 % of their time; 256 slots answer 3,106 of them.
+struct KnownMotions {
+  static constexpr std::size_t kSlots = 256;
+  std::array<std::uint64_t, kSlots> serial{};  // 0: empty
+  std::array<bool, kSlots> earliest{};
+  std::array<MotionResult, kSlots> result{};
+  std::vector<double> ends;  // kSlots rows of 2n values: the start, then the goal
+  std::size_t n = 0;
+};
+
+std::size_t slot_of(const double* start, const double* goal, std::size_t n, bool earliest) {
+  const std::uint64_t h = hash_of(goal, n, hash_of(start, n) ^ (earliest ? 0x5851F42D4C957F2DULL : 0));
+  return static_cast<std::size_t>(h % KnownMotions::kSlots);
 }
 
 }  // namespace
@@ -70,6 +91,7 @@ std::size_t slot_of(const double* state, std::size_t n) {
 // to __tls_get_addr).
 struct SceneChecker::StateScratch {
   FreeStates free;
+  KnownMotions motions;
   Posed posed;
 };
 
@@ -103,6 +125,37 @@ void SceneChecker::remember_free(StateScratch& scratch, const double* state, std
   }
   f.serial[slot] = serial_;
   std::memcpy(f.values.data() + slot * n, state, n * sizeof(double));
+}
+
+bool SceneChecker::known_motion(const double* start, const double* goal, bool earliest, MotionResult& result) const {
+  const KnownMotions& k = state_scratch().motions;
+  const std::size_t n = k.n;
+  if (n != checker_.model().variable_count()) return false;
+  const std::size_t slot = slot_of(start, goal, n, earliest);
+  const double* ends = k.ends.data() + slot * 2 * n;
+  if (k.serial[slot] != serial_ || k.earliest[slot] != earliest || std::memcmp(ends, start, n * sizeof(double)) != 0 ||
+      std::memcmp(ends + n, goal, n * sizeof(double)) != 0) {
+    return false;
+  }
+  result = k.result[slot];
+  result.states_checked = 0;  // none checked by this call
+  return true;
+}
+
+void SceneChecker::remember_motion(const double* start, const double* goal, bool earliest, const MotionResult& result) const {
+  KnownMotions& k = state_scratch().motions;
+  const std::size_t n = checker_.model().variable_count();
+  if (k.n != n) {
+    k.n = n;
+    k.ends.assign(KnownMotions::kSlots * 2 * n, 0.0);
+    k.serial.fill(0);
+  }
+  const std::size_t slot = slot_of(start, goal, n, earliest);
+  k.serial[slot] = serial_;
+  k.earliest[slot] = earliest;
+  k.result[slot] = result;
+  std::memcpy(k.ends.data() + slot * 2 * n, start, n * sizeof(double));
+  std::memcpy(k.ends.data() + slot * 2 * n + n, goal, n * sizeof(double));
 }
 
 SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment,

@@ -267,9 +267,17 @@ double SceneChecker::pair_growth(std::size_t pair, const double* start, const do
 }
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {
-  const std::size_t n = checker_.model().variable_count();
   checker_.require_finite_state(start, "motion check");
   checker_.require_finite_state(goal, "motion check");
+  MotionResult result;
+  if (known_motion(start, goal, earliest, result)) return result;
+  result = check_motion_once(start, goal, earliest);
+  remember_motion(start, goal, earliest, result);
+  return result;
+}
+
+MotionResult SceneChecker::check_motion_once(const double* start, const double* goal, bool earliest) const {
+  const std::size_t n = checker_.model().variable_count();
   MotionResult result;
   MotionScratch& s = motion_scratch();
   s.state.resize(n);

@@ -64,7 +64,8 @@ class SceneChecker {
   // Boolean: is `state` (model().variable_count() values) in collision at the tolerance? Throws
   // std::invalid_argument, naming the variable, for a value that is not finite (as check_motion).
   bool collides(const double* state) const;
-  // The straight motion, certified as above (MotionResult::states_checked counts intervals).
+  // The straight motion, certified as above (MotionResult::states_checked counts intervals; 0
+  // when this thread asked this checker the same motion before and the answer is remembered).
   // `earliest`: find the first collision, so that last_valid_fraction is where a planner can go
   // (intervals depth first, left first, each collision found narrowing the search to before
   // it); otherwise intervals breadth first, stopping at any collision (a boolean answer).
@@ -196,6 +197,11 @@ class SceneChecker {
   static StateScratch& state_scratch();
   bool known_free(const StateScratch& scratch, const double* state, std::size_t slot) const;  // slot: slot_of(state)
   void remember_free(StateScratch& scratch, const double* state, std::size_t slot) const;
+  // A motion this thread answered with this checker, asked again (the same ends and kind, bit for
+  // bit): known_motion gives the answer it had (states_checked 0), remember_motion records one.
+  bool known_motion(const double* start, const double* goal, bool earliest, MotionResult& result) const;
+  void remember_motion(const double* start, const double* goal, bool earliest, const MotionResult& result) const;
+  MotionResult check_motion_once(const double* start, const double* goal, bool earliest) const;
 
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;
