@@ -528,6 +528,25 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
   EXPECT_LT(free_motions, motions);
 }
 
+// Panda's straight motion from its ready pose (the fingers half open): joint 1 turned by 0.02 rad,
+// joint 4 to `joint4` when given; its ends and its state at fraction s.
+struct ReadyMotion {
+  std::vector<double> a, b;
+  explicit ReadyMotion(const RobotModel& model, std::optional<double> joint4 = std::nullopt) : a(model.variable_count(), 0.02) {
+    auto variable = [&](const std::string& joint) { return static_cast<std::size_t>(model.joints()[model.joint_index(joint)].variable); };
+    const double ready[] = {0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785};
+    for (int j = 0; j < 7; ++j) a[variable("panda_joint" + std::to_string(j + 1))] = ready[j];
+    b = a;
+    b[variable("panda_joint1")] += 0.02;
+    if (joint4) b[variable("panda_joint4")] = *joint4;
+  }
+  std::vector<double> at(double s) const {
+    std::vector<double> q(a.size());
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
+    return q;
+  }
+};
+
 // Within one interval, a link that barely moves and lies just inside its growth of an obstacle
 // frees a stretch around the midpoint by its exact distance (it cannot close that gap sooner).
 // The stretch holds only for the components that were measured: here the hand swings through a
@@ -537,18 +556,10 @@ TEST(SceneChecker, AStretchFreedByOneLinkDoesNotFreeAFasterOne) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker& checker = panda();
   const RobotModel& model = checker.model();
-  auto variable = [&](const std::string& joint) { return static_cast<std::size_t>(model.joints()[model.joint_index(joint)].variable); };
-  std::vector<double> a(model.variable_count(), 0.02);
-  const double ready[] = {0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785};
-  for (int j = 0; j < 7; ++j) a[variable("panda_joint" + std::to_string(j + 1))] = ready[j];
-  std::vector<double> b = a;
-  b[variable("panda_joint1")] += 0.02;
-  b[variable("panda_joint4")] = -0.6;
-  auto state = [&](double s) {
-    std::vector<double> q(a.size());
-    for (std::size_t j = 0; j < q.size(); ++j) q[j] = a[j] + s * (b[j] - a[j]);
-    return q;
-  };
+  const ReadyMotion motion(model, -0.6);
+  const std::vector<double>& a = motion.a;
+  const std::vector<double>& b = motion.b;
+  auto state = [&](double s) { return motion.at(s); };
   const int link1 = model.link_index("panda_link1"), hand = model.link_index("panda_hand");
   const auto empty = std::make_shared<const Environment>(Environment(0.05));
   const SceneChecker bare(checker, empty);
@@ -595,6 +606,82 @@ TEST(SceneChecker, AStretchFreedByOneLinkDoesNotFreeAFasterOne) {
   EXPECT_GE(e.last_valid_fraction, first / 1000.0 - 1e-3 - 1e-3);
   std::cout << "growth over the motion: link 1 " << slow << " m, the hand " << fast << " m; link 1 " << gap
             << " m from its box; the bar met from " << first / 1000.0 << ", found at " << r.colliding_fraction << "\n";
+}
+
+// The same for one link near two objects: link 1's exact distance to the box beside it frees a
+// stretch for that box only; a second box, met by link 1 inside that stretch, must still be found,
+// whichever of the two the object grid offers first. (Found by a search over small boxes around
+// link 1: one free at the midpoint and met within the stretch.)
+TEST(SceneChecker, AStretchFreedByOneObjectDoesNotFreeAnother) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const RobotModel& model = checker.model();
+  const ReadyMotion motion(model);
+  const std::vector<double>& a = motion.a;
+  const std::vector<double>& b = motion.b;
+  auto state = [&](double s) { return motion.at(s); };
+  const int link1 = model.link_index("panda_link1");
+  const auto empty = std::make_shared<const Environment>(Environment(0.05));
+  const double slow = SceneChecker(checker, empty).link_growth(link1, a.data(), b.data(), 0.0, 1.0);
+  const std::vector<Transform> mid = poses_along(model, a, b, 0.5);
+  auto link1_distance = [&](const Environment& world, double s) {
+    EnvironmentRequest request;
+    request.distance = true;
+    request.contacts = false;
+    const EnvironmentResult r = checker.check_environment(state(s).data(), world, request);
+    return r.collision ? 0.0 : r.min_distance;
+  };
+  // The first box 0.6 of link 1's growth from it at the midpoint, on one side.
+  auto first_box = [&](Environment& world, double t) {
+    world.add_object("side", ObjectShape::box({0.02, 0.02, 0.02}), Transform::Translation(mid[link1].t + Vec3(0.0, -t, -0.05)));
+  };
+  double lo = 0.0, hi = 0.5;
+  for (int i = 0; i < 60; ++i) {
+    const double t = 0.5 * (lo + hi);
+    Environment world(0.05);
+    first_box(world, t);
+    (link1_distance(world, 0.5) < 0.6 * slow ? lo : hi) = t;
+  }
+  Environment side(0.05);
+  first_box(side, hi);
+  const double gap = link1_distance(side, 0.5);
+  ASSERT_GT(gap, 0.0);
+  ASSERT_LT(gap, slow);
+  // A 4 mm box around link 1, free at the midpoint and met inside the stretch the first frees.
+  auto add_second = [&](Environment& world, const Vec3& at) {
+    world.add_object("bar", ObjectShape::box({0.004, 0.004, 0.004}), Transform::Translation(at));
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-0.12, 0.12);
+  for (const char* order : {"side box, bar", "bar, side box"}) {
+    const bool side_first = order[0] == 's';
+    std::optional<Vec3> found;
+    for (int tries = 0; tries < 4000 && !found; ++tries) {
+      const Vec3 at = mid[link1].t + Vec3(u(rng), u(rng), u(rng));
+      Environment world(0.05);
+      add_second(world, at);
+      if (link1_distance(world, 0.5) <= 0.0 || link1_distance(world, 0.5) > 0.5 * gap) continue;
+      for (int k = 1; k <= 40 && !found; ++k) {
+        if (link1_distance(world, 0.5 + k / 40.0 * 0.45 * gap / slow) <= 0.0) found = at;
+      }
+    }
+    ASSERT_TRUE(found.has_value()) << order;
+    Environment world(0.05);
+    if (side_first) first_box(world, hi);
+    add_second(world, *found);
+    if (!side_first) first_box(world, hi);
+    const auto env = std::make_shared<const Environment>(world);
+    const SceneChecker scene(checker, env);
+    EXPECT_FALSE(scene.check_motion(a.data(), b.data()).valid) << order;
+    const MotionResult e = scene.check_motion(a.data(), b.data(), true);
+    ASSERT_FALSE(e.valid) << order;
+    EXPECT_TRUE(exact_collides(padded(2e-5 + 1e-9), state(e.colliding_fraction).data(), *env)) << e.colliding_fraction;
+    // Free all the way to the last valid state (a planner goes there).
+    for (int k = 0; k <= 200; ++k) {
+      ASSERT_FALSE(exact_collides(checker, state(e.last_valid_fraction * k / 200.0).data(), *env))
+          << order << ": last valid " << e.last_valid_fraction;
+    }
+  }
 }
 
 // A motion that starts within the tolerance of an obstacle (a planner's goal a few millimetres

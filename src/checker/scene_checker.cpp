@@ -342,8 +342,12 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
     const Vec3& c = s.centres[l];
     const double r = m.bounds()[l].radius + pad;
     Answer answer = Answer::kFree;
+    // (Over an interval, an object the link failed on by its exact distance leaves the others to
+    // look at: the stretch that distance frees holds for that object only, and each of the others
+    // must free it too. Any other failure frees nothing: the walk stops there.)
+    auto done = [&] { return answer == Answer::kHit || (answer == Answer::kNear && !(s.free_radius > 0.0)); };
     grid_.for_each_near(c, r, [&](int o) {
-      if (answer != Answer::kFree || (!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
+      if (done() || (!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
       // A leaf whose centre lies deeper inside the object than the leaf's proven distance from
       // the link (its level's Hausdorff bound) proves a point of the link inside: a hit with no
       // exact test (the state itself only).
@@ -456,7 +460,11 @@ SceneChecker::Answer SceneChecker::component_check(int k, const Posed& s) const 
   if (!options_.environment) return Answer::kFree;
   const int link = k - pairs;
   const Answer objects = link_objects_check(link, s);
-  return objects != Answer::kFree || !octree_ ? objects : link_octree_check(link, s);
+  if (objects == Answer::kHit || !octree_) return objects;
+  // Failed on exact distances to objects (free_radius > 0): the octree must free the stretch too.
+  if (objects == Answer::kNear && !(s.free_radius > 0.0)) return objects;
+  const Answer tree = link_octree_check(link, s);
+  return tree == Answer::kFree ? objects : tree == Answer::kHit ? tree : Answer::kNear;
 }
 
 SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
