@@ -250,6 +250,16 @@ bool SceneChecker::worth(const ProxyLevel* level, double growth) const {
 // bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
 // proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
 // where halving the interval no longer helps them; always without proxies.
+// The one level a link walks against an object: the finest worth walking for its growth. A link
+// that meets an object at the coarser levels mostly meets it at the finest too, and a link the
+// object grid offers an object is mostly near it (on the planning benchmark's calls at 10 mm,
+// against walking each level from the coarsest: 2 % fewer instructions in its motions, 2 % in its
+// free states, 12 % in its colliding states). Null without levels.
+const ProxyLevel* SceneChecker::walked_level(double growth) const {
+  const auto finest = std::find_if(proxies_.rbegin(), proxies_.rend(), [&](const ProxyLevel* level) { return worth(level, growth); });
+  return finest == proxies_.rend() ? nullptr : *finest;
+}
+
 bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double error) const {
   if (proxies_.empty()) return true;
   return growth <= error && !s.tolerant();
@@ -272,19 +282,13 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
   const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
   if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
-  const bool gridded = checker_.accelerators().pair_clearance().has_grid(p);
-  if (gridded && checker_.accelerators().pair_clearance().lower_bound(p, s.state) > pads) return Answer::kFree;
-  // A grid that cannot bound the pair here puts it within a few centimetres (its cell's reach):
-  // coarser levels then fail where the finest does, so only the finest worth walking is walked.
-  auto apart_at = [&](const ProxyLevel* level) {
-    return worth(level, grow) && !proxies_overlap(level->links[a], s.poses[a], level->links[b], s.poses[b], pads);
-  };
-  if (gridded) {
-    const auto finest = std::find_if(proxies_.rbegin(), proxies_.rend(), [&](const ProxyLevel* l) { return worth(l, grow); });
-    if (finest != proxies_.rend() && apart_at(*finest)) return Answer::kFree;
-  } else if (std::any_of(proxies_.begin(), proxies_.end(), apart_at)) {
-    return Answer::kFree;
-  }
+  const PairClearance& clearance = checker_.accelerators().pair_clearance();
+  if (clearance.has_grid(p) && clearance.lower_bound(p, s.state) > pads) return Answer::kFree;
+  // Past the balls (and a grid, which puts the pair within a few centimetres when it cannot bound
+  // it), one level's spheres: the finest worth walking (walked_level; 0.6 % fewer instructions
+  // in the benchmark's motions than each level from the coarsest where no grid is kept).
+  const ProxyLevel* walked = walked_level(grow);
+  if (walked != nullptr && !proxies_overlap(walked->links[a], s.poses[a], walked->links[b], s.poses[b], pads)) return Answer::kFree;
   if (s.growth != nullptr) {
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
     if (!exact_distance_pays(s, grow, level_)) return s.no_free_radius();
@@ -346,6 +350,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
     // look at: the stretch that distance frees holds for that object only, and each of the others
     // must free it too. Any other failure frees nothing: the walk stops there.)
     auto done = [&] { return answer == Answer::kHit || (answer == Answer::kNear && !(s.free_radius > 0.0)); };
+    const ProxyLevel* walked = walked_level(s.grow(l));
     grid_.for_each_near(c, r, [&](int o) {
       if (done() || (!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
       // A leaf whose centre lies deeper inside the object than the leaf's proven distance from
@@ -356,11 +361,10 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
       bool proven = false;
       const bool local = grid_.exact_ball_test(o);
       const Transform in_object = local ? grid_.to_local(o) * s.poses[l] : Transform();
-      const bool apart = std::any_of(proxies_.begin(), proxies_.end(), [&](const ProxyLevel* level) {
+      const bool apart = walked != nullptr && [&](const ProxyLevel* level) {
         const LinkProxy& proxy = level->links[l];
         const double margin = proxy_pose_margin(proxy, s.poses[l]);
         const double slack = proxy.hausdorff_bound() + margin;
-        if (!worth(level, s.grow(l))) return false;
         if (local) {
           return !proxy_meets_obstacle(proxy, in_object, pad, [&](const Vec3& p, double pr, bool leaf) {
             if (!grid_.local_ball_meets(o, p, pr, margin)) return false;
@@ -373,7 +377,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
           if (leaf && s.growth == nullptr && !proven) proven = grid_.depth(o, pc) > slack;
           return true;
         });
-      });
+      }(walked);
       if (apart) return;
       if (proven) {
         answer = Answer::kHit;

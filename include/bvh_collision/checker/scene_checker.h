@@ -140,6 +140,7 @@ class SceneChecker {
   Answer component_check(int k, const Posed& posed) const;
   bool exact_distance_pays(const Posed& s, double growth, double error) const;
   bool worth(const ProxyLevel* level, double growth) const;
+  const ProxyLevel* walked_level(double growth) const;
   Answer pair_check(std::size_t pair, const Posed& posed) const;
   Answer link_objects_check(int link, const Posed& posed) const;
   Answer link_octree_check(int link, const Posed& posed) const;
