@@ -227,8 +227,12 @@ TEST(MeshAgainstPrimitive, ABooleanTheHullsSettleWalksNoTree) {
     const double beyond = request.padding + request.tolerance;
     QueryStats stats;
     const bool hit = shapes_collide(mesh_ref, mesh_pose, box, box_pose, request, nullptr, stats);
-    if (truth <= request.padding - 1e-9) ASSERT_TRUE(hit) << i;
-    if (truth > beyond + 1e-9) ASSERT_FALSE(hit) << i;
+    if (truth <= request.padding - 1e-9) {
+      ASSERT_TRUE(hit) << i;
+    }
+    if (truth > beyond + 1e-9) {
+      ASSERT_FALSE(hit) << i;
+    }
     hits += hit;
     const bool hull_apart = convex_distance(ConvexShape::of(hull), ConvexShape::of(box.primitive), relative_transform(mesh_pose, box_pose), beyond)
                                 .lower_bound > beyond;
@@ -257,9 +261,12 @@ TEST(MeshAgainstPrimitive, ABooleanTheHullsSettleWalksNoTree) {
   }
   std::cout << settled << " booleans settled by the hulls, " << walked << " walked (" << hits << " hits); " << pairs_settled
             << " mesh pairs settled by the hulls\n";
-  EXPECT_GT(settled, 20);
-  EXPECT_GT(walked, 20);
-  EXPECT_GT(pairs_settled, 5);
+  // (Shares of the poses near contact: test::sized shortens the loop under the sanitizers.)
+  const int near_contact = settled + walked;
+  EXPECT_GE(settled, near_contact / 5);
+  EXPECT_GE(walked, near_contact / 5);
+  EXPECT_GE(pairs_settled, near_contact / 10);
+  EXPECT_GT(near_contact, test::sized(300) / 10);
 }
 
 TEST(MeshAgainstOctree, ClosedMeshAgainstExplodedBoxes) {
