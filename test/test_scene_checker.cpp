@@ -234,7 +234,13 @@ TEST(SceneChecker, AMotionAskedAgainIsAnsweredFromMemory) {
     for (std::size_t i = 0; i + 1 < states.size(); ++i) {
       for (const bool earliest : {false, true}) {
         first.push_back(scene.check_motion(states[i].data(), states[i + 1].data(), earliest));
-        ASSERT_GT(first.back().states_checked, 0u) << "motion " << i;  // never asked before
+        // Never asked before (the earliest collision of a motion just found free lies within it:
+        // answered from memory, AMotionWithinOneFoundFreeIsAnsweredFromMemory).
+        if (earliest && first[first.size() - 2].valid) {
+          ASSERT_EQ(first.back().states_checked, 0u) << "motion " << i;
+        } else {
+          ASSERT_GT(first.back().states_checked, 0u) << "motion " << i;
+        }
         colliding += !first.back().valid;
       }
     }
@@ -251,9 +257,10 @@ TEST(SceneChecker, AMotionAskedAgainIsAnsweredFromMemory) {
     for (std::size_t i = 0; i + 1 < states.size(); ++i) {
       // Another scene asked the same motion answers for its own scene, from its own check.
       EXPECT_GT(other.check_motion(states[i].data(), states[i + 1].data()).states_checked, 0u) << "motion " << i;
-      // Ends one bit apart are another motion.
+      // Ends one bit apart are another motion (a free one's: a micro-radian apart, off the segment
+      // remembered free, which holds motions within it: AMotionWithinOneFoundFreeIsAnsweredFromMemory).
       std::vector<double> goal = states[i + 1];
-      goal[0] = std::nextafter(goal[0], 10.0);
+      goal[0] = first[2 * i].valid ? goal[0] + 1e-6 : std::nextafter(goal[0], 10.0);
       EXPECT_GT(scene.check_motion(states[i].data(), goal.data()).states_checked, 0u) << "motion " << i;
       // Asked back to back, a motion is always remembered.
       const MotionResult b = scene.check_motion(states[i].data(), goal.data());
@@ -266,6 +273,74 @@ TEST(SceneChecker, AMotionAskedAgainIsAnsweredFromMemory) {
   EXPECT_GT(colliding, questions / 10);
   EXPECT_LT(colliding, questions - questions / 10);
   EXPECT_GT(remembered, questions / 2);  // the rest: their slot taken by a later question of the round
+}
+
+// OMPL's path simplifier asks for motions between states it put on segments found free (its
+// B-spline pass subdivides the path; it checks the path again after each pass): a motion within a
+// segment this thread certified free with this checker is free, answered from memory. Within
+// means both ends on the segment to within rounding (kOnSegment, 1e-13 a variable); beyond that,
+// past an end, from another checker, or within a colliding motion, the motion is checked. Every
+// answer from memory is checked free by a checker that never saw the segment.
+TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker& checker = panda();
+  const auto env = std::make_shared<const Environment>(test::generate_scene(11, 12).environment());
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const std::size_t n = checker.model().variable_count();
+  auto along = [&](const std::vector<double>& p, const std::vector<double>& q, double t) {
+    std::vector<double> s(n);
+    for (std::size_t j = 0; j < n; ++j) s[j] = p[j] + (q[j] - p[j]) * t;  // as OMPL interpolates
+    return s;
+  };
+  for (const double tolerance : {0.0, 0.01}) {
+    SceneCheckOptions options;
+    options.tolerance = tolerance;
+    const SceneChecker scene(checker, env, options), fresh(checker, env, options), other(checker, env, options);
+    const std::size_t wanted_free = static_cast<std::size_t>(test::sized(24)), wanted_colliding = static_cast<std::size_t>(test::sized(8));
+    std::size_t free = 0, colliding = 0, within = 0;
+    while (free < wanted_free || colliding < wanted_colliding) {
+      const std::vector<double> p = random_configuration(checker.model(), rng);
+      const std::vector<double> q = along(p, random_configuration(checker.model(), rng), 0.2);
+      const MotionResult whole = scene.check_motion(p.data(), q.data());
+      ASSERT_GT(whole.states_checked, 0u);
+      if (!whole.valid && colliding >= wanted_colliding) continue;
+      (whole.valid ? free : colliding) += 1;
+      for (int k = 0; k < (whole.valid ? 6 : 1); ++k) {
+        double t0 = unit(rng), t1 = unit(rng);
+        if (k == 0) t0 = 0.0, t1 = 1.0 - 1e-3;  // from an end; then backwards, then random pieces
+        if (k == 1) t0 = 1.0, t1 = 0.25;
+        const std::vector<double> a = along(p, q, t0), b = along(p, q, t1);
+        const MotionResult piece = scene.check_motion(a.data(), b.data(), k % 2 == 1);
+        if (!whole.valid) {  // a colliding motion leaves nothing in memory
+          EXPECT_GT(piece.states_checked, 0u);
+          EXPECT_TRUE(same_answer(piece, fresh.check_motion(a.data(), b.data())));
+          continue;
+        }
+        ASSERT_EQ(piece.states_checked, 0u) << tolerance << " " << t0 << " " << t1;
+        ASSERT_TRUE(piece.valid && piece.certified && piece.last_valid_fraction == 1.0);
+        // The general certified motion (another code path, exact) finds it free too.
+        MotionRequest exact;
+        exact.max_states = 200000;
+        ASSERT_TRUE(checker.check_motion(a.data(), b.data(), *env, exact).valid) << "a piece of a free motion collides: " << t0 << " " << t1;
+        ++within;
+      }
+      if (!whole.valid) continue;
+      // Off the segment: past its end, a variable beyond rounding off it, another checker.
+      const std::vector<double> past = along(p, q, 1.05), half = along(p, q, 0.5);
+      EXPECT_GT(scene.check_motion(p.data(), past.data()).states_checked, 0u);
+      std::vector<double> near = half, off = half;
+      near[1] += 5e-14;  // within kOnSegment: panda's links move less than 1e-12 m for it
+      off[1] += 1e-12;
+      EXPECT_EQ(scene.check_motion(p.data(), near.data()).states_checked, 0u);
+      const MotionResult beside = scene.check_motion(p.data(), off.data());
+      EXPECT_GT(beside.states_checked, 0u);
+      EXPECT_TRUE(same_answer(beside, fresh.check_motion(p.data(), off.data())));
+      EXPECT_GT(other.check_motion(half.data(), q.data()).states_checked, 0u);
+    }
+    std::cout << "tolerance " << tolerance << ": " << within << " motions within " << free << " free ones answered from memory; "
+              << colliding << " colliding motions' pieces checked\n";
+  }
 }
 
 // A state with a value that is not a number or infinite has no pose: every query of one refuses

@@ -271,8 +271,14 @@ MotionResult SceneChecker::check_motion(const double* start, const double* goal,
   checker_.require_finite_state(goal, "motion check");
   MotionResult result;
   if (known_motion(start, goal, earliest, result)) return result;
+  if (within_free_motion(start, goal)) {  // states_checked 0: none checked by this call
+    result.valid = result.certified = true;
+    result.last_valid_fraction = 1.0;
+    return result;
+  }
   result = check_motion_once(start, goal, earliest);
   remember_motion(start, goal, earliest, result);
+  if (result.valid) remember_free_motion(start, goal);
   return result;
 }
 

@@ -203,6 +203,13 @@ class SceneChecker {
   bool known_motion(const double* start, const double* goal, bool earliest, MotionResult& result) const;
   void remember_motion(const double* start, const double* goal, bool earliest, const MotionResult& result) const;
   MotionResult check_motion_once(const double* start, const double* goal, bool earliest) const;
+  // A motion within one this thread certified free with this checker (both ends on its segment,
+  // to within rounding): free. remember_free_motion records one.
+  bool within_free_motion(const double* start, const double* goal) const;
+  void remember_free_motion(const double* start, const double* goal) const;
+  // How far (metres) a remembered free segment's certificate is trusted to stretch: the most any
+  // link may move between a motion's states and the segment's (within_free_motion).
+  static constexpr double kSegmentDisplacement = 1e-12;
 
   CollisionChecker checker_;
   std::shared_ptr<const Environment> env_;
