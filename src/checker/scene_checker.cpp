@@ -14,6 +14,7 @@
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/split_column.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
+#include "scene_memory.h"
 
 namespace bvh_collision {
 
@@ -41,221 +42,7 @@ std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tol
 
 std::atomic<std::uint64_t> next_serial{1};
 
-// The states a thread last found free, one slot per hash of their values: a planner asks for the
-// same state again and again (OMPL's RRTConnect checks a state, then the motion from it; each
-// motion starts at a tree node that was the end of an earlier one). A slot answers only for the
-// same checker and a state equal bit for bit, so it gives the answer the check would give.
-struct FreeStates {
-  static constexpr std::size_t kSlots = 64;
-  std::array<std::uint64_t, kSlots> serial{};  // 0: empty
-  std::vector<double> values;                  // kSlots rows of n values
-  std::size_t n = 0;
-};
-
-std::uint64_t hash_of(const double* values, std::size_t n, std::uint64_t h = 0x9E3779B97F4A7C15ULL) {
-  for (std::size_t j = 0; j < n; ++j) {
-    std::uint64_t bits;
-    std::memcpy(&bits, values + j, sizeof bits);
-    h = (h ^ bits) * 0xBF58476D1CE4E5B9ULL;
-    h ^= h >> 31;
-  }
-  return h;
-}
-
-std::size_t slot_of(const double* state, std::size_t n) { return static_cast<std::size_t>(hash_of(state, n) % FreeStates::kSlots); }
-
-// The motions a thread last answered, one slot per hash of their ends and kind (boolean or
-// earliest): OMPL's path simplifier asks again for motions it asked before (reduceVertices draws
-// the same pairs of vertices in each of its passes; checkAndRepair checks again every segment of
-// the path it made). Like FreeStates, a slot answers only for the same checker and the same ends
-// bit for bit, with the answer the check gave. On the planning benchmark's 21,334 motions of its
-// 10 mm planner, 3,295 were asked before, 22 % of their time; 256 slots answer 3,106 of them.
-struct KnownMotions {
-  static constexpr std::size_t kSlots = 256;
-  std::array<std::uint64_t, kSlots> serial{};  // 0: empty
-  std::array<bool, kSlots> earliest{};
-  std::array<MotionResult, kSlots> result{};
-  std::vector<double> ends;  // kSlots rows of 2n values: the start, then the goal
-  std::size_t n = 0;
-};
-
-std::size_t slot_of(const double* start, const double* goal, std::size_t n, bool earliest) {
-  const std::uint64_t h = hash_of(goal, n, hash_of(start, n) ^ (earliest ? 0x5851F42D4C957F2DULL : 0));
-  return static_cast<std::size_t>(h % KnownMotions::kSlots);
-}
-
-// The free motions a thread last certified, as segments (start, goal - start), the least recently
-// used replaced: OMPL's path simplifier asks for motions between states it put on segments found
-// free before (smoothBSpline subdivides the path and checks the new pieces; the path's check after
-// each pass), which lie within those segments. On the planning benchmark's 10 mm planner, 5,978
-// of 17,829 simplifier motions (22 % of their intervals) lie within an earlier free motion of the
-// same problem; 128 slots find all but 2 of them (64: 4,923).
-struct FreeSegments {
-  static constexpr std::size_t kSlots = 128;
-  std::array<std::uint64_t, kSlots> serial{};  // 0: empty
-  std::array<std::uint64_t, kSlots> used{};    // when last found or stored (clock)
-  std::array<int, kSlots> longest{};           // the variable that changes most along it
-  std::vector<double> rows;                    // kSlots rows of 2n values: the start, then goal - start
-  std::uint64_t clock = 0;
-  std::size_t n = 0;
-};
-
-// Within this of the segment, variable by variable (radians or metres), a state counts as on it:
-// a hundred times the rounding of a planner's interpolation between two of its states.
-constexpr double kOnSegment = 1e-13;
-
-// Does `state` lie on the segment (start, delta): each of its values within kOnSegment of the
-// segment's at one fraction in [0, 1] (found from the variable that changes most)? When it does
-// and `offset` is given, each difference (with the rounding of computing it) raises its variable's
-// entry there.
-bool on_segment(const double* start, const double* delta, int longest, const double* state, std::size_t n, double* offset) {
-  const double t = std::clamp((state[longest] - start[longest]) / delta[longest], 0.0, 1.0);
-  for (std::size_t j = 0; j < n; ++j) {
-    const double d = std::abs(start[j] + t * delta[j] - state[j]);
-    if (!(d <= kOnSegment)) return false;
-    // (The product, the sums and delta's own rounding: a few units of 1.1e-16 of these values.)
-    if (offset != nullptr) offset[j] = std::max(offset[j], d + 1e-15 * (1.0 + std::abs(start[j]) + std::abs(delta[j]) + std::abs(state[j])));
-  }
-  return true;
-}
-
 }  // namespace
-
-// A thread's memory for state checks: the free states, and the posed state (one thread_local
-// reached once a check, not at every use: in a shared library each use after a call costs a call
-// to __tls_get_addr).
-struct SceneChecker::StateScratch {
-  FreeStates free;
-  KnownMotions motions;
-  FreeSegments segments;
-  std::vector<double> offset, far_end, shifted;  // within_free_motion's
-  Posed posed;
-};
-
-[[gnu::noinline]] SceneChecker::StateScratch& SceneChecker::state_scratch() {
-  thread_local StateScratch s;
-  return s;
-}
-
-bool SceneChecker::known_free(const double* state) const {
-  return known_free(state_scratch(), state, slot_of(state, checker_.model().variable_count()));
-}
-
-bool SceneChecker::known_free(const StateScratch& scratch, const double* state, std::size_t slot) const {
-  const FreeStates& f = scratch.free;
-  const std::size_t n = f.n;
-  return n == checker_.model().variable_count() && f.serial[slot] == serial_ &&
-         std::memcmp(f.values.data() + slot * n, state, n * sizeof(double)) == 0;
-}
-
-void SceneChecker::remember_free(const double* state) const {
-  remember_free(state_scratch(), state, slot_of(state, checker_.model().variable_count()));
-}
-
-void SceneChecker::remember_free(StateScratch& scratch, const double* state, std::size_t slot) const {
-  FreeStates& f = scratch.free;
-  const std::size_t n = checker_.model().variable_count();
-  if (f.n != n) {
-    f.n = n;
-    f.values.assign(FreeStates::kSlots * n, 0.0);
-    f.serial.fill(0);
-  }
-  f.serial[slot] = serial_;
-  std::memcpy(f.values.data() + slot * n, state, n * sizeof(double));
-}
-
-bool SceneChecker::known_motion(const double* start, const double* goal, bool earliest, MotionResult& result) const {
-  const KnownMotions& k = state_scratch().motions;
-  const std::size_t n = k.n;
-  if (n != checker_.model().variable_count()) return false;
-  const std::size_t slot = slot_of(start, goal, n, earliest);
-  const double* ends = k.ends.data() + slot * 2 * n;
-  if (k.serial[slot] != serial_ || k.earliest[slot] != earliest || std::memcmp(ends, start, n * sizeof(double)) != 0 ||
-      std::memcmp(ends + n, goal, n * sizeof(double)) != 0) {
-    return false;
-  }
-  result = k.result[slot];
-  result.states_checked = 0;  // none checked by this call
-  return true;
-}
-
-void SceneChecker::remember_motion(const double* start, const double* goal, bool earliest, const MotionResult& result) const {
-  KnownMotions& k = state_scratch().motions;
-  const std::size_t n = checker_.model().variable_count();
-  if (k.n != n) {
-    k.n = n;
-    k.ends.assign(KnownMotions::kSlots * 2 * n, 0.0);
-    k.serial.fill(0);
-  }
-  const std::size_t slot = slot_of(start, goal, n, earliest);
-  k.serial[slot] = serial_;
-  k.earliest[slot] = earliest;
-  k.result[slot] = result;
-  std::memcpy(k.ends.data() + slot * 2 * n, start, n * sizeof(double));
-  std::memcpy(k.ends.data() + slot * 2 * n + n, goal, n * sizeof(double));
-}
-
-// A motion within a segment certified free is free: each of its states lies within the ends'
-// offsets from a state of the segment (along the motion the offset interpolates the ends'), and
-// over such an offset no point of any link moves farther than kSegmentDisplacement (the links'
-// speed bounds, CollisionChecker::link_speed, over the largest offset of each variable). That is a
-// thousandth of kPoseMargin, the margin every certified interval's growth carries above rounding
-// errors of about 1e-14 m (geometry/safety_margin.h): the certificate covers it.
-bool SceneChecker::within_free_motion(const double* start, const double* goal) const {
-  StateScratch& scratch = state_scratch();
-  FreeSegments& f = scratch.segments;
-  const std::size_t n = checker_.model().variable_count();
-  if (f.n != n) return false;
-  for (std::size_t k = 0; k < FreeSegments::kSlots; ++k) {
-    const double* from = f.rows.data() + k * 2 * n;
-    if (f.serial[k] != serial_ || !on_segment(from, from + n, f.longest[k], start, n, nullptr) ||
-        !on_segment(from, from + n, f.longest[k], goal, n, nullptr)) {
-      continue;
-    }
-    // The largest offset per variable, from the value of either end farthest from zero (a slide
-    // beyond its travel lengthens the levers above it by the most there: CollisionChecker::link_speed).
-    std::vector<double>& offset = scratch.offset;
-    std::vector<double>& far = scratch.far_end;
-    std::vector<double>& shifted = scratch.shifted;
-    offset.assign(n, 0.0);
-    on_segment(from, from + n, f.longest[k], start, n, offset.data());
-    on_segment(from, from + n, f.longest[k], goal, n, offset.data());
-    far.resize(n);
-    shifted.resize(n);
-    for (std::size_t j = 0; j < n; ++j) {
-      far[j] = std::abs(start[j]) >= std::abs(goal[j]) ? start[j] : goal[j];
-      shifted[j] = far[j] + (far[j] >= 0.0 ? offset[j] : -offset[j]);
-    }
-    if (!std::all_of(links_.begin(), links_.end(), [&](int l) { return checker_.link_speed(l, far.data(), shifted.data()) <= kSegmentDisplacement; })) {
-      return false;
-    }
-    f.used[k] = ++f.clock;
-    return true;
-  }
-  return false;
-}
-
-void SceneChecker::remember_free_motion(const double* start, const double* goal) const {
-  FreeSegments& f = state_scratch().segments;
-  const std::size_t n = checker_.model().variable_count();
-  int longest = 0;
-  for (std::size_t j = 0; j < n; ++j) {
-    if (std::abs(goal[j] - start[j]) > std::abs(goal[longest] - start[longest])) longest = static_cast<int>(j);
-  }
-  if (!(std::abs(goal[longest] - start[longest]) > 0.0)) return;  // a motion that does not move (KnownMotions has it)
-  if (f.n != n) {
-    f.n = n;
-    f.rows.assign(FreeSegments::kSlots * 2 * n, 0.0);
-    f.serial.fill(0);
-    f.used.fill(0);
-  }
-  const std::size_t k = static_cast<std::size_t>(std::min_element(f.used.begin(), f.used.end()) - f.used.begin());
-  double* row = f.rows.data() + k * 2 * n;
-  for (std::size_t j = 0; j < n; ++j) row[j] = start[j], row[n + j] = goal[j] - start[j];
-  f.serial[k] = serial_;
-  f.longest[k] = longest;
-  f.used[k] = ++f.clock;
-}
 
 SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Environment> environment,
                            const SceneCheckOptions& options)
@@ -617,7 +404,7 @@ SceneChecker::Answer SceneChecker::check_still(const Posed& s) const {
 bool SceneChecker::collides(const double* state) const {
   checker_.require_finite_state(state, "state check");
   StateScratch& scratch = state_scratch();
-  const std::size_t slot = slot_of(state, checker_.model().variable_count());  // (hashed once)
+  const std::size_t slot = state_slot(state);  // (hashed once)
   if (known_free(scratch, state, slot)) return false;
   Posed& posed = scratch.posed;
   pose_links(state, posed);

@@ -196,6 +196,7 @@ class SceneChecker {
   void remember_free(const double* state) const;
   struct StateScratch;
   static StateScratch& state_scratch();
+  std::size_t state_slot(const double* state) const;  // its slot in the memory of free states
   bool known_free(const StateScratch& scratch, const double* state, std::size_t slot) const;  // slot: slot_of(state)
   void remember_free(StateScratch& scratch, const double* state, std::size_t slot) const;
   // A motion this thread answered with this checker, asked again (the same ends and kind, bit for
