@@ -1,5 +1,7 @@
 #include "cgal_oracle.h"
 
+#include "bvh_collision/geometry/mesh.h"
+
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Gmpzf.h>
@@ -13,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <iterator>
+#include <limits>
 
 namespace bvh_collision::test {
 namespace {
@@ -120,6 +123,18 @@ bool cgal_triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi) 
   if (s.dim == 2) return CGAL::do_intersect(Epick::Triangle_3(s.p[0], s.p[1], s.p[2]), box);
   if (s.dim == 1) return CGAL::do_intersect(Epick::Segment_3(s.p[0], s.p[1]), box);
   return !box.has_on_unbounded_side(s.p[0]);
+}
+
+double cgal_triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi) {
+  if (cgal_triangle_meets_box(t, lo, hi)) return 0.0;
+  const TriangleMesh box = box_mesh(hi - lo);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < box.triangles.size(); ++f) {
+    Triangle face = box.triangle(f);
+    for (int k = 0; k < 3; ++k) face[k] += 0.5 * (lo + hi);
+    best = std::min(best, cgal_triangle_distance(t, face));
+  }
+  return best;
 }
 
 std::vector<Vec3> cgal_extreme_points(const std::vector<Vec3>& points) {

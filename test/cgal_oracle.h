@@ -31,6 +31,10 @@ double cgal_segment_distance(const Vec3& p1, const Vec3& p2, const Vec3& q1, con
 // Whether a closed triangle (degenerate ones as above) meets the closed box [lo, hi]. Exact.
 bool cgal_triangle_meets_box(const Triangle& t, const Vec3& lo, const Vec3& hi);
 
+// The distance between a closed triangle and the closed box [lo, hi]: 0 when they meet, else the
+// nearest of the box's 12 face triangles (apart, the distance is reached on its surface).
+double cgal_triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi);
+
 // The extreme points of a point set (CGAL::extreme_points_3): the vertices of its hull.
 std::vector<Vec3> cgal_extreme_points(const std::vector<Vec3>& points);
 

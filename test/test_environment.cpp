@@ -1,8 +1,8 @@
 // The robot against its environment: exact cube-triangle primitives against CGAL, a mesh against
 // the octree against the same octree exploded into boxes (each checked with the pairwise BVH
-// queries), solids, collision objects, and a whole robot.
+// queries), solids, collision objects, and a whole robot (a mesh against a primitive:
+// test_environment_mesh_primitive.cpp, one binary).
 #include <gtest/gtest.h>
-
 
 #include <algorithm>
 #include <iostream>
@@ -29,19 +29,6 @@ std::mt19937_64& rng() {
   return r;
 }
 
-// Apart: the distance is reached on the box's surface, so the nearest of its 12 face triangles.
-double oracle_triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi) {
-  if (test::cgal_triangle_meets_box(t, lo, hi)) return 0.0;
-  const TriangleMesh box = box_mesh(hi - lo);
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t f = 0; f < box.triangles.size(); ++f) {
-    Triangle face = box.triangle(f);
-    for (int k = 0; k < 3; ++k) face[k] += 0.5 * (lo + hi);
-    best = std::min(best, test::cgal_triangle_distance(t, face));
-  }
-  return best;
-}
-
 TEST(CubeTriangle, AgainstCgal) {
   const Vec3 lo(0.25, -0.5, 1.0), hi(0.5, -0.25, 1.25);
   std::uniform_real_distribution<double> u(-0.35, 0.35), grid(-1, 5);
@@ -61,7 +48,7 @@ TEST(CubeTriangle, AgainstCgal) {
     ASSERT_EQ(triangle_meets_box(t, lo, hi), expected) << i;
     Vec3 on_t, on_b;
     const double d = triangle_box_distance(t, lo, hi, on_t, on_b);
-    const double oracle = oracle_triangle_box_distance(t, lo, hi);
+    const double oracle = test::cgal_triangle_box_distance(t, lo, hi);
     ASSERT_NEAR(d, oracle, 1e-12) << i;
     EXPECT_NEAR((on_t - on_b).norm(), d, 1e-12);
     EXPECT_TRUE(((on_b.array() >= lo.array() - 1e-12) && (on_b.array() <= hi.array() + 1e-12)).all());
@@ -140,133 +127,6 @@ void expect_mesh_matches_exploded(const TriangleMesh& mesh, const Octree& tree, 
   }
   EXPECT_GT(hits, poses / 10);
   EXPECT_GT(misses, poses / 10);
-}
-
-// A mesh's distance to a box (half extents `half`, at box_pose) by CGAL's triangle distances over
-// every triangle, nearest bounding box first: one whose bounding box is farther than the best so
-// far cannot be nearer, nor can any after it.
-double oracle_mesh_box_distance(const TriangleMesh& mesh, const Transform& mesh_pose, const Transform& box_pose, const Vec3& half) {
-  std::vector<std::pair<double, Triangle>> local;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle tri = mesh.triangle(t);
-    const Triangle q{{box_pose.inverse() * (mesh_pose * tri[0]), box_pose.inverse() * (mesh_pose * tri[1]),
-                      box_pose.inverse() * (mesh_pose * tri[2])}};
-    const Vec3 lo = q[0].cwiseMin(q[1]).cwiseMin(q[2]), hi = q[0].cwiseMax(q[1]).cwiseMax(q[2]);
-    local.emplace_back((lo - half).cwiseMax(-half - hi).cwiseMax(0.0).norm(), q);
-  }
-  std::sort(local.begin(), local.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  double truth = std::numeric_limits<double>::infinity();
-  for (const auto& [bound, q] : local) {
-    if (bound > truth) break;
-    truth = std::min(truth, oracle_triangle_box_distance(q, -half, half));
-  }
-  return truth;
-}
-
-// A bumpy sphere (dents and bumps of 40 %) as a narrowphase mesh, and a box.
-struct DentedMeshAndBox {
-  TriangleMesh mesh;
-  Bvh<Obb> bvh;
-  ConvexHull hull;
-  ShapeRef mesh_ref;
-  Vec3 half{0.03, 0.05, 0.02};
-  ShapeRef box{nullptr, nullptr, Primitive::box(2.0 * half)};
-  explicit DentedMeshAndBox(std::mt19937_64& r)
-      : mesh(test::bumpy_sphere(r, 0.1, 8, 12, 0.4)), bvh(Bvh<Obb>::build(mesh)), hull(convex_hull(mesh.vertices)), mesh_ref{&bvh, &hull, Primitive{}} {}
-  DentedMeshAndBox(const DentedMeshAndBox&) = delete;  // (mesh_ref points into it)
-};
-
-// A mesh against a box primitive, by the narrowphase's distance (shape_pairs.h), against CGAL's
-// triangle distances over every triangle: a bumpy sphere (dents and bumps of 40 %) at random
-// poses, the box often facing a dent, where the mesh's convex hull is nearer than the mesh and its
-// closest point is not on the surface (the hull settles a pair only when it is).
-TEST(MeshAgainstPrimitive, ADentedMeshAgainstABoxIsExact) {
-  std::mt19937_64 r(21);
-  const DentedMeshAndBox shapes(r);
-  const auto& [mesh, bvh, hull, mesh_ref, half, box] = shapes;
-  std::uniform_real_distribution<double> u(-0.2, 0.2);
-  int apart = 0, off_hull = 0;
-  for (int i = 0; i < test::sized(200); ++i) {
-    const Transform mesh_pose = test::random_rotation(r, Vec3(u(r), u(r), u(r)));
-    const Transform box_pose = Transform::Translation(Vec3(u(r), u(r), u(r)));
-    const double truth = oracle_mesh_box_distance(mesh, mesh_pose, box_pose, half);
-    if (truth < 1e-6) continue;  // (the mesh holding the box is another test's)
-    ++apart;
-    QueryStats stats;
-    Vec3 wa, wb;
-    const double d = shapes_distance(mesh_ref, mesh_pose, box, box_pose, std::numeric_limits<double>::infinity(), true, wa, wb, stats);
-    ASSERT_NEAR(d, truth, 1e-9) << i;
-    EXPECT_NEAR((wa - wb).norm(), d, 1e-9) << i;
-    const ConvexDistance h = convex_distance(ConvexShape::of(hull), ConvexShape::of(box.primitive), relative_transform(mesh_pose, box_pose));
-    off_hull += h.distance < truth - 1e-6;
-  }
-  std::cout << apart << " poses apart, " << off_hull << " with the hull nearer than the mesh\n";
-  EXPECT_GT(apart, test::sized(200) / 4);
-  EXPECT_GT(off_hull, apart / 10);  // the dents are met
-}
-
-// The boolean of a mesh against a box and against another mesh, near contact (within a few
-// centimetres, where the tree walk goes down to triangles): the answer of DESIGN.md section 2
-// against CGAL's distances (a hit within the padding, none beyond padding and tolerance), and no
-// tree walked at all where the convex hulls are proven farther apart than padding and tolerance
-// (the mesh lies in its hull); a mesh pair answers as the BVH walk alone. Contacts asked for walk.
-TEST(MeshAgainstPrimitive, ABooleanTheHullsSettleWalksNoTree) {
-  std::mt19937_64 r(23);
-  const DentedMeshAndBox shapes(r);
-  const auto& [mesh, bvh, hull, mesh_ref, half, box] = shapes;
-  std::uniform_real_distribution<double> u(-0.2, 0.2), near(0.0, 0.03);
-  int settled = 0, walked = 0, hits = 0, pairs_settled = 0;
-  for (int i = 0; i < test::sized(300); ++i) {
-    const Transform mesh_pose = test::random_rotation(r, Vec3(u(r), u(r), u(r)));
-    const Transform box_pose = Transform::Translation(Vec3(u(r), u(r), u(r)));
-    const double truth = oracle_mesh_box_distance(mesh, mesh_pose, box_pose, half);
-    if (truth > 0.05) continue;
-    PairRequest request;
-    request.padding = near(r);
-    request.tolerance = i % 2 ? 0.01 : 0.0;
-    const double beyond = request.padding + request.tolerance;
-    QueryStats stats;
-    const bool hit = shapes_collide(mesh_ref, mesh_pose, box, box_pose, request, nullptr, stats);
-    if (truth <= request.padding - 1e-9) {
-      ASSERT_TRUE(hit) << i;
-    }
-    if (truth > beyond + 1e-9) {
-      ASSERT_FALSE(hit) << i;
-    }
-    hits += hit;
-    const bool hull_apart = convex_distance(ConvexShape::of(hull), ConvexShape::of(box.primitive), relative_transform(mesh_pose, box_pose), beyond)
-                                .lower_bound > beyond;
-    if (hull_apart) {
-      EXPECT_EQ(stats.volume_tests + stats.primitive_tests, 0u) << i;
-      ++settled;
-    } else {
-      ++walked;
-    }
-    std::vector<MeshContact> contacts;
-    QueryStats walk;
-    request.max_contacts = 4;
-    EXPECT_EQ(shapes_collide(mesh_ref, mesh_pose, box, box_pose, request, &contacts, walk), hit) << i;
-    EXPECT_GT(walk.volume_tests, 0u) << i;
-    // The same mesh turned, its centre 0.2-0.3 from the first's (the bumps reach 0.06-0.14): two
-    // meshes near contact.
-    const Vec3 away = (box_pose.t - mesh_pose.t).normalized() * (0.2 + 0.1 * near(r) / 0.03);
-    const Transform other = test::random_rotation(r, mesh_pose.t + away);
-    request.max_contacts = 0;
-    QueryStats pair_stats;
-    const bool pair_hit = shapes_collide(mesh_ref, mesh_pose, mesh_ref, other, request, nullptr, pair_stats);
-    CollisionRequest direct;
-    direct.padding = request.padding;
-    EXPECT_EQ(pair_hit, collide(bvh, mesh_pose, bvh, other, direct).collision || (pair_hit && request.tolerance > 0)) << i;
-    pairs_settled += pair_stats.volume_tests == 0;
-  }
-  std::cout << settled << " booleans settled by the hulls, " << walked << " walked (" << hits << " hits); " << pairs_settled
-            << " mesh pairs settled by the hulls\n";
-  // (Shares of the poses near contact: test::sized shortens the loop under the sanitizers.)
-  const int near_contact = settled + walked;
-  EXPECT_GE(settled, near_contact / 5);
-  EXPECT_GE(walked, near_contact / 5);
-  EXPECT_GE(pairs_settled, near_contact / 10);
-  EXPECT_GT(near_contact, test::sized(300) / 10);
 }
 
 TEST(MeshAgainstOctree, ClosedMeshAgainstExplodedBoxes) {
@@ -530,7 +390,6 @@ TEST(RobotAgainstEnvironment, PandaAgainstExplodedScene) {
   EXPECT_GT(free, 5);
   EXPECT_EQ(undecided, 0) << "a link passed within 1e-6 m of the post's surface: the prisms cannot tell";
 }
-
 
 // Capsule objects are exact primitives (the points within `radius` of a segment): panda against a
 // capsule, by distance and by boolean, against brute force over every link triangle and the
