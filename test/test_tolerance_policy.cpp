@@ -70,6 +70,30 @@ TEST(TolerancePolicy, TheTable) {
   }
 }
 
+// A certified motion's interval that still fails counts as colliding only when the level's error
+// (against a link, the larger) and twice the growth fit the tolerance: never at tolerance 0, and at
+// the level a motion prefers (half the tolerance) a growth up to a quarter of it.
+TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
+  for (const double t : {0.0, 1e-4, 0.003, 0.01, 0.05}) {
+    ToleranceQuestion q{t, Counterpart::kLink};
+    q.motion = true;
+    const double preferred = proxy_use(q).prefer_up_to;
+    for (const double level : {0.0, preferred, 0.002, 0.005, 0.01, 0.02}) {
+      for (const double growth : {0.0, 1e-6, t / 4, t / 2, t}) {
+        const bool fits = level + 2.0 * growth <= t;
+        EXPECT_EQ(interval_within_tolerance(level, growth, t), fits) << t << " " << level << " " << growth;
+        if (t == 0.0 && (level > 0.0 || growth > 0.0)) {
+          EXPECT_FALSE(interval_within_tolerance(level, growth, t));
+        }
+      }
+    }
+    if (t > 0.0) {
+      EXPECT_TRUE(interval_within_tolerance(preferred, t / 4, t));
+      EXPECT_FALSE(interval_within_tolerance(preferred, t / 4 * (1 + 1e-9), t));
+    }
+  }
+}
+
 // Every combination of the question at every tolerance class: a level allowed to decide errs by
 // at most the tolerance, and is the largest that does; a motion prefers a level that leaves half.
 TEST(TolerancePolicy, EveryLevelAllowedToDecideFitsTheTolerance) {

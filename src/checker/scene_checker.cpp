@@ -26,10 +26,14 @@ namespace {
 // The levels tests go through, coarsest first, down to the finest that serves `tolerance` as a
 // certified motion's (narrowphase/tolerance_policy.h; states use the same): at a tolerance the
 // coarsest level up to half of it (or up to it), exact: every level.
-std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
+ProxyUse motion_use(double tolerance) {
   ToleranceQuestion question{tolerance, Counterpart::kLink};
   question.motion = true;
-  const ProxyUse use = proxy_use(question);
+  return proxy_use(question);
+}
+
+std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
+  const ProxyUse use = motion_use(tolerance);
   const ProxyLevel* finest = m.proxies_for(use.prefer_up_to);
   if (finest == nullptr) finest = m.proxies_for(use.decide_up_to);
   std::vector<const ProxyLevel*> out;
@@ -56,7 +60,9 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
   proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
   proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
-  tolerance_asked_ = options.tolerance > 0.0 && !proxies_.empty() && level_ <= options.tolerance / 2;
+  // (The policy's preferred level for a motion: the rest of the tolerance is the room a failing
+  // interval's growth needs before the tolerance may take it.)
+  tolerance_asked_ = !proxies_.empty() && level_ <= motion_use(options.tolerance).prefer_up_to;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {
     if (m.shapes()[l].empty()) continue;

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
 
@@ -162,7 +163,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
   // link within level + 2 largest (a self pair) of a collision at its midpoint.
   // (The room first: whether every failing component may take the shortcut costs end checks.)
-  if (tolerance_asked_ && level_ + 2.0 * (largest + options_.min_clearance) <= options_.tolerance &&
+  if (tolerance_asked_ && interval_within_tolerance(level_, largest + options_.min_clearance, options_.tolerance) &&
       std::all_of(arena.begin() + static_cast<std::ptrdiff_t>(failing), arena.end(), [&](int k) { return tolerant_component(k, ends); })) {
     return {Step::kCollides, mid, failing, left};
   }

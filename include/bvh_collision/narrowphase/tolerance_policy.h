@@ -51,4 +51,10 @@ struct ProxyUse {
 };
 ProxyUse proxy_use(const ToleranceQuestion& question);
 
+// A certified motion's interval that a component still fails at proxy level `level`, each link
+// moving (each pair closing) at most `growth` over half of it: the component comes within
+// level + 2 growth of a collision somewhere in the interval (a self pair's error, the larger). May
+// the tolerance take it as colliding? When that fits the tolerance.
+bool interval_within_tolerance(double level, double growth, double tolerance);
+
 }  // namespace bvh_collision
