@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <map>
 #include <random>
@@ -18,6 +19,8 @@
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/narrowphase/link_proxy.h"
 #include "bvh_collision/narrowphase/link_proxy_cache.h"
+#include "bvh_collision/narrowphase/proxy_octree.h"
+#include "bvh_collision/octree/scan.h"
 #include "bvh_collision/checker/robot_collision_model.h"
 #include "bvh_collision/geometry/distance.h"
 #include "checker_fixtures.h"
@@ -241,6 +244,55 @@ TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {
                 padding, collide, near, false_positives[0.01], false_positives[0.015], false_positives[0.02],
                 false_positives[0.03]);
   }
+}
+
+// A link's proxy level against the octree with its distance field (narrowphase/proxy_octree.h),
+// against the exact mesh-octree distance: a miss proves the mesh farther than the padding, a hit
+// puts it within padding + level / 2 (the leaves' Hausdorff bound), and a contact asked for is an
+// occupied leaf of the tree with a point of a grown leaf ball on its cube.
+TEST(ProxyOctree, AMissIsApartAndAHitWithinHalfTheLevel) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Octree tree(0.02);
+  std::vector<ScanPoint> table;  // a table top and a post on it
+  for (double x = -0.3; x <= 0.3; x += 0.01) {
+    for (double y = -0.3; y <= 0.3; y += 0.01) table.emplace_back(float(x), float(y), 0.0f);
+  }
+  for (double z = 0.0; z <= 0.3; z += 0.01) table.emplace_back(0.05f, 0.05f, float(z));
+  insert_points(tree, table);
+  const OctreeDistanceField field = OctreeDistanceField::build(tree, Vec3(-0.5, -0.5, -0.3), Vec3(0.5, 0.5, 0.5), 0.2);
+  const Bvh<Obb> bvh = Bvh<Obb>::build(test::bumpy_sphere(rng, 0.06, 8, 10, 0.1));
+  int hits = 0, misses = 0, near_misses = 0;
+  for (const double level : {0.01, 0.02}) {
+    const LinkProxy proxy = LinkProxy::build({BodyShape{ShapeRef{&bvh, nullptr, Primitive{}}, Transform()}}, level);
+    for (int i = 0; i < test::sized(600); ++i) {
+      const Transform pose = test::random_rotation(rng, Vec3(0.25 * u(rng), 0.25 * u(rng), 0.02 + 0.12 * std::abs(u(rng))));
+      const double padding = i % 3 == 0 ? 0.0 : 0.01;
+      const double d = mesh_octree_distance(bvh, pose, tree, true).distance;
+      const ProxyOctreeHit boolean = proxy_meets_octree(proxy, pose, padding, tree, field, false);
+      const ProxyOctreeHit asked = proxy_meets_octree(proxy, pose, padding, tree, field, true);
+      ASSERT_EQ(boolean.hit, asked.hit) << i;
+      if (!asked.hit) {
+        ASSERT_GT(d, padding) << "a miss within the padding: " << i;
+        ++misses;
+        near_misses += d < padding + level;
+        continue;
+      }
+      ++hits;
+      ASSERT_LE(d, padding + proxy.hausdorff_bound() + 1e-9) << "a hit beyond half the level: " << i;
+      ASSERT_TRUE(asked.contact.has_value()) << i;
+      const Octree::Leaf& cube = asked.contact->voxel;
+      const std::optional<Octree::Lookup> found = tree.find(cube.key);
+      ASSERT_TRUE(found.has_value()) << i;
+      EXPECT_EQ(found->depth, cube.depth);
+      EXPECT_TRUE(tree.occupied(found->log_odds)) << "the contact's cube is occupied";
+      const Vec3 lo = tree.cube_min(cube.key), hi = lo + Vec3::Constant(tree.cube_size(cube.depth));
+      EXPECT_LE((asked.contact->position.cwiseMax(lo).cwiseMin(hi) - asked.contact->position).norm(), 1e-12) << "on the cube";
+    }
+  }
+  std::cout << hits << " hits, " << misses << " misses (" << near_misses << " of them within the level)\n";
+  EXPECT_GT(hits, test::sized(600) / 10);
+  EXPECT_GT(misses, test::sized(600) / 10);
 }
 
 // Issue 33, point 3: proxies kept on disk by content. The first build stores every link's proxy,

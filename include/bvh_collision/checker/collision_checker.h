@@ -189,9 +189,10 @@ class CollisionChecker {
   // check_environment with the distance field already looked up (null: none).
   EnvironmentResult environment_check(const double* state, const Environment& env, const EnvironmentRequest& request,
                                       const OctreeDistanceField* field) const;
-  // Boolean check of one link against the octree from its proxy (tolerance at least half its level).
-  bool proxy_meets_octree(int link, const Transform& pose, const LinkProxy& proxy, const Octree& tree,
-                          const OctreeDistanceField& field, bool contacts, EnvironmentResult& result) const;
+  // Boolean check of one link against the octree from its proxy (tolerance at least half its
+  // level: narrowphase/proxy_octree.h), its contact into `result` when asked.
+  bool link_proxy_meets_octree(int link, const Transform& pose, const LinkProxy& proxy, const Octree& tree,
+                               const OctreeDistanceField& field, bool contacts, EnvironmentResult& result) const;
   bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,
                          EnvironmentResult& result) const;
   bool link_meets_object(int link, const Transform& pose, const CollisionObject& object,
