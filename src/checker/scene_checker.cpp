@@ -2,14 +2,9 @@
 #include "bvh_collision/checker/scene_checker.h"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
-#include <cstring>
-#include <deque>
-#include <limits>
 #include <stdexcept>
-#include <string>
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/split_column.h"
@@ -22,16 +17,16 @@ namespace bvh_collision {
 
 namespace {
 
-
-// The levels tests go through, coarsest first, down to the finest that serves `tolerance` as a
-// certified motion's (narrowphase/tolerance_policy.h; states use the same): at a tolerance the
-// coarsest level up to half of it (or up to it), exact: every level.
+// How the tolerance policy lets proxy levels serve a certified motion's intervals.
 ProxyUse motion_use(double tolerance) {
   ToleranceQuestion question{tolerance, Counterpart::kLink};
   question.motion = true;
   return proxy_use(question);
 }
 
+// The levels tests go through, coarsest first, down to the finest that serves `tolerance` as a
+// certified motion's (narrowphase/tolerance_policy.h; states use the same): at a tolerance the
+// coarsest level up to half of it (or up to it), exact: every level.
 std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
   const ProxyUse use = motion_use(tolerance);
   const ProxyLevel* finest = m.proxies_for(use.prefer_up_to);
