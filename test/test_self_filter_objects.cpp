@@ -180,7 +180,7 @@ TEST(ObjectFilter, AgainstBruteForce) {
     FilteredScan got;
     got.obstacles = scan;
     got.clear_only = {ScanPoint(0.1f, 0.2f, 0.3f)};  // a self-filter ray already there stays first
-    filter_objects(objects, sensor.cast<float>(), padding, got);
+    filter_objects(ObjectList(objects), sensor.cast<float>(), padding, got);
     std::vector<ScanPoint> kept, ends;
     std::size_t on = 0, ambiguous = 0;
     for (const ScanPoint& point : scan) {
@@ -221,14 +221,14 @@ TEST(ObjectFilter, BadInputAndNoObjects) {
   filter_objects({}, ScanPoint(0, 0, 0), 0.02, scan);
   EXPECT_EQ(scan.obstacles.size(), 1u);
   const std::vector<CollisionObject> objects = {make_collision_object("box", ObjectShape::box({1, 1, 1}), Transform::Identity())};
-  EXPECT_THROW(filter_objects(objects, ScanPoint(0, 0, 0), -0.01, scan), std::invalid_argument);
-  EXPECT_THROW(filter_objects(objects, ScanPoint(0, 0, 0), std::nan(""), scan), std::invalid_argument);
-  EXPECT_THROW(filter_objects(objects, ScanPoint(std::nanf(""), 0, 0), 0.0, scan), std::invalid_argument);
+  EXPECT_THROW(filter_objects(ObjectList(objects), ScanPoint(0, 0, 0), -0.01, scan), std::invalid_argument);
+  EXPECT_THROW(filter_objects(ObjectList(objects), ScanPoint(0, 0, 0), std::nan(""), scan), std::invalid_argument);
+  EXPECT_THROW(filter_objects(ObjectList(objects), ScanPoint(std::nanf(""), 0, 0), 0.0, scan), std::invalid_argument);
   EXPECT_EQ(scan.obstacles.size(), 1u) << "a refused call changes nothing";
   // The sensor inside an object: its points there are the object's; the object cuts no ray (a
   // camera in its housing would see nothing), so the ray clears up to the point.
   scan.obstacles = {ScanPoint(0.2f, 0, 0), ScanPoint(3, 0, 0)};
-  filter_objects(objects, ScanPoint(0, 0, 0), 0.0, scan);
+  filter_objects(ObjectList(objects), ScanPoint(0, 0, 0), 0.0, scan);
   EXPECT_EQ(scan.on_objects, 1u);
   EXPECT_EQ(scan.obstacles, std::vector<ScanPoint>{ScanPoint(3, 0, 0)});
   EXPECT_EQ(scan.clear_only, std::vector<ScanPoint>{ScanPoint(0.2f, 0, 0)});
@@ -253,7 +253,7 @@ TEST(ObjectFilter, BoxMovedAcrossATableLeavesNoVoxels) {
     }
     FilteredScan split;
     split.obstacles = scan;
-    filter_objects(collision_objects({box}), sensor.cast<float>(), padding, split);
+    filter_objects(ObjectList(collision_objects({box})), sensor.cast<float>(), padding, split);
     EXPECT_GT(split.on_objects, 100u);
     insert_scan(filtered, split.obstacles, split.clear_only, sensor.cast<float>());
     insert_scan(unfiltered, scan, sensor.cast<float>());

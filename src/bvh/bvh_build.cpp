@@ -395,7 +395,7 @@ struct BvhBuilder {
     constexpr int kMaxSampled = 256;
     const bool large = out.triangles_.size() > kSearchedMesh;
     const int corners_up_to = large ? 1 : 4;
-    const int sampled_up_to = large ? 0 : kMaxSampled;
+    const int sampled_up_to = large || !options.sampled_slack ? 0 : kMaxSampled;
     for (std::size_t i = end; i-- > begin;) {
       BvhNode<BV>& node = out.nodes_[i];
       const EnclosingBox box = enclosing_box(node.volume);

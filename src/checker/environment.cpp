@@ -57,6 +57,10 @@ ShapeRef exact_shape_of(const CollisionObject& o) {
 
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
   if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
+  // The object's name part (before any '#k') by the rule for ids; the whole for control characters.
+  std::string problem = object_id_problem(object_name(id));
+  if (problem.empty() && printable_id(id) != id) problem = "id '" + printable_id(id) + "' holds a control character";
+  if (!problem.empty()) throw std::invalid_argument("collision object " + problem);
   require_rigid(pose, id);
   CollisionObject o{id, shape, pose, nullptr, nullptr, Primitive{}, Vec3::Zero(), 0.0};
   if (shape.kind == ObjectShape::Kind::kSphere) {
@@ -86,7 +90,9 @@ CollisionObject make_collision_object(const std::string& id, const ObjectShape& 
     return o;
   }
   const TriangleMesh mesh = object_mesh(shape, id);
-  o.mesh = std::make_shared<const Bvh<Obb>>(Bvh<Obb>::build(mesh, BuildOptions{BuildMethod::kSah, 2}));
+  BuildOptions build{BuildMethod::kSah, 2};
+  build.sampled_slack = shape.kind != ObjectShape::Kind::kBox;  // a box answers states as the exact primitive
+  o.mesh = std::make_shared<const Bvh<Obb>>(Bvh<Obb>::build(mesh, build));
   o.hull = std::make_shared<const ConvexHull>(convex_hull(used_vertices(mesh)));
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const Vec3& v : used_vertices(mesh)) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
@@ -140,46 +146,21 @@ void Environment::add_object(const std::string& id, const ObjectShape& shape, co
   add_object(make_collision_object(id, shape, pose));  // throws before anything changes
 }
 
-namespace {
-
-std::ptrdiff_t position_of(const std::vector<CollisionObject>& objects, const std::string& id) {
-  const auto it = std::find_if(objects.begin(), objects.end(), [&](const CollisionObject& x) { return x.id == id; });
-  return it == objects.end() ? -1 : it - objects.begin();
-}
-
-}  // namespace
-
-// Object changes build a new list (records only: hierarchies and hulls stay shared), so the
-// list a snapshot holds never changes under it.
 void Environment::add_object(CollisionObject o) {
-  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
-  const std::ptrdiff_t i = position_of(*next, o.id);
-  if (i >= 0) {
-    (*next)[i] = std::move(o);
-  } else {
-    next->push_back(std::move(o));
-  }
-  objects_ = std::move(next);
+  objects_.add(std::make_shared<const CollisionObject>(std::move(o)));
 }
 
 bool Environment::move_object(const std::string& id, const Transform& pose) {
-  const std::ptrdiff_t i = position_of(*objects_, id);
+  const std::ptrdiff_t i = objects_.find(id);
   if (i < 0) return false;
   require_rigid(pose, id);
-  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
-  (*next)[i].pose = pose;
-  objects_ = std::move(next);
+  auto moved = std::make_shared<CollisionObject>(objects_[static_cast<std::size_t>(i)]);
+  moved->pose = pose;
+  objects_.add(std::move(moved));
   return true;
 }
 
-bool Environment::remove_object(const std::string& id) {
-  const std::ptrdiff_t i = position_of(*objects_, id);
-  if (i < 0) return false;
-  auto next = std::make_shared<std::vector<CollisionObject>>(*objects_);
-  next->erase(next->begin() + i);
-  objects_ = std::move(next);
-  return true;
-}
+bool Environment::remove_object(const std::string& id) { return objects_.remove(id); }
 
 const AttachedBody* Environment::find_attached(const std::string& id) const {
   const auto it = std::find_if(attached_->begin(), attached_->end(), [&](const AttachedBody& b) { return b.id == id; });
@@ -187,8 +168,8 @@ const AttachedBody* Environment::find_attached(const std::string& id) const {
 }
 
 void Environment::attach(AttachedBody body) {
-  if (body.id.empty() || body.id.find('#') != std::string::npos) {
-    throw std::invalid_argument("attached object '" + body.id + "': the id must be non-empty without '#'");
+  if (const std::string problem = object_id_problem(body.id); !problem.empty()) {
+    throw std::invalid_argument("attached object " + problem);
   }
   if (body.link.empty()) throw std::invalid_argument("attached object '" + body.id + "': no link named");
   if (body.shapes.empty()) throw std::invalid_argument("attached object '" + body.id + "' has no shapes");
@@ -212,8 +193,38 @@ bool Environment::detach(const std::string& id) {
 }
 
 const CollisionObject* Environment::find_object(const std::string& id) const {
-  const std::ptrdiff_t i = position_of(*objects_, id);
-  return i < 0 ? nullptr : &(*objects_)[i];
+  const std::ptrdiff_t i = objects_.find(id);
+  return i < 0 ? nullptr : &objects_[static_cast<std::size_t>(i)];
+}
+
+std::string printable_id(const std::string& id) {
+  static const char* const kHex = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : id) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7F) {
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
+std::string object_id_problem(const std::string& id) {
+  if (id.empty()) return "id is empty";
+  for (std::size_t i = 0; i < id.size(); ++i) {
+    const auto c = static_cast<unsigned char>(id[i]);
+    if (c < 0x20 || c == 0x7F) {
+      static const char* const kHex = "0123456789ABCDEF";
+      return std::string("id '") + printable_id(id) + "' holds a control character (0x" + kHex[c >> 4] + kHex[c & 15] +
+             " at byte " + std::to_string(i) + ")";
+    }
+  }
+  if (id.find('#') != std::string::npos) return "id '" + id + "' contains '#' (it names an object's shapes: id#k)";
+  return "";
 }
 
 }  // namespace bvh_collision

@@ -10,8 +10,54 @@ namespace bvh_collision {
 namespace {
 
 thread_local std::vector<Transform> tl_env_poses;
+thread_local std::vector<std::uint32_t> tl_near_objects;
+thread_local std::vector<ObjectBoxTree::Entry> tl_robot_objects;
+
+// Up to this many objects a link tries each in turn; beyond, only those the list's box tree
+// finds near the robot and then near the link (the walk over all grows with the scene, the
+// tree's with log n).
+constexpr std::size_t kObjectsWalkedInTurn = 16;
+
+// A box around a ball, grown by the rounding of its centre.
+void ball_box(const Vec3& centre, double reach, Vec3& lo, Vec3& hi) {
+  const Vec3 r = Vec3::Constant(reach + pose_margin(centre.norm() + reach));
+  lo = centre - r;
+  hi = centre + r;
+}
+
+// The slots of the objects whose boxes meet the link's box [lo, hi] among those near the robot
+// (every object of a small list), ascending: the order the walk over all would try them in.
+void objects_near(const ObjectList& objects, const std::vector<ObjectBoxTree::Entry>& near_robot, const Vec3& lo, const Vec3& hi,
+                  std::vector<std::uint32_t>& out) {
+  out.clear();
+  if (objects.size() <= kObjectsWalkedInTurn) {
+    for (std::size_t o = 0; o < objects.size(); ++o) out.push_back(static_cast<std::uint32_t>(o));
+    return;
+  }
+  for (const ObjectBoxTree::Entry& e : near_robot) {
+    if ((e.lo.array() <= hi.array()).all() && (lo.array() <= e.hi.array()).all()) out.push_back(e.slot);
+  }
+  std::sort(out.begin(), out.end());
+}
 
 }  // namespace
+
+// The objects whose boxes meet the box of every link's ball (grown by its padding and the
+// tolerance): one walk of the object list's tree a state, each link then filters these.
+void CollisionChecker::objects_near_robot(const std::vector<Transform>& poses, const ObjectList& objects, double tolerance,
+                                          const std::vector<char>* only, std::vector<ObjectBoxTree::Entry>& out) const {
+  out.clear();
+  if (objects.size() <= kObjectsWalkedInTurn) return;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
+    if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
+    Vec3 a, b;
+    ball_box(poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius + m_->paddings()[l] + tolerance, a, b);
+    lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
+  }
+  if (!(lo.array() <= hi.array()).all()) return;
+  objects.for_each_box_meeting(lo, hi, [&](const ObjectBoxTree::Entry& e) { out.push_back(e); });
+}
 
 bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const Octree& tree,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
@@ -140,6 +186,8 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
   question.solids = request.solids;
   question.octree_field = field != nullptr;
   const ProxyLevel* proxies = a_->proxies_for(proxy_use(question).decide_up_to);
+  std::vector<ObjectBoxTree::Entry>& near_robot = tl_robot_objects;
+  if (request.objects) objects_near_robot(poses, env.objects(), request.tolerance, only, near_robot);
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
     if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);
@@ -152,9 +200,15 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
                                                              request.contacts, result)
                                    : link_meets_octree(link, poses[l], env.octree(), request, result));
     const std::string& name = m_->robot().links()[l].name;
-    for (std::size_t o = 0; request.objects && o < env.objects().size() && !(hit && !request.all_links); ++o) {
-      if (env.object_allowed(name, o)) continue;
-      hit = link_meets_object(link, poses[l], env.objects()[o], request, result) || hit;
+    std::vector<std::uint32_t>& near = tl_near_objects;
+    if (request.objects) {
+      Vec3 lo, hi;
+      ball_box(poses[l] * bound.center, bound.radius + m_->paddings()[l] + request.tolerance, lo, hi);
+      objects_near(env.objects(), near_robot, lo, hi, near);
+    }
+    for (std::size_t k = 0; request.objects && k < near.size() && !(hit && !request.all_links); ++k) {
+      if (env.object_allowed(name, near[k])) continue;
+      hit = link_meets_object(link, poses[l], env.objects()[near[k]], request, result) || hit;
     }
     result.collision = result.collision || hit;
   }

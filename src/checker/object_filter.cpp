@@ -35,7 +35,7 @@ struct Part {
 
 }  // namespace
 
-void filter_objects(const std::vector<CollisionObject>& objects, const ScanPoint& sensor, double padding,
+void filter_objects(const ObjectList& objects, const ScanPoint& sensor, double padding,
                     FilteredScan& scan) {
   if (!(padding >= 0.0) || !std::isfinite(padding)) {
     throw std::invalid_argument("object filter: padding must be finite and >= 0, got " + std::to_string(padding));

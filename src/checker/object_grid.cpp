@@ -27,7 +27,7 @@ double squared_box_distance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
 
 }  // namespace
 
-ObjectGrid::ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach,
+ObjectGrid::ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi, double reach,
                        double cell)
     : origin_(lo), cell_(cell), inverse_cell_(1.0 / cell), reach_(reach) {
   for (const CollisionObject& o : objects) {

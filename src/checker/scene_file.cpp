@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <unordered_map>
 
 namespace bvh_collision {
 
@@ -72,6 +73,7 @@ class SceneReader {
 
   std::vector<std::string> lines_;
   std::string source_;
+  std::unordered_map<std::string, int> lines_of_ids_;  // each id's first line
   std::size_t line_ = 0, col_ = 0;  // the next token is at or after lines_[line_][col_]
 };
 
@@ -160,8 +162,9 @@ SceneObject SceneReader::object(bool new_format) {
   SceneObject o;
   o.id = rest_of_line();
   --line_;  // errors about the id name its line
+  o.line = static_cast<int>(line_) + 1;
   if (o.id.empty()) fail("an object without an id");
-  if (o.id.find('#') != std::string::npos) fail("object id '" + o.id + "' contains '#' (it names an object's shapes: id#k)");
+  if (const std::string problem = object_id_problem(o.id); !problem.empty()) fail("object " + problem);
   ++line_;
   const std::string what = "object '" + o.id + "'";
   if (new_format) o.pose = pose(what + " pose");
@@ -179,7 +182,7 @@ SceneObject SceneReader::object(bool new_format) {
     const std::size_t subframes = count(what + " subframe count", 1'000'000);
     for (std::size_t k = 0; k < subframes; ++k) {
       const std::string name = token(what + " subframe " + std::to_string(k + 1) + " name");
-      pose(what + " subframe '" + name + "' pose");
+      o.subframes.emplace_back(name, pose(what + " subframe '" + name + "' pose"));
     }
   }
   return o;
@@ -206,8 +209,14 @@ SceneFile SceneReader::read() {
     if (marker == ".") break;
     if (marker != "*") fail("'" + marker + "' where an object ('* id') or the end ('.') belongs");
     SceneObject o = object(format);
-    auto same = std::find_if(scene.objects.begin(), scene.objects.end(), [&](const SceneObject& x) { return x.id == o.id; });
-    if (same != scene.objects.end()) scene.objects.erase(same);  // as MoveIt: the later replaces it
+    // A second entry of an id adds its shapes to the object (scene_file.h): kept as read, merged
+    // where the scene is applied. Found by a hash: a scene of n objects reads in n steps, not n^2.
+    const auto [first, added] = lines_of_ids_.emplace(o.id, o.line);
+    if (!added) {
+      scene.warnings.push_back(source_ + ":" + std::to_string(o.line) + ": object '" + o.id + "' is also at line " +
+                               std::to_string(first->second) + ": its shapes are added to that object's (MoveIt 1.1.12 and later "
+                               "would keep only these)");
+    }
     scene.objects.push_back(std::move(o));
   }
   return scene;
@@ -236,34 +245,6 @@ void write_shape(std::ostream& out, const ObjectShape& s) {
 
 }  // namespace
 
-std::size_t SceneFile::shape_count() const {
-  std::size_t n = 0;
-  for (const SceneObject& o : objects) n += o.shapes.size();
-  return n;
-}
-
-std::vector<CollisionObject> SceneFile::collision_objects() const {
-  std::vector<CollisionObject> out;
-  for (const SceneObject& o : objects) {
-    for (std::size_t k = 0; k < o.shapes.size(); ++k) {
-      const std::string id = o.shapes.size() == 1 ? o.id : o.id + "#" + std::to_string(k);
-      out.push_back(make_collision_object(id, o.shapes[k].shape, o.pose * o.shapes[k].pose));
-    }
-  }
-  return out;
-}
-
-Environment SceneFile::environment(double octree_resolution) const {
-  Environment env(octree_resolution);
-  for (CollisionObject& o : collision_objects()) env.add_object(std::move(o));
-  // Every entry: the checks against objects read only those that name one (a pair of links is
-  // the robot's matrix, which this does not change).
-  NamedAllowedCollisions acm;
-  for (const AllowedCollision& e : allowed_collisions) acm.set_entry(e.a, e.b, e.allowed);
-  env.set_allowed_collisions(std::move(acm));
-  return env;
-}
-
 SceneFile read_scene_text(std::istream& in, const std::string& source) { return SceneReader(in, source).read(); }
 
 SceneFile read_scene_file(const std::string& path) {
@@ -291,6 +272,7 @@ void write_scene_file(const SceneFile& scene, const std::string& path) {
 }
 
 void write_scene_text(const SceneFile& scene, std::ostream& out) {
+  if (scene.is_diff) throw std::invalid_argument("a diff (is_diff) has no .scene form: write it as YAML");
   std::ostringstream text;  // nothing reaches `out` if a shape cannot be written
   text << std::setprecision(17);
   text << scene.name << "\n";
@@ -303,7 +285,11 @@ void write_scene_text(const SceneFile& scene, std::ostream& out) {
       write_pose(text, s.pose);
       text << "0 0 0 0\n";  // no colour
     }
-    text << "0\n";  // no subframes
+    text << o.subframes.size() << "\n";
+    for (const auto& [name, pose] : o.subframes) {
+      text << name << "\n";
+      write_pose(text, pose);
+    }
   }
   text << ".\n";
   out << text.str();

@@ -20,10 +20,34 @@
 namespace bvh_collision {
 namespace {
 
+constexpr const char* kUsage =
+    "usage: bvh_collision_check --urdf FILE [--srdf FILE] [--package-path DIRS] --states FILE\n"
+    "                           [--scene FILE] [--distance] [--tolerance M] [--padding M]\n"
+    "                           [--print-acm] [--sample-acm N [--acm-cache FILE]] [--help]\n"
+    "\n"
+    "Checks every configuration of a states file for collision and prints one line each:\n"
+    "`INDEX free` or `INDEX collision A:B,C:D` (names sorted), with --distance ` distance=D pair=A:B`.\n"
+    "\n"
+    "  --urdf FILE          the robot description (required)\n"
+    "  --srdf FILE          its semantic description: pairs never checked, group states\n"
+    "  --package-path DIRS  ':'-separated folders where package:// mesh paths are looked up\n"
+    "                       (before ROS_PACKAGE_PATH and CMAKE_PREFIX_PATH)\n"
+    "  --states FILE        first line `joints: NAME ...`, then one configuration a line\n"
+    "                       (required unless --print-acm)\n"
+    "  --scene FILE         also check against a MoveIt .scene, or a PlanningScene in YAML\n"
+    "                       (.yaml, .yml): its objects, attached objects and robot state\n"
+    "  --distance           print the distance to the nearest pair (0 in collision)\n"
+    "  --tolerance M        allowed error in metres (a pair closer than M may be reported)\n"
+    "  --padding M          padding added to every link, in metres\n"
+    "  --print-acm          print `check A:B` or `skip A:B REASON` for every pair of links\n"
+    "  --sample-acm N       also skip pairs that N random configurations show never or always colliding\n"
+    "  --acm-cache FILE     read the sampled pairs from FILE, or write them there\n"
+    "  --help, -h           print this and exit\n";
+
 struct Options {
   std::string urdf, srdf, states, package_path, acm_cache, scene;
   std::size_t sample_acm = 0;
-  bool distance = false, print_acm = false;
+  bool distance = false, print_acm = false, help = false;
   double tolerance = 0.0, padding = 0.0;
 };
 
@@ -56,6 +80,11 @@ Options parse_args(const std::vector<std::string>& args) {
     if (i + 1 >= args.size()) throw std::invalid_argument(args[i] + " needs a value");
     return args[++i];
   };
+  // Asked for anywhere, the usage answers alone: nothing else is read.
+  if (std::find(args.begin(), args.end(), "--help") != args.end() || std::find(args.begin(), args.end(), "-h") != args.end()) {
+    o.help = true;
+    return o;
+  }
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "--urdf") o.urdf = value(i);
@@ -69,7 +98,7 @@ Options parse_args(const std::vector<std::string>& args) {
     else if (a == "--padding") o.padding = parse_number(a, value(i));
     else if (a == "--sample-acm") o.sample_acm = parse_count(a, value(i));
     else if (a == "--acm-cache") o.acm_cache = value(i);
-    else throw std::invalid_argument("unknown argument '" + a + "'");
+    else throw std::invalid_argument("unknown argument '" + a + "' (--help lists them)");
   }
   if (o.urdf.empty()) throw std::invalid_argument("--urdf FILE is required");
   if (o.states.empty() && !o.print_acm) throw std::invalid_argument("--states FILE is required");
@@ -202,6 +231,27 @@ void apply_scene_state(const SceneFile& scene, const RobotModel& m, std::vector<
   }
 }
 
+// The frames a scene may name, at the robot's state with its root link at the world's origin:
+// the root (also named "world", and the parent frame of the SRDF's virtual joint that holds it)
+// and every link.
+SceneFrameLookup robot_frames(const RobotModel& m, const std::string& srdf_xml, const std::vector<double>& state) {
+  std::vector<Transform> poses;
+  forward_kinematics(m, state.data(), poses);
+  std::string mount;
+  if (!srdf_xml.empty()) {
+    for (const SrdfVirtualJoint& v : parse_srdf(srdf_xml, &m).virtual_joints) {  // (its warnings shown once, above)
+      if (v.child_link == m.links()[m.root_link()].name) mount = v.parent_frame;
+    }
+  }
+  // The tool's world is the root's frame: "world" names it too unless a link is so named.
+  return [&m, poses, mount](const std::string& frame) -> std::optional<Transform> {
+    if ((!mount.empty() && frame == mount) || (frame == "world" && m.link_index(frame) < 0)) return Transform::Identity();
+    const int l = m.link_index(frame);
+    if (l < 0) return std::nullopt;
+    return poses[static_cast<std::size_t>(l)];
+  };
+}
+
 // One configuration's line: `INDEX free` or `INDEX collision A:B,...` (link pairs and, with a
 // scene, link:object pairs, name-sorted), then with --distance the nearest pair of either kind.
 void print_state(const Options& o, const CollisionChecker& checker, const Environment* world,
@@ -244,6 +294,10 @@ void print_state(const Options& o, const CollisionChecker& checker, const Enviro
 int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     const Options o = parse_args(args);
+    if (o.help) {
+      out << kUsage;
+      return 0;
+    }
     std::vector<std::string> roots = split_path_list(o.package_path);
     if (const char* env = std::getenv("ROS_PACKAGE_PATH")) {
       for (const std::string& p : split_path_list(env)) roots.push_back(p);
@@ -256,7 +310,9 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
     AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
     const std::string srdf_xml = o.srdf.empty() ? "" : read_file(o.srdf, "SRDF");
     if (!o.srdf.empty()) {
-      for (const std::string& name : apply_srdf(parse_srdf(srdf_xml, &model), model, acm)) {
+      const Srdf semantic = parse_srdf(srdf_xml, &model);
+      for (const std::string& w : semantic.warnings) err << "warning: " << w << "\n";
+      for (const std::string& name : apply_srdf(semantic, model, acm)) {
         err << "warning: SRDF names '" << name << "', which is not a link of the robot\n";
       }
     }
@@ -274,13 +330,21 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
       if (j.bounded) state[v] = std::clamp(0.0, j.lower, j.upper);
     }
     // The scene's objects (MoveIt .scene text or PlanningScene YAML), checked with the robot's own
-    // pairs; a YAML scene's robot state gives the joints the states file leaves out.
-    const std::optional<SceneFile> scene = o.scene.empty() ? std::nullopt : std::optional<SceneFile>(read_scene_file(o.scene));
-    if (scene) apply_scene_state(*scene, m, state, err);
-    const std::optional<Environment> world = scene ? std::optional<Environment>(scene->environment()) : std::nullopt;
+    // pairs; a YAML scene's robot state gives the joints the states file leaves out, and places
+    // the objects posed in a link's frame and those the robot holds.
+    std::optional<Environment> world;
+    if (!o.scene.empty()) {
+      SceneFile scene = read_scene_file(o.scene);
+      for (const std::string& w : scene.warnings) err << "warning: " << w << "\n";
+      apply_scene_state(scene, m, state, err);
+      place_in_world(scene, robot_frames(m, srdf_xml, state));
+      world = scene.environment();
+    }
+    // A robot that holds objects checks them as links of its own (self and world).
+    const CollisionChecker holding = world ? checker.carrying(*world, false) : checker;
     for (std::size_t i = 0; i < states.rows.size(); ++i) {
       for (std::size_t k = 0; k < states.variables.size(); ++k) state[states.variables[k]] = states.rows[i][k];
-      print_state(o, checker, world ? &*world : nullptr, state, i, out);
+      print_state(o, holding, world ? &*world : nullptr, state, i, out);
     }
     return 0;
   } catch (const std::exception& e) {

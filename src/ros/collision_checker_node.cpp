@@ -118,7 +118,9 @@ void CollisionCheckerNode::load_robot() {
   std::string srdf;
   if (nh_.getParam("robot_description_semantic", srdf) && !srdf.empty()) {
     try {
-      for (const std::string& name : apply_srdf(parse_srdf(srdf, &model), model, acm)) {
+      const Srdf semantic = parse_srdf(srdf, &model);
+      for (const std::string& w : semantic.warnings) ROS_WARN_STREAM("collision_checker: " << w);
+      for (const std::string& name : apply_srdf(semantic, model, acm)) {
         ROS_WARN_STREAM("collision_checker: the SRDF names '" << name << "', which the URDF does not have");
       }
     } catch (const std::invalid_argument& e) {

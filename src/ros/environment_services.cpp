@@ -1,6 +1,7 @@
 // The environment: point clouds into the octree (through tf2 and the self filter), and the
 // services that change or save it.
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <algorithm>
 #include <map>
@@ -18,39 +19,51 @@ namespace {
 constexpr double kWorkspaceMargin = 0.5;
 
 // Removes object `id`, or every shape "id#k" of an object of several; false when there was none.
-bool remove_object_shapes(Environment& env, const std::string& id) {
-  std::vector<std::string> names;
-  for (const CollisionObject& o : env.objects()) {
-    const bool part = o.id.size() > id.size() + 1 && o.id.compare(0, id.size(), id) == 0 && o.id[id.size()] == '#' &&
-                      o.id.find_first_not_of("0123456789", id.size() + 1) == std::string::npos;
-    if (o.id == id || part) names.push_back(o.id);
+bool remove_object_shapes(Environment& env, const std::string& id) { return env.remove_object_shapes(id) > 0; }
+
+// Shapes as scene objects: the shapes id#0, id#1, ... of an object of several back into one
+// object `id` (in the order of k), the object posed at its frame and its shapes within it.
+std::vector<SceneObject> objects_of(const std::vector<const CollisionObject*>& shapes) {
+  std::map<std::string, std::map<std::size_t, const CollisionObject*>> parts;
+  std::vector<std::string> order;  // objects in the order their first shape comes
+  for (const CollisionObject* o : shapes) {
+    const auto hash = o->id.rfind('#');
+    const bool part = hash != std::string::npos && hash + 1 < o->id.size() &&
+                      o->id.find_first_not_of("0123456789", hash + 1) == std::string::npos;
+    const std::string id = part ? o->id.substr(0, hash) : o->id;
+    if (parts.find(id) == parts.end()) order.push_back(id);
+    parts[id][part ? std::stoul(o->id.substr(hash + 1)) : 0] = o;
   }
-  for (const std::string& name : names) env.remove_object(name);
-  return !names.empty();
+  std::vector<SceneObject> out;
+  for (const std::string& id : order) {
+    SceneObject object;
+    object.id = id;
+    object.pose = parts[id].begin()->second->frame;
+    for (const auto& [k, shape] : parts[id]) object.shapes.push_back(SceneShape{shape->shape, relative_transform(object.pose, shape->pose)});
+    out.push_back(std::move(object));
+  }
+  return out;
 }
 
-// The collision objects as a scene: the shapes id#0, id#1, ... of an object of several back into
-// one object `id` (in the order of k), posed in the world.
+// The collision objects, the attached ones (in their links' frames) and the allowed-collision
+// entries as a scene, posed in the world.
 SceneFile scene_of(const Environment& env, const std::string& name) {
   SceneFile scene;
   scene.name = name.empty() ? "(noname)+" : name;
-  std::map<std::string, std::map<std::size_t, SceneShape>> parts;
-  std::vector<std::string> order;  // objects in the order their first shape comes
-  for (const CollisionObject& o : env.objects()) {
-    const auto hash = o.id.rfind('#');
-    const bool part = hash != std::string::npos && hash + 1 < o.id.size() &&
-                      o.id.find_first_not_of("0123456789", hash + 1) == std::string::npos;
-    const std::string id = part ? o.id.substr(0, hash) : o.id;
-    if (parts.find(id) == parts.end()) order.push_back(id);
-    parts[id][part ? std::stoul(o.id.substr(hash + 1)) : 0] = SceneShape{o.shape, o.pose};
-  }
-  for (const std::string& id : order) {
-    SceneObject object{id, Transform(), {}};
-    for (auto& [k, shape] : parts[id]) object.shapes.push_back(std::move(shape));
-    scene.objects.push_back(std::move(object));
+  std::vector<const CollisionObject*> shapes;
+  for (const CollisionObject& o : env.objects()) shapes.push_back(&o);
+  scene.objects = objects_of(shapes);
+  for (const AttachedBody& body : env.attached()) {
+    shapes.clear();
+    for (const CollisionObject& o : body.shapes) shapes.push_back(&o);
+    for (SceneObject& o : objects_of(shapes)) {
+      o.frame_id = body.link;
+      scene.attached.push_back(SceneAttachedObject{body.link, std::move(o), body.touch_links});
+    }
   }
   // The allowed-collision entries (YAML keeps them; the .scene text has no place for them).
   for (const auto& [pair, allowed] : env.allowed_collisions().entries()) scene.allowed_collisions.push_back({pair.first, pair.second, allowed});
+  for (const auto& [who, allowed] : env.allowed_collisions().defaults()) scene.default_allowed.emplace_back(who, allowed);
   return scene;
 }
 
@@ -237,9 +250,7 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
   return serve("set_collision_object", res, [&] {
     if (req.id.empty()) throw RequestError("collision object id is empty");
     if (req.id == "octree") throw RequestError("'octree' is reserved: it names the obstacle octree in contacts");
-    if (req.id.find('#') != std::string::npos) {
-      throw RequestError("collision object id '" + req.id + "' contains '#' (it names an object's shapes: id#k)");
-    }
+    if (const std::string problem = object_id_problem(req.id); !problem.empty()) throw RequestError("collision object " + problem);
     if (store_->snapshot()->find_attached(req.id) != nullptr) {
       throw RequestError("object '" + req.id + "' is attached to a link: detach_object it first");
     }
@@ -255,6 +266,7 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       const std::string name = shapes.size() == 1 ? req.id : req.id + "#" + std::to_string(k);
       parts.push_back(make_collision_object(name, shapes[k].shape, pose * shapes[k].pose));
+      parts.back().frame = pose;
     }
     store_->modify([&](Environment& env) {
       if (env.find_attached(req.id) != nullptr) throw RequestError("object '" + req.id + "' is attached to a link: detach_object it first");
@@ -267,6 +279,7 @@ bool CollisionCheckerNode::set_collision_object(SetCollisionObject::Request& req
 bool CollisionCheckerNode::remove_collision_object(RemoveCollisionObject::Request& req,
                                                    RemoveCollisionObject::Response& res) {
   return serve("remove_collision_object", res, [&] {
+    if (const std::string problem = object_id_problem(req.id); !problem.empty()) throw RequestError("collision object " + problem);
     // Thrown inside the change: the store then publishes nothing (an unknown id is no new snapshot).
     store_->modify([&](Environment& env) {
       if (!remove_object_shapes(env, req.id)) throw RequestError("no collision object with id '" + req.id + "'");
@@ -288,28 +301,9 @@ bool CollisionCheckerNode::save_octree(SaveOctree::Request& req, SaveOctree::Res
 bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Response& res) {
   return serve("load_scene", res, [&] {
     if (req.path.empty()) throw RequestError("path is empty");
-    // Read and built (meshes, hierarchies, hulls) before the environment is locked.
-    SceneFile scene = [&] {
-      try {
-        return read_scene_file(req.path);
-      } catch (const SceneFileError& e) {
-        throw RequestError(e.what());
-      }
-    }();
-    // A YAML object in a named frame: placed in world_frame through tf2, as set_collision_object's.
-    for (SceneObject& o : scene.objects) {
-      o.pose = frame_to_world(o.frame_id) * o.pose;
-      o.frame_id.clear();
-    }
-    for (const SceneObject& o : scene.objects) {
-      if (o.id == "octree") throw RequestError(req.path + ": object id 'octree' is reserved: it names the obstacle octree in contacts");
-      double triangles = 0.0;
-      for (const SceneShape& s : o.shapes) triangles += static_cast<double>(s.shape.triangle_count());
-      check_limit("collision object '" + o.id + "' with its triangles", triangles, params_.limits.object_triangles,
-                  "max_object_triangles");
-    }
-    std::vector<CollisionObject> parts = scene.collision_objects();
-    // The file's allowed-collision entries that name an object (two links: the robot's SRDF's).
+    // Read, placed and checked before the environment is locked; built in the change, which
+    // publishes nothing when it throws (a refused file changes nothing).
+    SceneFile scene = read_scene_for_node(req.path);
     const RobotModel& model = checker()->model();
     std::size_t link_pairs = 0;
     NamedAllowedCollisions entries;
@@ -317,25 +311,105 @@ bool CollisionCheckerNode::load_scene(LoadScene::Request& req, LoadScene::Respon
       if (model.link_index(e.a) >= 0 && model.link_index(e.b) >= 0) ++link_pairs;
       else entries.set_entry(e.a, e.b, e.allowed);
     }
+    std::vector<std::string> warnings = scene.warnings;
+    const std::shared_ptr<const CollisionChecker> base = checker();
     store_->modify([&](Environment& env) {
       for (const SceneObject& o : scene.objects) {
         if (env.find_attached(o.id) != nullptr) throw RequestError(req.path + ": object '" + o.id + "' is attached to a link: detach_object it first");
       }
-      if (!req.merge) env.clear_objects();
-      for (const SceneObject& o : scene.objects) remove_object_shapes(env, o.id);
-      for (CollisionObject& part : parts) env.add_object(std::move(part));
-      NamedAllowedCollisions acm = req.merge ? env.allowed_collisions() : NamedAllowedCollisions{};
+      if (!req.merge && !scene.is_diff) env.clear_objects();
+      try {
+        apply_scene_objects(scene, env, warnings);
+      } catch (const SceneFileError& e) {
+        throw RequestError(req.path + ": " + e.what());
+      }
+      attach_scene_objects(scene, env, req.path);
+      NamedAllowedCollisions acm = req.merge || scene.is_diff ? env.allowed_collisions() : NamedAllowedCollisions{};
       for (const auto& [pair, allowed] : entries.entries()) acm.set_entry(pair.first, pair.second, allowed);
+      for (const auto& [name, allowed] : scene.default_allowed) acm.set_default(name, allowed);
       env.set_allowed_collisions(std::move(acm));
+      if (!scene.attached.empty()) {
+        try {
+          base->carrying(env, false);
+        } catch (const std::invalid_argument& e) {
+          throw RequestError(e.what());
+        }
+      }
     });
+    if (!scene.attached.empty()) checker_for(store_->snapshot());  // carried at once, its proxy levels started
     res.name = scene.name;
-    res.objects = static_cast<std::uint32_t>(scene.objects.size());
+    res.objects = static_cast<std::uint32_t>(scene.objects.size() + scene.attached.size());
     res.shapes = static_cast<std::uint32_t>(scene.shape_count());
-    std::vector<std::string> unused;
-    if (!scene.joint_values.empty()) unused.push_back("its robot state (" + std::to_string(scene.joint_values.size()) + " joints: the node's come from joint_states)");
-    if (link_pairs > 0) unused.push_back("its allowed-collision entries for " + std::to_string(link_pairs) + " pairs of links (the robot's SRDF decides those)");
-    if (!unused.empty()) res.warning = "not applied: " + unused[0] + (unused.size() > 1 ? " and " + unused[1] : "");
+    if (!scene.joint_values.empty()) warnings.push_back("its robot state is not applied (" + std::to_string(scene.joint_values.size()) + " joints: the node's come from joint_states)");
+    if (link_pairs > 0) warnings.push_back("its allowed-collision entries for " + std::to_string(link_pairs) + " pairs of links are not applied (the robot's SRDF decides those)");
+    for (std::size_t k = 0; k < warnings.size(); ++k) res.warning += (k ? "; " : "") + warnings[k];
   });
+}
+
+// The scene file read and placed in world_frame (its frames through tf2: robot links, or any
+// frame tf2 resolves now), its objects checked against the node's rules and limits.
+SceneFile CollisionCheckerNode::read_scene_for_node(const std::string& path) const {
+  SceneFile scene;
+  try {
+    scene = read_scene_file(path);
+    place_in_world(scene, [&](const std::string& frame) -> std::optional<Transform> {
+      try {
+        return frame_to_world(frame);
+      } catch (const RequestError&) {
+        return std::nullopt;
+      }
+    });
+  } catch (const SceneFileError& e) {
+    throw RequestError(e.what());
+  }
+  const RobotModel& model = checker()->model();
+  auto limit = [&](const SceneObject& o, const char* kind) {
+    double triangles = 0.0;
+    for (const SceneShape& s : o.shapes) triangles += static_cast<double>(s.shape.triangle_count());
+    check_limit(std::string(kind) + " '" + o.id + "' with its triangles", triangles, params_.limits.object_triangles, "max_object_triangles");
+  };
+  for (const SceneObject& o : scene.objects) {
+    if (o.id == "octree") throw RequestError(path + ": object id 'octree' is reserved: it names the obstacle octree in contacts");
+    limit(o, "collision object");
+  }
+  for (const SceneAttachedObject& a : scene.attached) {
+    if (a.object.id == "octree" || model.link_index(a.object.id) >= 0) throw RequestError(path + ": attached object id '" + a.object.id + "' is reserved or a link's name");
+    if (model.link_index(a.link) < 0) throw RequestError(path + ": no link '" + a.link + "' to attach '" + a.object.id + "' to");
+    for (const std::string& t : a.touch_links) {
+      if (model.link_index(t) < 0) throw RequestError(path + ": touch link '" + t + "' of '" + a.object.id + "' is not a link");
+    }
+    limit(a.object, "attached object");
+  }
+  return scene;
+}
+
+// The scene's attached objects hung from their links (in the link's frame): given by shapes, or
+// the world's object of that id moved to the robot (MoveIt's attach of an existing object).
+void CollisionCheckerNode::attach_scene_objects(const SceneFile& scene, Environment& env, const std::string& path) const {
+  for (const SceneAttachedObject& a : scene.attached) {
+    AttachedBody body{a.object.id, a.link, a.touch_links, {}};
+    if (!a.object.shapes.empty()) {
+      for (std::size_t k = 0; k < a.object.shapes.size(); ++k) {
+        const std::string name = a.object.shapes.size() == 1 ? a.object.id : a.object.id + "#" + std::to_string(k);
+        body.shapes.push_back(make_collision_object(name, a.object.shapes[k].shape, a.object.pose * a.object.shapes[k].pose));
+        body.shapes.back().frame = a.object.pose;
+      }
+    } else {
+      const Transform link_world = link_in_world(checker()->model().link_index(a.link));
+      for (const std::uint32_t slot : env.objects().shapes_of(a.object.id)) {
+        body.shapes.push_back(env.objects()[slot]);
+        body.shapes.back().pose = relative_transform(link_world, body.shapes.back().pose);
+        body.shapes.back().frame = relative_transform(link_world, body.shapes.back().frame);
+      }
+      if (body.shapes.empty()) throw RequestError(path + ": attached object '" + a.object.id + "' has no shapes and the world has no object of that id");
+    }
+    env.remove_object_shapes(a.object.id);
+    try {
+      env.attach(std::move(body));
+    } catch (const std::invalid_argument& e) {
+      throw RequestError(path + ": " + e.what());
+    }
+  }
 }
 
 bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request& req, SetAllowedCollisions::Response& res) {
@@ -355,7 +429,7 @@ bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request&
       names.push_back(req.names_b[i]);
     }
     for (const std::string& name : names) {
-      if (name.empty() || name.find('#') != std::string::npos) throw RequestError("name '" + name + "' is empty or names a shape (id#k)");
+      if (const std::string problem = object_id_problem(name); !problem.empty()) throw RequestError("name: " + problem);
     }
     std::vector<std::string> unknown;
     store_->modify([&](Environment& env) {
@@ -370,9 +444,7 @@ bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request&
       }
       env.set_allowed_collisions(std::move(acm));
       for (const std::string& name : names) {
-        const bool object = std::any_of(env.objects().begin(), env.objects().end(), [&](const CollisionObject& o) {
-          return object_name(o.id) == name;
-        });
+        const bool object = env.objects().has_object(name);
         if (!object && !is_link(name) && env.find_attached(name) == nullptr && std::find(unknown.begin(), unknown.end(), name) == unknown.end()) unknown.push_back(name);
       }
     });
@@ -386,10 +458,15 @@ bool CollisionCheckerNode::set_allowed_collisions(SetAllowedCollisions::Request&
 bool CollisionCheckerNode::save_scene(SaveScene::Request& req, SaveScene::Response& res) {
   return serve("save_scene", res, [&] {
     if (req.path.empty()) throw RequestError("path is empty");
+    const SceneFile scene = scene_of(*store_->snapshot(), req.name);
     try {
-      write_scene_file(scene_of(*store_->snapshot(), req.name), req.path);
+      write_scene_file(scene, req.path);
     } catch (const SceneFileError& e) {
       throw RequestError(e.what());
+    }
+    const std::string ext = std::filesystem::path(req.path).extension().string();
+    if (!scene.attached.empty() && ext != ".yaml" && ext != ".yml") {
+      res.warning = std::to_string(scene.attached.size()) + " attached objects not written: a .scene file has no place for them (save as .yaml)";
     }
   });
 }
@@ -416,15 +493,15 @@ std::vector<CollisionObject> CollisionCheckerNode::attached_shapes(const AttachO
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     const std::string name = shapes.size() == 1 ? req.id : req.id + "#" + std::to_string(k);
     out.push_back(make_collision_object(name, shapes[k].shape, pose * shapes[k].pose));
+    out.back().frame = pose;
   }
   return out;
 }
 
 bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObject::Response& res) {
   return serve("attach_object", res, [&] {
-    if (req.id.empty() || req.id.find('#') != std::string::npos || req.id == "octree") {
-      throw RequestError("attached object id '" + req.id + "' must be non-empty, without '#', and not 'octree'");
-    }
+    if (const std::string problem = object_id_problem(req.id); !problem.empty()) throw RequestError("attached object " + problem);
+    if (req.id == "octree") throw RequestError("attached object id 'octree' is reserved: it names the obstacle octree in contacts");
     const RobotModel& model = checker()->model();  // (the node's checker lives as long as the node)
     const int link = model.link_index(req.link);
     if (link < 0) throw RequestError("no link '" + req.link + "' to attach '" + req.id + "' to");
@@ -438,10 +515,10 @@ bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObjec
     const std::shared_ptr<const CollisionChecker> base = checker();
     store_->modify([&](Environment& env) {
       if (!given) {
-        for (const CollisionObject& o : env.objects()) {
-          if (object_name(o.id) != req.id) continue;
-          body.shapes.push_back(o);
-          body.shapes.back().pose = relative_transform(link_world, o.pose);
+        for (const std::uint32_t slot : env.objects().shapes_of(req.id)) {
+          body.shapes.push_back(env.objects()[slot]);
+          body.shapes.back().pose = relative_transform(link_world, body.shapes.back().pose);
+          body.shapes.back().frame = relative_transform(link_world, body.shapes.back().frame);
         }
         if (body.shapes.empty()) {
           throw RequestError("no collision object '" + req.id + "' in the world to attach (give its geometry to attach a new one)");
@@ -463,6 +540,7 @@ bool CollisionCheckerNode::attach_object(AttachObject::Request& req, AttachObjec
 
 bool CollisionCheckerNode::detach_object(DetachObject::Request& req, DetachObject::Response& res) {
   return serve("detach_object", res, [&] {
+    if (const std::string problem = object_id_problem(req.id); !problem.empty()) throw RequestError("attached object " + problem);
     const AttachedBody* now = store_->snapshot()->find_attached(req.id);
     if (now == nullptr) throw RequestError("no attached object '" + req.id + "'");
     const Transform link_world = req.remove ? Transform::Identity() : link_in_world(checker()->model().link_index(now->link));
@@ -475,6 +553,7 @@ bool CollisionCheckerNode::detach_object(DetachObject::Request& req, DetachObjec
       if (req.remove) return;
       for (CollisionObject& o : shapes) {
         o.pose = link_world * o.pose;
+        o.frame = link_world * o.frame;
         env.add_object(std::move(o));
       }
     });

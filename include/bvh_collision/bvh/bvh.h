@@ -24,6 +24,11 @@ struct BuildOptions {
   BuildMethod method = BuildMethod::kSah;  // fewest volume tests in the benchmark
   int max_leaf_triangles = 1;
   int max_depth = 64;  // top-down builders: a node this deep becomes a leaf
+  // Each node's slack bounded by sampling its volume (the tightest proven bound; most of a small
+  // mesh's build), or only by its corners and its children's (looser, proven all the same): a
+  // collision object's box answers single states as the exact primitive, and a scene holds
+  // thousands of them.
+  bool sampled_slack = true;
 };
 
 template <class BV>

@@ -8,6 +8,7 @@
 
 #include "bvh_collision/bvh/bvh.h"
 #include "bvh_collision/checker/named_allowed_collisions.h"
+#include "bvh_collision/checker/object_list.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/narrowphase/shape.h"
@@ -49,6 +50,10 @@ struct CollisionObject {
   Primitive primitive;  // when mesh is null
   Vec3 bound_center = Vec3::Zero();  // object frame
   double bound_radius = 0.0;
+  // The pose of the object this is a shape of (MoveIt's object pose, in the frame `pose` is in):
+  // the shape lies at frame^-1 * pose within it. Moving the object moves its frame and every
+  // shape with it; a scene written out poses the object at its frame.
+  Transform frame = Transform::Identity();
 };
 
 // The object as the narrowphase takes it (its mesh and hull, or its primitive) ...
@@ -56,6 +61,13 @@ inline ShapeRef shape_of(const CollisionObject& o) { return ShapeRef{o.mesh.get(
 // ... and as the single-state tests take it: a box as the exact primitive it is (kept as 12
 // triangles too, which the general queries use; mesh against box primitive measured faster).
 ShapeRef exact_shape_of(const CollisionObject& o);
+
+// Why `id` cannot name a collision object, or "" when it can: an id is not empty and holds no
+// '#' (id#k names an object's shapes) and no control character (U+0000..U+001F, U+007F: a NUL
+// would cut it short in C strings and log lines, an ESC rewrite the terminal that shows it).
+std::string object_id_problem(const std::string& id);
+// The id as a message may quote it: control characters written as \xHH.
+std::string printable_id(const std::string& id);
 
 // The object a shape belongs to: an object of several shapes keeps them as "id#k" (an id itself
 // never holds '#'), and names such as allowed-collision entries name the object, "id".
@@ -79,8 +91,9 @@ struct AttachedBody {
 CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose);
 
 // A copy shares the octree's pages (octree.h) and the object list; a change copies what it
-// writes: the octree pages it touches, or the list of object records (each object's hierarchy
-// and hull stay shared). Snapshots that readers keep thus cost only what changed since.
+// writes: the octree pages it touches, or the nodes of the object list on one path (object_list.h:
+// log n of them; each object's hierarchy and hull stay shared). Snapshots that readers keep thus
+// cost only what changed since, and adding the n-th object costs log n.
 class Environment {
  public:
   // Throws std::invalid_argument for a resolution that is not a positive finite number.
@@ -104,8 +117,10 @@ class Environment {
   // False (and nothing changes) when no object has this id; move throws for a bad pose.
   bool move_object(const std::string& id, const Transform& pose);
   bool remove_object(const std::string& id);
-  void clear_objects() { objects_ = std::make_shared<const std::vector<CollisionObject>>(); }
-  const std::vector<CollisionObject>& objects() const { return *objects_; }
+  // Every shape of the object `name` ("name", or its shapes "name#k"); how many there were.
+  std::size_t remove_object_shapes(const std::string& name) { return objects_.remove_object(name); }
+  void clear_objects() { objects_.clear(); }
+  const ObjectList& objects() const { return objects_; }
   const CollisionObject* find_object(const std::string& id) const;
   // Allowed collisions that name objects (a link with an object, an object's default entry):
   // the environment's checks skip the allowed (link, object) pairs. Kept by name, so an entry
@@ -120,7 +135,7 @@ class Environment {
   // whole objects: a shape "id#k" of a several-shape object answers as "id".
   bool object_allowed(const std::string& link_name, std::size_t o) const {
     if (allowed_->empty()) return false;
-    return allowed_->allowed(link_name, object_name((*objects_)[o].id));
+    return allowed_->allowed(link_name, object_name(objects_[o].id));
   }
 
   // Objects the robot carries (AttachedBody), in the order attached. A snapshot that holds one
@@ -154,7 +169,7 @@ class Environment {
     OctreeDistanceField field;
   };
   Octree octree_;
-  std::shared_ptr<const std::vector<CollisionObject>> objects_ = std::make_shared<const std::vector<CollisionObject>>();
+  ObjectList objects_;
   std::shared_ptr<const NamedAllowedCollisions> allowed_ = std::make_shared<const NamedAllowedCollisions>();
   std::shared_ptr<const std::vector<AttachedBody>> attached_ = std::make_shared<const std::vector<AttachedBody>>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store

@@ -17,7 +17,7 @@ namespace bvh_collision {
 // objects may be out of date, and what the camera saw there is real. Objects are in the scan's
 // frame (the world). Uses every core. Throws std::invalid_argument for a padding that is not
 // finite and >= 0 or a sensor origin that is not finite.
-void filter_objects(const std::vector<CollisionObject>& objects, const ScanPoint& sensor, double padding,
+void filter_objects(const ObjectList& objects, const ScanPoint& sensor, double padding,
                     FilteredScan& scan);
 
 }  // namespace bvh_collision

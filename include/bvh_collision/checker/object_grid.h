@@ -18,7 +18,7 @@ namespace bvh_collision {
 class ObjectGrid {
  public:
   ObjectGrid() = default;
-  ObjectGrid(const std::vector<CollisionObject>& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
+  ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi, double reach, double cell);
 
   // Calls f(object index) for every object that might lie within `radius` of `centre`: those
   // of the cell's list not proven farther (when radius <= reach and the centre lies in the

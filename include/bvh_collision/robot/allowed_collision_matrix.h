@@ -80,17 +80,24 @@ struct Srdf {
   std::vector<SrdfVirtualJoint> virtual_joints;
   // <group_state name group>: joint values by joint name.
   std::map<std::string, std::map<std::string, GroupStateJoint>> group_states;
+  // What srdfdom or MoveIt's RobotModel would log and skip, skipped here too, each naming the
+  // element (and its line): the caller shows them (the node's log, the tool's stderr).
+  std::vector<std::string> warnings;
 };
 
 // How many values a joint of this type takes in a group state (its variables: 0 for fixed).
 std::size_t group_state_value_count(JointType type);
 
-// Parses SRDF XML with tinyxml2; throws std::invalid_argument (with the XML line, and for a group
-// state its name and the joint's) when malformed. Every group-state value is a finite decimal.
-// Where a joint's type is known (a <virtual_joint> of the SRDF, or a joint of `model` when one is
-// given) its values must have that type's count, and a floating joint's quaternion is normalised
-// (a zero one is refused). Joints known to neither keep their values unchecked for count: srdfdom
-// skips them too.
+// Parses SRDF XML with tinyxml2 as srdfdom does, and group states as MoveIt's RobotModel takes
+// them: what they refuse is refused (std::invalid_argument: XML that is not well formed, a root
+// that is not <robot>), and what they log and skip is skipped with a warning in Srdf::warnings (an
+// element without the attributes it needs, a virtual joint on a link the robot lacks, a group
+// state of a group the SRDF does not define or for a joint the robot lacks, a value count that
+// does not fit the joint, a floating joint's zero quaternion); an unknown virtual joint type is
+// taken as fixed, with a warning. Names are trimmed. One refusal of our own: a group-state value
+// that is not a finite decimal (srdfdom would read "abc" as 0), with the state, the joint and
+// the line. A floating joint's quaternion is normalised. Without a model, joints are known by the
+// virtual joints only and others keep their values unchecked.
 Srdf parse_srdf(const std::string& xml, const RobotModel* model = nullptr);
 
 // Applies the SRDF to the matrix: default-disabled links, disabled pairs, then enabled pairs

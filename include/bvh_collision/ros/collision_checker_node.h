@@ -37,6 +37,7 @@
 #include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/checker/scene_file.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckMotions.h"
@@ -240,6 +241,8 @@ class CollisionCheckerNode {
   bool attach_object(AttachObject::Request& req, AttachObject::Response& res);
   bool detach_object(DetachObject::Request& req, DetachObject::Response& res);
   std::vector<CollisionObject> attached_shapes(const AttachObject::Request& req, const Transform& link_world) const;
+  SceneFile read_scene_for_node(const std::string& path) const;
+  void attach_scene_objects(const SceneFile& scene, Environment& env, const std::string& path) const;
 
   // Output (node_output.cpp).
   void publish_occupied_cells(const ros::WallTimerEvent&);
