@@ -68,8 +68,8 @@ int BenchReport::report_status_ = -1;
 
 TEST_F(BenchReport, EveryBenchmarkRunsOnSmallInputs) {
   BVH_REQUIRE_ROBOTS();
-  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "node"};
-  ASSERT_EQ(statuses_.size(), 6u);
+  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "scene_scale", "node"};
+  ASSERT_EQ(statuses_.size(), 7u);
   for (std::size_t i = 0; i < statuses_.size(); ++i) EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
 }
 

@@ -261,5 +261,21 @@ TEST(CheckTool, HelpPrintsTheUsageAndExitsZero) {
   }
 }
 
+// The public benchmark's panda SRDF gives its fixed finger joint a value in the state "close";
+// MoveIt loads the robot and leaves that joint out of the state. We stopped: "SRDF <group_state
+// name="close"> (line 102): joint 'panda_finger_joint1' (fixed) needs 0 values, got 1". Now a
+// warning names it and the tool checks the states (the demo arm's hand joint is fixed).
+TEST(CheckTool, AValueForAFixedJointInAGroupStateIsAWarning) {
+  const std::string srdf = write_states(
+      "<robot name='demo_arm'>\n<group name='hand'><joint name='hand_joint'/></group>\n"
+      "<group_state name='close' group='hand'>\n<joint name='hand_joint' value='0'/>\n</group_state>\n</robot>\n");
+  const ToolRun r = run({"--urdf", kUrdf, "--srdf", srdf, "--states", write_states("joints: joint2\n0\n")});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("0 free", 0), 0u) << r.out;
+  EXPECT_NE(r.err.find("warning: SRDF <group_state name=\"close\"> (line 4): joint 'hand_joint' (fixed) needs 0 values, got 1: "
+                       "this state does not set it"),
+            std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace bvh_collision

@@ -85,7 +85,9 @@ void check_map(Map& map, int keys, int steps, std::uint64_t seed) {
     const int* found = map.find(probe);
     const auto it = oracle.find(probe);
     ASSERT_EQ(found != nullptr, it != oracle.end()) << step;
-    if (found) ASSERT_EQ(*found, it->second);
+    if (found) {
+      ASSERT_EQ(*found, it->second);
+    }
     if (step % 499 == 0) snapshots.emplace_back(map, oracle);
   }
   for (const auto& [snap, expected] : snapshots) {

@@ -181,7 +181,9 @@ void expect_same_answers(const CollisionChecker& checker, const std::vector<cons
       for (const EnvironmentContact& c : b.contacts) other.push_back(checker.model().links()[c.link].name + ":" + c.object);
       std::sort(other.begin(), other.end());
       ASSERT_EQ(touched, other) << "world " << w << " state " << i;
-      if (!a.collision) ASSERT_NEAR(a.min_distance, b.min_distance, 1e-9) << "world " << w << " state " << i;
+      if (!a.collision) {
+        ASSERT_NEAR(a.min_distance, b.min_distance, 1e-9) << "world " << w << " state " << i;
+      }
     }
     colliding += a.collision;
   }
@@ -418,7 +420,7 @@ world:
 // Ids with a NUL or an ESC were accepted from a .scene file (a mesh name with one was refused):
 // every reader refuses them by name, as make_collision_object and attach do.
 TEST(SceneSpellings, IdsWithControlCharactersAreRefused) {
-  for (const std::string id : {std::string("ta") + '\0' + "ble", std::string("\x1b[2Jtable"), std::string("tab\x7f")}) {
+  for (const std::string& id : {std::string("ta") + '\0' + "ble", std::string("\x1b[2Jtable"), std::string("tab\x7f")}) {
     const std::string text = "scene\n* " + id + "\n0 0 0\n0 0 0 1\n1\nsphere\n0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n.\n";
     try {
       read_text(text);
