@@ -1,4 +1,4 @@
-# bvh_collision: the commands of DESIGN.md section 5.
+# bvh_collision: the commands of docs/design.md.
 #   make deps    install the Debian packages the build and tests need (idempotent)
 #   make build   configure and build the package and its tests (Release) in ./build
 #                (make build-node: the node and the demo's programs only, what make demo builds)

@@ -19,8 +19,8 @@
 
 #include "bench_util.h"
 #include "environment_bench.h"
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/environment_store.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/world/environment_store.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/robot_description.h"

@@ -8,7 +8,7 @@
 #include "../test/fcl_oracle.h"
 #include "../test/mesh_fixtures.h"
 #include "bench_util.h"
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 
 namespace bvh_collision {
 namespace {

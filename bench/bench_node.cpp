@@ -20,7 +20,7 @@
 #include "bench_util.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/ros/conversions.h"
 
@@ -29,7 +29,7 @@ namespace {
 
 constexpr double kTargetSingleUs = 300.0, kTargetBatchRatio = 1.5;
 // The proxy level both the node and the in-process checker build: self batches at this
-// tolerance run in the SIMD lanes (checker/proxy_batch.h), the fastest in-process baseline.
+// tolerance run in the SIMD lanes (model/proxy_batch.h), the fastest in-process baseline.
 constexpr double kProxyLevel = 0.01;
 
 CollisionChecker load_checker(const std::string& urdf) {

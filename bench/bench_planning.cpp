@@ -26,7 +26,7 @@
 
 #include "bench_util.h"
 #include "checker_fixtures.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/planning/ompl_validity.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "fcl_oracle.h"

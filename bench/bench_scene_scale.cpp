@@ -14,8 +14,8 @@
 #include <random>
 
 #include "bench_util.h"
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "checker_fixtures.h"
 #include "fcl_oracle.h"
 

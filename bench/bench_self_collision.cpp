@@ -16,8 +16,8 @@
 
 #include "../test/fcl_oracle.h"
 #include "bench_util.h"
-#include "bvh_collision/checker/acm_sampling.h"
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/acm_sampling.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"
@@ -170,7 +170,7 @@ std::vector<std::vector<double>> random_states(const RobotModel& m, std::size_t 
 
 // ------------------------------------------------------------------ section 1: tolerance
 
-// Boolean self-collision at each tolerance (DESIGN.md section 2: "collision" may be answered up
+// Boolean self-collision at each tolerance (docs/design.md: "collision" may be answered up
 // to `tolerance` apart, never "free" for a colliding state), against the exact distances.
 // Meshes as surfaces, as FCL sees them, so that both answer the same question.
 void tolerance_section(const Robot& robot, const CollisionChecker& checker, FclPipeline& fcl_pipeline,
@@ -568,14 +568,14 @@ int main(int argc, char** argv) {
   }
   proof.note("Uniform random states and states from centimetres down to micrometres of a self contact on both sides (bisection between a "
              "free and a colliding state), SRDF matrix, padding 0. A false negative (a colliding state answered free) "
-             "or a reported collision farther than the tolerance would break DESIGN.md section 2; both must be 0.");
+             "or a reported collision farther than the tolerance would break docs/design.md; both must be 0.");
   proof.write(bench::output_dir(argc, argv));
   speed_error.note("Uniform random states (the same as section 1), SRDF matrix, solids; the truth is our exact solid "
                    "distance. Tolerance 0 is the exact check; at tolerance t the coarsest proxy level e <= t answers "
                    "(narrowphase/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
-                   "clearance grid clears the padding (checker/pair_clearance.h). batch: check_batch over all states on "
+                   "clearance grid clears the padding (model/pair_clearance.h). batch: check_batch over all states on "
                    "the shared thread pool (" + std::to_string(ThreadPool::shared().capacity()) +
-                   " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (checker/proxy_batch.h, " +
+                   " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (model/proxy_batch.h, " +
                    (avx2_available() ? "AVX2, four lanes" : "SSE2, two lanes: this CPU has no AVX2") +
                    "). FCL: exact, surfaces, one state at a time. The scene "
                    "`octree` rows are bench_environment's (table speed_error_octree), merged in by the report.");

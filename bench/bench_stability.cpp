@@ -14,7 +14,7 @@
 #include "bench_util.h"
 #include "bvh_collision/bvh/primitive_queries.h"
 #include "bvh_collision/bvh/queries.h"
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/geometry/convex_distance.h"
@@ -138,7 +138,7 @@ void mesh_cases(const std::string& dir) {
   add("the same segments 0.01 m clear of the face", box, Transform(), needles, Transform::Translation(Vec3(0.21, 0, 0)),
       false, 0.01, false);
   table.note("Distances are 0 for colliding pairs. FCL treats meshes as surfaces, so it reports the closed mesh inside "
-             "another as free (DESIGN.md section 2 counts it as a collision).");
+             "another as free (docs/design.md counts it as a collision).");
   table.write(dir);
 }
 

@@ -5,7 +5,7 @@ same run (<dir>/tables/*.json, see bench/bench_util.h), with the machine's descr
 Usage: bench_report.py BENCH_DIR [--quick]
 
 Exits non-zero, naming the reason, when a table is missing or a figure breaks a promise of
-DESIGN.md section 2: a false negative at any tolerance, a distance outside its allowed error,
+docs/design.md: a false negative at any tolerance, a distance outside its allowed error,
 an octree that differs from OctoMap's, a wrong answer on a hard case. So `make bench` (and the
 reduced report in `make test`) fail loudly instead of publishing a curve that hides an error.
 """
@@ -422,7 +422,7 @@ def build_report(tables, bench_dir, quick):
             "runs with the smallest and largest run in brackets; FCL and OctoMap are the Debian packages' builds.", ""]
 
     out += ["## 1. Self-collision: time against tolerance", "",
-            "DESIGN.md section 2: at tolerance eps a query must report collision at distance 0 and free beyond eps. "
+            "docs/design.md: at tolerance eps a query must report collision at distance 0 and free beyond eps. "
             "False positives are free states reported colliding (allowed, bounded by eps); false negatives are "
             "missed collisions (never allowed).", "", headline_self(tables), "",
             f"![self-collision against tolerance]({plot_self(tables, plots_dir, 'tolerance')})", ""]

@@ -25,7 +25,7 @@ unit_tests() {
   ctest --test-dir "$1" -j"$JOBS" -R '^_ctest_bvh_collision_gtest_' --output-on-failure
 }
 
-# The sanitized build: the project's library (-g1: line tables for the sanitizers' reports, a
+# The sanitized build: the project's libraries (-g1: line tables for the sanitizers' reports, a
 # third less compile time than -g) and the three tests that link a static project library. The
 # tests themselves are not instrumented (CMakeLists.txt), so every other unit test runs again
 # from the Release build on the sanitized library (scripts/run_preloaded_tests.py).
@@ -34,7 +34,7 @@ san_build_pid=""
 start_sanitized_build() {
   ( nice -n 19 cmake -S . -B "$SAN_BUILD" -DBVH_COLLISION_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" > "$SAN_BUILD.configure.log" 2>&1 \
-    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_core "${own_tests[@]}" ) > "$SAN_BUILD.build.log" 2>&1 &
+    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_query bvh_collision_io "${own_tests[@]}" ) > "$SAN_BUILD.build.log" 2>&1 &
   san_build_pid=$!
 }
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"
 

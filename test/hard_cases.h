@@ -1,4 +1,4 @@
-// The named hard cases of triangle-pair collision (DESIGN.md section 2: touching counts,
+// The named hard cases of triangle-pair collision (docs/design.md: touching counts,
 // degenerate triangles are geometry): shared by the geometry tests (against CGAL's exact
 // predicates) and the report's stability section (bench_stability, against CGAL and FCL).
 #pragma once

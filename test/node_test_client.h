@@ -17,7 +17,7 @@
 
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/SetCollisionObject.h"
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/ros/readiness.h"

@@ -2,7 +2,7 @@
 // boards, boxes open on one side, cages of bars, and loose clutter, placed at random around the
 // robot (never on its base), each built from shape_msgs-like boxes, cylinders and spheres. What
 // the planning benchmark (bench/bench_planning.cpp) and the planning fast-path tests use; each
-// scene is a SceneFile (checker/scene_file.h), written as MoveIt `.scene` text so that other
+// scene is a SceneFile (io/scene_file.h), written as MoveIt `.scene` text so that other
 // tools can read the same problems.
 #pragma once
 
@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/io/scene_file.h"
 
 namespace bvh_collision::test {
 
 // A generated scene: its objects' shapes posed in the world (each object at the identity), as
-// MoveIt keeps them; checker/scene_file.h writes it as `.scene` text.
+// MoveIt keeps them; io/scene_file.h writes it as `.scene` text.
 using PlanningScene = SceneFile;
 
 namespace scene_detail {

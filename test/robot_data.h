@@ -1,4 +1,4 @@
-// Where tests find the real robots of ../shared/robots (DESIGN.md section 6).
+// Where tests find the real robots of ../shared/robots (docs/design.md).
 // BVH_COLLISION_ROBOTS overrides the default folder beside the repository. When the folder is
 // missing a test is skipped with a message, except under CI=true, where that is a failure.
 #pragma once

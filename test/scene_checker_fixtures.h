@@ -2,7 +2,7 @@
 // proxy levels, and the exact oracles of a state.
 #pragma once
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "checker_fixtures.h"
 
 namespace bvh_collision::scene_test {

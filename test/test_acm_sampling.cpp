@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "bvh_collision/checker/acm_sampling.h"
+#include "bvh_collision/query/acm_sampling.h"
 #include "bvh_collision/robot/robot_description.h"
 
 namespace bvh_collision {

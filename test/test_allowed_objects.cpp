@@ -1,4 +1,4 @@
-// Allowed collisions with objects (checker/named_allowed_collisions.h), MoveIt's semantics,
+// Allowed collisions with objects (world/named_allowed_collisions.h), MoveIt's semantics,
 // against a brute-force oracle: a link allowed to touch some objects is checked, alone, against
 // an environment without them. Every query that meets objects is held to it: check_environment
 // (boolean, contacts, distance), SceneChecker's states and certified motions.
@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <random>
 
-#include "bvh_collision/checker/allowed_contacts.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/allowed_contacts.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "checker_fixtures.h"
 #include "planning_scenes.h"
 #include "robot_data.h"

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"
 #include "planning_scenes.h"

@@ -1,7 +1,7 @@
 // The report generator on small inputs, so that `make bench`'s report cannot silently rot: every
 // benchmark with --quick, the service benchmark on a private master, then scripts/bench_report.py.
 // The report must have its eight sections and every plot it links; and the generator must refuse
-// figures that break DESIGN.md section 2 (a false negative, a distance beyond its allowed error, a
+// figures that break docs/design.md (a false negative, a distance beyond its allowed error, a
 // restriction of the checked pairs that changes an answer).
 #include <gtest/gtest.h>
 

@@ -10,7 +10,7 @@
 
 #include <sstream>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"

@@ -10,7 +10,7 @@
 #include <random>
 #include <set>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/narrowphase/shape_pairs.h"
 #include "bvh_collision/octree/scan.h"
@@ -171,7 +171,7 @@ TEST(MeshAgainstOctree, SolidsInsideEachOther) {
 }
 
 // The tolerance's early exit may answer "collision" for a volume near a cube, but never beyond
-// padding + tolerance (DESIGN.md section 2). Boxes (few triangles, flat leaf volumes) turned so
+// padding + tolerance (docs/design.md). Boxes (few triangles, flat leaf volumes) turned so
 // that an edge faces a voxel's edge are separated only along the cross product of the two edges:
 // a test of the boxes' face axes alone sees them overlap however far apart they are.
 TEST(MeshAgainstOctree, ToleranceNeverReportsBeyondPaddingPlusTolerance) {

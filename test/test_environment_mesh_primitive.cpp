@@ -9,7 +9,7 @@
 #include <random>
 #include <set>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/narrowphase/shape_pairs.h"
 #include "bvh_collision/octree/scan.h"
@@ -87,7 +87,7 @@ TEST(MeshAgainstPrimitive, ADentedMeshAgainstABoxIsExact) {
 }
 
 // The boolean of a mesh against a box and against another mesh, near contact (within a few
-// centimetres, where the tree walk goes down to triangles): the answer of DESIGN.md section 2
+// centimetres, where the tree walk goes down to triangles): the answer of docs/design.md
 // against CGAL's distances (a hit within the padding, none beyond padding and tolerance), and no
 // tree walked at all where the convex hulls are proven farther apart than padding and tolerance
 // (the mesh lies in its hull); a mesh pair answers as the BVH walk alone. Contacts asked for walk.

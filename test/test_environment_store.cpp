@@ -12,8 +12,8 @@
 #include <string>
 #include <thread>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/environment_store.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/world/environment_store.h"
 #include "bvh_collision/octree/scan.h"
 #include "checker_fixtures.h"
 #include "robot_data.h"

@@ -1,4 +1,4 @@
-// URDF cylinders are exact shapes (DESIGN.md section 2: tolerance 0 is exact for primitives too).
+// URDF cylinders are exact shapes (docs/design.md: tolerance 0 is exact for primitives too).
 // Two cylinder links on a prismatic joint are placed at known gaps, with dyadic sizes so that the
 // gap 0 is exactly touching in doubles: the answers must be exact (touching collides; 1e-12 m
 // apart is free) and the distance must be the gap. A circumscribing prism answers "collision"
@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 
 namespace bvh_collision {

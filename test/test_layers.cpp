@@ -1,6 +1,6 @@
-// The architecture of DESIGN.md section 1, checked on the sources: every file belongs to one
-// layer, lower layers never include higher ones, the core includes no ROS header (and OctoMap only
-// in octomap_bridge), and the built core library links no ROS library.
+// The architecture of docs/design.md, checked on the sources: every file belongs to one layer,
+// lower layers never include higher ones, the library includes no ROS header (and OctoMap only
+// in octomap_bridge), and the built libraries link no ROS library.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -19,19 +19,29 @@ namespace {
 namespace fs = std::filesystem;
 const std::string kSource = BVH_COLLISION_SOURCE_DIR;
 
-// Which project layers each folder may include (its own included).
+// Which project layers each folder may include (its own included): the parts along the data flow
+// of docs/design.md, each a library of its own.
+const std::set<std::string> kBelowWorld = {"geometry", "bvh", "octree", "narrowphase"};
+std::set<std::string> with(std::set<std::string> layers, std::initializer_list<std::string> more) {
+  layers.insert(more);
+  return layers;
+}
 const std::map<std::string, std::set<std::string>> kAllowed = {
     {"geometry", {"geometry"}},
     {"bvh", {"geometry", "bvh"}},
     {"octree", {"geometry", "octree"}},
     {"robot", {"geometry", "bvh", "robot"}},
     {"narrowphase", {"geometry", "bvh", "octree", "narrowphase"}},
-    {"checker", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker"}},
-    {"planning", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning"}},
-    {"ros", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning", "ros"}},
-    {"nodes", {"geometry", "bvh", "octree", "robot", "narrowphase", "checker", "planning", "ros"}},
+    {"world", with(kBelowWorld, {"world"})},
+    {"model", with(kBelowWorld, {"robot", "world", "model"})},
+    {"query", with(kBelowWorld, {"robot", "world", "model", "query"})},
+    {"io", with(kBelowWorld, {"world", "io"})},
+    {"planning", with(kBelowWorld, {"robot", "world", "model", "query", "planning"})},
+    {"ros", with(kBelowWorld, {"robot", "world", "model", "query", "io", "planning", "ros"})},
+    {"nodes", with(kBelowWorld, {"robot", "world", "model", "query", "io", "planning", "ros"})},
 };
-const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "narrowphase", "checker"};
+// The ROS-free library (everything below planning and ros).
+const std::set<std::string> kCore = {"geometry", "bvh", "octree", "robot", "narrowphase", "world", "model", "query", "io"};
 
 struct Include {
   std::string file;
@@ -133,7 +143,7 @@ TEST(Layers, CoreIncludesNoRosHeaderAndOctomapOnlyInTheBridge) {
 // One dispatch over the kinds of collidable things, in narrowphase/: above it no code tests what
 // kind a shape is (a primitive's kind, a mesh index or pointer), it hands the shape to the engine.
 // The one exception is where the world model turns a described object (ObjectShape) into the
-// engine's geometry: checker/environment.h and .cpp; and checker/scene_file.cpp and
+// engine's geometry: world/environment.h and .cpp; and io/scene_file.cpp and
 // scene_yaml_write.cpp, which write a described object as MoveIt's .scene text or YAML, may read
 // the description's kind (and nothing more).
 std::vector<std::string> kind_tests_in(const fs::path& file) {
@@ -160,7 +170,7 @@ TEST(Layers, NoShapeKindTestAboveTheNarrowphase) {
   const auto layers = files_by_layer();
   ASSERT_TRUE(layers.count("narrowphase")) << "no narrowphase layer";
   std::size_t scanned = 0;
-  for (const std::string layer : {"checker", "planning", "ros", "nodes"}) {
+  for (const std::string layer : {"world", "model", "query", "io", "planning", "ros", "nodes"}) {
     if (!layers.count(layer)) continue;
     for (const auto& file : layers.at(layer)) {
       ++scanned;
@@ -221,21 +231,26 @@ TEST(Layers, IncludeCheckRecognisesRosHeaders) {
   EXPECT_FALSE(is_ros_header("Eigen/Core"));
 }
 
-TEST(Layers, CoreLibraryLinksNoRosLibrary) {
-  const std::string lib = BVH_COLLISION_CORE_LIBRARY;
-  ASSERT_TRUE(fs::exists(lib)) << lib;
-  FILE* pipe = popen(("ldd '" + lib + "' 2>&1").c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  std::array<char, 512> buf{};
-  while (fgets(buf.data(), buf.size(), pipe) != nullptr) output += buf.data();
-  ASSERT_EQ(pclose(pipe), 0) << output;
-  EXPECT_NE(output.find("liburdfdom_model"), std::string::npos) << "ldd output unexpected:\n" << output;
-  static const std::regex ros_lib(
-      R"(lib(roscpp|rosconsole|rostime|cpp_common|xmlrpcpp|tf2|tf2_ros|message_filters|roslib)[._])");
-  EXPECT_FALSE(std::regex_search(output, ros_lib)) << "core links ROS:\n" << output;
+// Each of the library's parts, built: it links no ROS library (and the core links urdfdom).
+TEST(Layers, TheLibrariesLinkNoRosLibrary) {
+  std::istringstream list(BVH_COLLISION_LIBRARIES);
+  std::size_t checked = 0;
+  for (std::string lib; std::getline(list, lib, ':');) {
+    ASSERT_TRUE(fs::exists(lib)) << lib;
+    FILE* pipe = popen(("ldd '" + lib + "' 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string output;
+    std::array<char, 512> buf{};
+    while (fgets(buf.data(), buf.size(), pipe) != nullptr) output += buf.data();
+    ASSERT_EQ(pclose(pipe), 0) << output;
+    EXPECT_NE(output.find("liburdfdom_model"), std::string::npos) << "ldd output unexpected:\n" << output;
+    static const std::regex ros_lib(
+        R"(lib(roscpp|rosconsole|rostime|cpp_common|xmlrpcpp|tf2|tf2_ros|message_filters|roslib)[._])");
+    EXPECT_FALSE(std::regex_search(output, ros_lib)) << lib << " links ROS:\n" << output;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 5u);
 }
-
 
 // make demo builds the `all` target only (make build-node): the node, its libraries and the
 // demo's programs. Tests and benchmarks build under make test and make bench (a fresh machine's

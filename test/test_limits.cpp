@@ -8,7 +8,7 @@
 #include <iostream>
 #include <random>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"

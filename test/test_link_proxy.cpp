@@ -21,7 +21,7 @@
 #include "bvh_collision/narrowphase/link_proxy_cache.h"
 #include "bvh_collision/narrowphase/proxy_octree.h"
 #include "bvh_collision/octree/scan.h"
-#include "bvh_collision/checker/robot_collision_model.h"
+#include "bvh_collision/model/robot_collision_model.h"
 #include "bvh_collision/geometry/distance.h"
 #include "checker_fixtures.h"
 #include "mesh_fixtures.h"
@@ -197,7 +197,7 @@ TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
   EXPECT_LT(overlaps, test::sized(400));
 }
 
-// The self check through the proxies keeps DESIGN.md's contract against the exact check, on
+// The self check through the proxies keeps docs/design.md's contract against the exact check, on
 // panda's uniform random states and on the near-contact ones among them (exact distance under
 // 4 cm): no false negative, and every collision it reports is within padding + tolerance.
 TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {

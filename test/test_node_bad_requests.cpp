@@ -1,4 +1,4 @@
-// Launch test: every kind of bad input of DESIGN.md section 4 gets an error that names what is
+// Launch test: every kind of bad input of docs/design.md gets an error that names what is
 // wrong, changes nothing, and leaves the node serving: unknown joints, wrong array lengths, NaN
 // and Inf, values outside joint limits (answered, with a warning), unknown frames, bad shapes,
 // unwritable octree paths, malformed clouds and clouds whose transform never comes, a robot

@@ -196,7 +196,7 @@ TEST_F(NodeEnvironment, CertifiedMotionFindsAThinObstacleThatACoarseStepMisses) 
   EXPECT_FALSE(certified.valid) << "the certified check missed the plate";
   EXPECT_GT(certified.last_valid_fraction, 0.2);
   EXPECT_LT(certified.last_valid_fraction, 0.5) << "the plate is at joint1 = 0, fraction 0.47";
-  // The node certifies through a SceneChecker (checker/scene_checker.h), which finds the first
+  // The node certifies through a SceneChecker (query/scene_checker.h), which finds the first
   // collision to a thousandth of the motion; the library's general check_motion steps up to it.
   const MotionResult lib = checker().check_motion(start.data(), goal.data(), env, MotionRequest{});
   EXPECT_NEAR(certified.last_valid_fraction, lib.last_valid_fraction, 1e-3);

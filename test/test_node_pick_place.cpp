@@ -27,7 +27,7 @@
 #include "bvh_collision/SaveOctree.h"
 #include "bvh_collision/SetAllowedCollisions.h"
 #include "bvh_collision/SetCollisionObject.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/ros/conversions.h"
 #include "bvh_collision/ros/service_validity.h"

@@ -80,7 +80,7 @@ TEST_F(NodeQueries, FreeAndSelfCollidingConfigurations) {
   for (const Contact& c : b.contacts) EXPECT_GE(c.depth, 0.0);
 }
 
-// DESIGN.md section 2 through the service, whatever serves the tolerance (the link proxies when
+// docs/design.md through the service, whatever serves the tolerance (the link proxies when
 // the .test file builds them): collision whenever the exact distance is 0, free beyond it.
 TEST_F(NodeQueries, TolerantAnswersKeepTheContract) {
   std::mt19937_64 rng(17);

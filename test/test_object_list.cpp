@@ -1,4 +1,4 @@
-// The world's object list and its persistent containers (checker/object_list.h,
+// The world's object list and its persistent containers (world/object_list.h,
 // persistent_vector.h, persistent_map.h): random changes against std::vector and
 // std::unordered_map, every snapshot taken along the way unchanged afterwards, box queries
 // against brute force, and the work of one change bounded by counts (nodes and entries copied)
@@ -12,10 +12,10 @@
 #include <unordered_map>
 #include <vector>
 
-#include "bvh_collision/checker/environment.h"
-#include "bvh_collision/checker/object_list.h"
-#include "bvh_collision/checker/persistent_map.h"
-#include "bvh_collision/checker/persistent_vector.h"
+#include "bvh_collision/world/environment.h"
+#include "bvh_collision/world/object_list.h"
+#include "bvh_collision/world/persistent_map.h"
+#include "bvh_collision/world/persistent_vector.h"
 #include "robot_data.h"
 
 namespace bvh_collision {

@@ -1,4 +1,4 @@
-// Proven clearance grids of the self pairs one or two variables move (checker/pair_clearance.h),
+// Proven clearance grids of the self pairs one or two variables move (model/pair_clearance.h),
 // checked against the exact routines: in random states, near-contact states, states on cell
 // edges and continuous joints beyond one turn, no grid's bound exceeds the pair's exact distance
 // (solids), and a pair the grid skips is free by the exact boolean check of that pair alone;
@@ -9,7 +9,7 @@
 #include <limits>
 #include <random>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/narrowphase/shape_pairs.h"
 #include "checker_fixtures.h"
 #include "robot_data.h"

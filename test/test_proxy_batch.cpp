@@ -1,4 +1,4 @@
-// The vectorised batch of proxy self checks (checker/proxy_batch.h) against independent oracles:
+// The vectorised batch of proxy self checks (model/proxy_batch.h) against independent oracles:
 // its sine and cosine against the C library, its forward kinematics against KinematicsPlan on
 // every joint kind, and its answers against the one-state proxy check (the same decision, state
 // by state), the exact check (no false negative; every collision within padding + level) and
@@ -10,7 +10,7 @@
 #include <limits>
 #include <random>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/sin_cos.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"

@@ -3,7 +3,7 @@
 // first query cannot rot.
 #include <gtest/gtest.h>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"

@@ -1,4 +1,4 @@
-// SceneChecker (checker/scene_checker.h), the planner-facing path, against the checker's own
+// SceneChecker (query/scene_checker.h), the planner-facing path, against the checker's own
 // general queries as the oracle: one state at tolerance 0 answers exactly as check_self +
 // check_environment; at a tolerance every answer keeps the contract by exact distances; a
 // motion asked again, or within one found free, is answered from the thread's memory for its
@@ -17,8 +17,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "bvh_collision/checker/object_grid.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/world/object_grid.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"
 #include "mesh_fixtures.h"

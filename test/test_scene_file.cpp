@@ -1,4 +1,4 @@
-// MoveIt `.scene` files in and out (checker/scene_file.h): MoveIt's two formats read as MoveIt
+// MoveIt `.scene` files in and out (io/scene_file.h): MoveIt's two formats read as MoveIt
 // reads them, a round trip to the same doubles and the same text, the same answers as the same
 // objects added one by one, and every malformed input refused by file, line and field.
 #include <gtest/gtest.h>
@@ -7,8 +7,8 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "checker_fixtures.h"
 #include "planning_scenes.h"
 

@@ -1,4 +1,4 @@
-// SceneChecker's certified motions (checker/scene_checker.h) against the checker's own general
+// SceneChecker's certified motions (query/scene_checker.h) against the checker's own general
 // queries as the oracle: the interval growth holds every vertex of every link over sampled motion
 // (a self pair's in the frame of its common ancestor); a motion answered free is free at every
 // state of a dense sweep, and one answered colliding collides (at the tolerance) where it says; a
@@ -16,8 +16,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "bvh_collision/checker/object_grid.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/world/object_grid.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "checker_fixtures.h"
 #include "mesh_fixtures.h"

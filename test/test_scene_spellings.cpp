@@ -1,4 +1,4 @@
-// Scenes as MoveIt users have them (checker/scene_file.h): the benchmark spelling of
+// Scenes as MoveIt users have them (io/scene_file.h): the benchmark spelling of
 // PlanningScene YAML beside the `rostopic echo` one and `.scene` text, a generated corpus that
 // must answer alike in all of them and as the same objects set one by one, MoveIt's rules for
 // operations, duplicate ids and attached objects, and ids with control characters refused.
@@ -9,8 +9,8 @@
 #include <random>
 #include <sstream>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "checker_fixtures.h"
 
 namespace bvh_collision {

@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "fcl_oracle.h"
 #include "robot_data.h"
@@ -263,7 +263,7 @@ TEST_P(SelfCollision, DistanceToleranceBoundsTheError) {
       const SelfCollisionResult r = f.checker->check_self(s.data(), loose);
       ASSERT_GE(r.min_distance, truth.min_distance) << "state " << i << " tolerance " << tolerance;
       ASSERT_LE(r.min_distance, truth.min_distance + tolerance) << "state " << i << " tolerance " << tolerance;
-      // The collision answer follows DESIGN.md section 2: never a miss, "collision" only within the tolerance.
+      // The collision answer follows docs/design.md: never a miss, "collision" only within the tolerance.
       if (truth.collision) {
         ASSERT_TRUE(r.collision) << i;
       }
@@ -368,7 +368,7 @@ INSTANTIATE_TEST_SUITE_P(Robots, SelfCollision,
                          ::testing::Values("panda", "ur5e", "pr2", "abb_irb2400", "solo", "panda_capsules", "demo"));
 
 // The demo robot folded onto itself: the reported pair is the one that meets; padding and
-// tolerance behave as DESIGN.md section 2 says.
+// tolerance behave as docs/design.md says.
 TEST(SelfCollisionDemo, FoldedArmReportsTheRightPairAndPaddingWorks) {
   const std::string urdf_path = test::source_dir() + "/urdf/demo_arm.urdf";
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(urdf_path), PackageResolver({}));

@@ -10,8 +10,8 @@
 #include <map>
 #include <random>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/object_filter.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/world/object_filter.h"
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
 #include "bvh_collision/robot/robot_description.h"

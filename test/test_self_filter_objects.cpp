@@ -1,4 +1,4 @@
-// Known objects are not voxels (checker/object_filter.h): the filter against brute force (each
+// Known objects are not voxels (world/object_filter.h): the filter against brute force (each
 // object's distance and ray entry written out here by hand: a box's slabs, a sphere's quadratic,
 // a cylinder's disc times interval, a mesh's triangles), the carried objects' own padding, and its
 // purpose: a box moved across a table under a camera leaves no voxel behind. One binary with
@@ -11,8 +11,8 @@
 #include <map>
 #include <random>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/object_filter.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/world/object_filter.h"
 #include "bvh_collision/geometry/distance.h"
 #include "bvh_collision/geometry/intersection.h"
 #include "bvh_collision/robot/robot_description.h"

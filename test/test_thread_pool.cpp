@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "bvh_collision/checker/collision_checker.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"

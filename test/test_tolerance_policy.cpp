@@ -1,6 +1,6 @@
 // The tolerance policy (narrowphase/tolerance_policy.h): the table of which method may answer,
 // for every kind of counterpart and tolerance class, and on a robot that the level it picks keeps
-// DESIGN.md section 2's contract (collision whenever d <= padding, free whenever d > padding + eps)
+// docs/design.md's contract (collision whenever d <= padding, free whenever d > padding + eps)
 // for every kind pair: link x link, link x object, link x octree.
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <tuple>
 #include <vector>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
 #include "bvh_collision/octree/scan.h"
 #include "checker_fixtures.h"

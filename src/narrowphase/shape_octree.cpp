@@ -293,7 +293,7 @@ bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree
   WorldVolumes& world = WorldVolumes::for_query(mesh, pose);
   bool hit = false;
   depth_first_pair_walk(
-      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh}, *root, std::int32_t{0},
+      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh, LeftFirst{}}, *root, std::int32_t{0},
       [&](const Cube& cube, std::int32_t node) {
         const BvhNode<Obb>& n = nodes[node];
         const double half = 0.5 * tree.cube_size(cube.depth);
@@ -358,7 +358,7 @@ OctreeDistance mesh_octree_distance(const Bvh<Obb>& mesh, const Transform& pose,
   const RelativeFrame same;  // cubes are already carried into the link frame
   double bound = upper_bound;
   nearest_first_pair_walk(
-      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh}, *root, std::int32_t{0}, 0.0,
+      OccupiedCubeView<>{tree, {}}, BvhView<Obb>{mesh, LeftFirst{}}, *root, std::int32_t{0}, 0.0,
       [&](const Cube& c, std::int32_t node) {
         ++s.volume_tests;
         return distance_lower_bound(nodes[node].volume, frame.box(c), same);

@@ -10,9 +10,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "bvh_collision/checker/acm_sampling.h"
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/acm_sampling.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/robot/link_solidity.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/robot/urdf_validation.h"

@@ -10,7 +10,7 @@
 // clamped into their limits. Output: `INDEX free` or `INDEX collision A:B,C:D` (0-based index,
 // names sorted within and across pairs), followed with --distance by ` distance=D pair=A:B`.
 // --scene FILE (MoveIt .scene text, or PlanningScene YAML when it ends in .yaml or .yml;
-// checker/scene_file.h) also checks each configuration against the scene's objects: a link
+// io/scene_file.h) also checks each configuration against the scene's objects: a link
 // touching one adds `LINK:OBJECT` to the pairs (an object of several shapes as `id#k`), and the
 // distance is the nearest of either kind. A YAML scene's robot state sets the joints the states
 // file leaves out; its allowed-collision entries that name an object are applied, those for two

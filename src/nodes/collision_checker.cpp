@@ -1,4 +1,4 @@
-// The collision_checker node (DESIGN.md section 4).
+// The collision_checker node (docs/design.md).
 #include <ros/ros.h>
 
 #include "bvh_collision/ros/collision_checker_node.h"

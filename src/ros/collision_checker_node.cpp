@@ -9,7 +9,7 @@
 #include <ros/console.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/robot/link_solidity.h"
 

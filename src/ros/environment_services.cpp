@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <map>
 
-#include "bvh_collision/checker/object_filter.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/world/object_filter.h"
+#include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/ros/collision_checker_node.h"
 
@@ -15,7 +15,7 @@ namespace bvh_collision {
 
 namespace {
 
-// Beyond the robot's reach, by this much, obstacles are ignored (DESIGN.md section 4).
+// Beyond the robot's reach, by this much, obstacles are ignored (docs/design.md).
 constexpr double kWorkspaceMargin = 0.5;
 
 // Removes object `id`, or every shape "id#k" of an object of several; false when there was none.

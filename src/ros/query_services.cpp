@@ -2,7 +2,7 @@
 #include <cmath>
 #include <limits>
 
-#include "bvh_collision/checker/allowed_contacts.h"
+#include "bvh_collision/query/allowed_contacts.h"
 #include "bvh_collision/ros/collision_checker_node.h"
 
 namespace bvh_collision {

@@ -15,8 +15,8 @@
 
 #include "bvh_collision/bvh/bounding_volumes.h"
 #include "bvh_collision/bvh/bvh.h"
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/mesh_loader.h"

@@ -1,4 +1,4 @@
-// The loader's fuzz targets (DESIGN.md "Bad input"): a robot description (URDF text, meshes from
+// The loader's fuzz targets (docs/design.md "Bad input"): a robot description (URDF text, meshes from
 // a fixed package), one mesh file, an SRDF. Each returns what went wrong, or an empty string when
 // the input was either refused by name or loaded into something valid. libFuzzer's entry points
 // (fuzz_target.cpp) abort on a non-empty answer; test_fuzz_replay runs every corpus file

@@ -1,5 +1,5 @@
 // Queries on BVHs: collision and distance between two meshes under poses, ray casting, and point
-// containment for closed meshes. Semantics follow DESIGN.md section 2:
+// containment for closed meshes. Semantics follow docs/design.md:
 //  - touching is collision; with padding p a pair collides when its distance d <= p;
 //  - tolerance eps: collision is reported whenever d <= p and may be reported when d <= p + eps
 //    (never a false negative); eps = 0 is exact;

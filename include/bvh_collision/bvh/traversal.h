@@ -78,7 +78,7 @@ template <class BV, class BoundFn, class LeafFn, class CutoffFn>
 void nearest_first(const Bvh<BV>& bvh, BoundFn&& bound, LeafFn&& leaf, CutoffFn&& cutoff) {
   if (bvh.empty()) return;
   const auto& nodes = bvh.nodes();
-  nearest_first_walk(BvhView<BV>{bvh}, 0, bound, [&](std::int32_t i) { return leaf(nodes[i]); }, cutoff);
+  nearest_first_walk(BvhView<BV>{bvh, LeftFirst{}}, 0, bound, [&](std::int32_t i) { return leaf(nodes[i]); }, cutoff);
 }
 
 // Depth first over the pairs of two hierarchies from their roots. `visit(ia, ib)` decides for
@@ -91,7 +91,7 @@ void depth_first_pair(const Bvh<BV>& a, const Bvh<BV>& b, VisitFn&& visit, LeafF
   const auto& nodes_a = a.nodes();
   const auto& nodes_b = b.nodes();
   depth_first_pair_walk(
-      BvhView<BV>{a}, BvhView<BV>{b}, 0, 0, visit,
+      BvhView<BV>{a, LeftFirst{}}, BvhView<BV>{b, LeftFirst{}}, 0, 0, visit,
       [&](std::int32_t ia, std::int32_t ib) { return leaf(nodes_a[ia], nodes_b[ib]); },
       [&](std::int32_t ia, std::int32_t ib, auto&& push) {
         const BvhNode<BV>& na = nodes_a[ia];

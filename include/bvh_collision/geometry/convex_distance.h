@@ -48,7 +48,7 @@ double extent(const ConvexShape& s);
 ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a,
                                double decide_at = std::numeric_limits<double>::quiet_NaN(), double slack = 0.0);
 
-// The collision decision of DESIGN.md section 2 for two convex sets with padding: true when the
+// The collision decision of docs/design.md for two convex sets with padding: true when the
 // distance may be at most `padding` (the certified lower bound does not exceed it).
 inline bool convex_within(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double padding) {
   return convex_distance(a, b, b_in_a, padding).lower_bound <= padding;

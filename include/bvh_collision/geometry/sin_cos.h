@@ -1,6 +1,6 @@
 // Sine and cosine of one angle together, for forward kinematics: the C library's sincos costs
 // about 190 instructions a call and is a third of a panda pose; this one is about 60, with no
-// call and no branch but the quadrant's, and the batch kernel (checker/proxy_batch_kernel.h)
+// call and no branch but the quadrant's, and the batch kernel (model/proxy_batch_kernel.h)
 // evaluates the same constants and the same operations in its lanes, so both give the same bits.
 //
 // x = k pi/2 + r with k = round(2x/pi) and |r| <= pi/4 (+ rounding); pi/2 in three parts: hi (26

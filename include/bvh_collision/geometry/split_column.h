@@ -3,7 +3,7 @@
 // products as calls and keeps loops over three rows, at twice the instructions. Lane arithmetic
 // rounds as scalar arithmetic does and the sums keep one order (row r: a(r,0) b0 + a(r,1) b1 +
 // a(r,2) b2), so the results are the scalar products bit for bit (and the batch kernel's,
-// checker/proxy_batch_kernel.h).
+// model/proxy_batch_kernel.h).
 #pragma once
 
 #include <cstring>

@@ -1,4 +1,4 @@
-// Bounded-error sphere proxies of a link (DESIGN.md section 2, the tolerance): a tree of spheres
+// Bounded-error sphere proxies of a link (docs/design.md, the tolerance): a tree of spheres
 // built once per link and per proxy level e, such that
 //   (a) the leaf spheres together contain the link's geometry, solids included, and
 //   (b) every point of every leaf sphere lies within e/2 of the link (one-sided Hausdorff bound).

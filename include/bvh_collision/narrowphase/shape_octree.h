@@ -3,7 +3,7 @@
 // mesh: the BVH and the octree descended together, cube against volume, then cube against
 // triangle, exactly; a primitive: certified convex distance against each nearby cube; a sphere:
 // the octree's own sphere query and nearest-cube search). Semantics of
-// DESIGN.md section 2: touching is collision, padding p, tolerance eps, and solids: a link inside
+// docs/design.md: touching is collision, padding p, tolerance eps, and solids: a link inside
 // occupied space, or an occupied cube inside a closed link, is in collision (distance 0).
 #pragma once
 

@@ -12,7 +12,7 @@ namespace bvh_collision {
 
 struct PairRequest {
   double padding = 0.0;          // the pair collides when its distance is at most this
-  double tolerance = 0.0;        // DESIGN.md section 2
+  double tolerance = 0.0;        // docs/design.md
   std::size_t max_contacts = 0;  // contacts wanted (0: a boolean answer)
   bool solids = true;            // closed meshes bound solids
 };

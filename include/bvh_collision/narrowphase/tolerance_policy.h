@@ -1,5 +1,5 @@
 // The tolerance policy, in one place: which method may answer a component of a query (a link
-// against another link, an object or the octree) at tolerance eps, by DESIGN.md section 2: report
+// against another link, an object or the octree) at tolerance eps, by docs/design.md: report
 // collision whenever d <= padding, free whenever d > padding + eps, and "a tolerance may be
 // served by a coarser model of a link (a proxy) only when that model's error is proven at build
 // time to be within the tolerance".
@@ -7,7 +7,7 @@
 // The methods and their error:
 // - exact (shape_pairs.h, shape_octree.h): none; a distance query at eps may stop within eps
 //   above the true distance, a BVH x octree walk may settle a cube within eps (its slack).
-// - clearance grids (checker/pair_clearance.h) and the octree's distance field
+// - clearance grids (model/pair_clearance.h) and the octree's distance field
 //   (octree/distance_field.h): proven lower bounds, so they only ever prove "free": used at every
 //   tolerance, eps = 0 included.
 // - a proxy level e (link_proxy.h): its leaf spheres hold the link and lie within e/2 of it. So
@@ -19,7 +19,7 @@
 //   solids (the proxies cover a closed mesh's solid; without solids a link inside another is
 //   free, which they cannot tell), and against the octree only with its distance field (the
 //   proxies' leaf test reads the field's occupancy grid).
-// - a certified motion (checker/scene_checker.h, motion_check.cpp) grows each interval's proxies
+// - a certified motion (query/scene_checker.h, motion_check.cpp) grows each interval's proxies
 //   by how far the links move in it; an interval that still fails counts as colliding once growth
 //   and proxy error fit eps. So it prefers the coarsest level up to eps / 2 (the other half is the
 //   room the growth needs, which keeps the intervals near a contact long), else up to eps.

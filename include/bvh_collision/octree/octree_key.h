@@ -1,4 +1,4 @@
-// Keys and node indices of the environment octree (DESIGN.md section 3).
+// Keys and node indices of the environment octree (docs/design.md).
 //
 // Discretisation is OctoMap's, so that voxels agree bit for bit: depth 16, and along each axis
 // key = floor(coordinate * (1 / resolution)) + 32768, computed exactly as OctoMap computes it

@@ -23,8 +23,8 @@
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/scene_checker.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 
 namespace bvh_collision::planning {
 
@@ -99,7 +99,7 @@ struct CheckerPlanningContext {
   JointGroup group;
   std::vector<double> base_state;  // every variable of the model (variable_names() order)
   bool self = true, obstacles = true;
-  // DESIGN.md section 2. A free answer is free at any tolerance (every distance exceeds its
+  // docs/design.md. A free answer is free at any tolerance (every distance exceeds its
   // padding); the tolerance only lets a state or motion within it of a collision count as
   // colliding, which lets the proxy levels answer: 1 cm by default (with levels of 5 mm or
   // coarser built: CheckerOptions::proxy_levels); 0 asks for exact answers.
@@ -114,7 +114,7 @@ struct CheckerPlanningContext {
   std::vector<double> full_state(const ompl::base::State* state) const;
   // The same into `full` (resized): no allocation once it has the size.
   void full_state(const ompl::base::State* state, std::vector<double>& full) const;
-  // The checker the validators ask (checker/scene_checker.h), built on first use from the
+  // The checker the validators ask (query/scene_checker.h), built on first use from the
   // fields above as they are then (set them before planning); shared by both validators.
   const SceneChecker& scene() const;
 

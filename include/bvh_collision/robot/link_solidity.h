@@ -1,4 +1,4 @@
-// Which links bound solids and which mesh elements do not, and why (DESIGN.md section 2: a
+// Which links bound solids and which mesh elements do not, and why (docs/design.md: a
 // closed mesh is a solid, so a link inside it collides). A user whose "solid" link lets a
 // gripper pass inside it needs to know that its mesh has a hole, and where.
 #pragma once

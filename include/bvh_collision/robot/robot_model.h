@@ -78,7 +78,7 @@ class RobotModel {
 
   // This model with one more link, `name`, hung from link `parent` at `origin` (in the parent's
   // frame) by a fixed joint named "<name>/attached": what an object the robot carries becomes
-  // (checker/environment.h, AttachedBody). The link has no collision elements here (its shapes
+  // (world/environment.h, AttachedBody). The link has no collision elements here (its shapes
   // are the collision model's); the state vector is unchanged. Throws std::invalid_argument for
   // a name a link or joint already has, or a parent that is not a link.
   RobotModel with_fixed_link(const std::string& name, int parent, const Transform& origin) const;
@@ -137,7 +137,7 @@ class KinematicsPlan {
     int joint = -1;              // for floating and planar joints
   };
   // The steps in order (a parent before its children), for code that computes the same poses
-  // another way (checker/proxy_batch.h); the root link is at identity.
+  // another way (model/proxy_batch.h); the root link is at identity.
   const std::vector<Step>& step_list() const { return steps_; }
   int root() const { return root_; }
   std::size_t link_count() const { return links_; }

@@ -1,4 +1,4 @@
-// The collision_checker node (DESIGN.md section 4): the checker's queries as ROS services, the
+// The collision_checker node (docs/design.md): the checker's queries as ROS services, the
 // obstacle octree fed by point clouds through tf2, markers and diagnostics.
 //
 // Threads: services, joint_states and timers run on the global callback queue, served by a
@@ -36,8 +36,8 @@
 
 #include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
-#include "bvh_collision/checker/scene_checker.h"
-#include "bvh_collision/checker/scene_file.h"
+#include "bvh_collision/query/scene_checker.h"
+#include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckMotions.h"
@@ -51,8 +51,8 @@
 #include "bvh_collision/SaveScene.h"
 #include "bvh_collision/SetAllowedCollisions.h"
 #include "bvh_collision/SetCollisionObject.h"
-#include "bvh_collision/checker/collision_checker.h"
-#include "bvh_collision/checker/environment_store.h"
+#include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/world/environment_store.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/robot/joint_state_history.h"
 #include "bvh_collision/robot/robot_description.h"
@@ -66,7 +66,7 @@ class NodeStartupError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The node's private parameters (DESIGN.md section 4, and the node's own below the line).
+// The node's private parameters (docs/design.md, and the node's own below the line).
 struct NodeParameters {
   std::string world_frame;  // empty until resolved: then the URDF root link
   double resolution = 0.02;
@@ -92,7 +92,7 @@ struct NodeParameters {
   double max_range = 5.0;
   double self_filter_padding = 0.02;
   // Points on or within this of a collision object or a carried object are not voxels either
-  // (checker/object_filter.h): a known object is not counted twice. Unset: self_filter_padding.
+  // (world/object_filter.h): a known object is not counted twice. Unset: self_filter_padding.
   std::optional<double> object_padding;
   // Rays with no return (a depth image's NaN pixels) clear along their pixel's ray up to max_range,
   // and rays that end past the workspace or max_range clear inside it instead of being dropped
@@ -206,7 +206,7 @@ class CollisionCheckerNode {
   bool check_states(CheckStates::Request& req, CheckStates::Response& res);
   bool check_motion(CheckMotion::Request& req, CheckMotion::Response& res);
   bool check_motions(CheckMotions::Request& req, CheckMotions::Response& res);
-  // The checker certified motions go through (checker/scene_checker.h) for this snapshot, these
+  // The checker certified motions go through (query/scene_checker.h) for this snapshot, these
   // checks and this root pose: the one kept since the last such request when nothing changed.
   std::shared_ptr<const SceneChecker> scene_checker(const std::shared_ptr<const Environment>& env, bool self,
                                                     bool environment, const Transform& root) const;

@@ -1,5 +1,5 @@
 // Conversions between ROS messages and the checker's plain types, with the validation that
-// DESIGN.md section 4 asks of every request: a malformed message gives a message that names what
+// docs/design.md asks of every request: a malformed message gives a message that names what
 // is wrong, never a crash and never a silently wrong answer.
 #pragma once
 
@@ -14,7 +14,7 @@
 #include <shape_msgs/SolidPrimitive.h>
 
 #include "bvh_collision/SetCollisionObject.h"
-#include "bvh_collision/checker/environment.h"
+#include "bvh_collision/world/environment.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_model.h"

@@ -1,0 +1,71 @@
+// What is built from a RobotCollisionModel to answer faster, held beside it (CollisionChecker
+// keeps both): the proxy levels (narrowphase/link_proxy.h, each with its flat copy for the SIMD
+// batch kernel) and the self pairs' clearance grids (model/pair_clearance.h). The model is what
+// every query reads and what these are built from; it does not know them. Adding a proxy level
+// copies these, not the model's meshes.
+#pragma once
+
+#include <atomic>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bvh_collision/model/pair_clearance.h"
+#include "bvh_collision/model/proxy_batch.h"
+#include "bvh_collision/model/robot_collision_model.h"
+#include "bvh_collision/narrowphase/link_proxy.h"
+
+namespace bvh_collision {
+
+// One proxy level as built: its link proxies and what they cost.
+struct ProxyLevel {
+  double level = 0.0;
+  std::vector<LinkProxy> links;  // per link (empty for links without geometry)
+  std::size_t leaves = 0, memory_bytes = 0;
+  std::size_t links_from_cache = 0;  // read from CheckerOptions::proxy_cache, not built
+  double build_seconds = 0.0;
+  ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
+};
+
+// RobotAccelerators::with_proxy_level stopped by its cancel flag.
+struct ProxyBuildCancelled : std::runtime_error {
+  ProxyBuildCancelled() : std::runtime_error("proxy level build cancelled") {}
+};
+
+class RobotAccelerators {
+ public:
+  RobotAccelerators() = default;
+  // Built from `model`: the clearance grids (options.pair_clearance_cells), then the proxy levels
+  // (options.proxy_levels, read from options.proxy_cache where it holds them). Throws
+  // std::invalid_argument for a bad level.
+  RobotAccelerators(const RobotCollisionModel& model, const CheckerOptions& options);
+
+  // The proxy levels built, finest first; the coarsest level whose e is at most `tolerance`, or null.
+  const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
+  const ProxyLevel* proxies_for(double tolerance) const;
+  const PairClearance& pair_clearance() const { return pair_clearance_; }
+
+  // A copy with proxy level `level` built from `model` (the one these were built from) as well:
+  // it answers every query as this one does and uses the level wherever it fits (a node builds
+  // its levels this way after start-up, coarsest first, and swaps each copy in). `cancel`, once
+  // true, stops the build between links with ProxyBuildCancelled. Throws std::invalid_argument
+  // for a bad level.
+  RobotAccelerators with_proxy_level(const RobotCollisionModel& model, double level,
+                                     const std::atomic<bool>* cancel = nullptr) const;
+  // These for `carried` (RobotCollisionModel::carrying of the model these were built from): every
+  // level gets the carried links' proxies (from the proxy cache when it holds them), the new self
+  // pairs get no clearance grid. A carried object's proxies take what its size asks (a 10 cm box
+  // about a second at 5 mm, a 30 cm one a minute): with `proxies` false, no level at all (every
+  // query takes the exact path, within the same contract) and nothing to build.
+  RobotAccelerators carrying(const RobotCollisionModel& carried, bool proxies = true) const;
+
+ private:
+  ProxyLevel build_proxy_level(const RobotCollisionModel& model, double level, const std::atomic<bool>* cancel) const;
+  LinkProxy cached_or_built_proxy(const RobotCollisionModel& model, int link, double level, std::size_t& from_cache) const;
+
+  std::string proxy_cache_;  // CheckerOptions::proxy_cache
+  std::vector<ProxyLevel> proxy_levels_;
+  PairClearance pair_clearance_;
+};
+
+}  // namespace bvh_collision

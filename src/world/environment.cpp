@@ -1,0 +1,230 @@
+#include "bvh_collision/world/environment.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+
+#include "bvh_collision/geometry/safety_margin.h"
+
+namespace bvh_collision {
+namespace {
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+void require_rigid(const Transform& pose, const std::string& id) {
+  if (!is_rigid(pose)) {
+    throw std::invalid_argument("object '" + id + "': the pose must be finite with a rotation matrix");
+  }
+}
+
+TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
+  const std::string what = "object '" + id + "': ";
+  switch (shape.kind) {
+    case ObjectShape::Kind::kBox:
+      if (!(positive(shape.size.x()) && positive(shape.size.y()) && positive(shape.size.z()))) {
+        throw std::invalid_argument(what + "box sizes must be positive and finite");
+      }
+      return box_mesh(shape.size);
+    case ObjectShape::Kind::kMesh: {
+      if (!shape.mesh || shape.mesh->empty()) throw std::invalid_argument(what + "the mesh has no triangles");
+      for (const Vec3& v : shape.mesh->vertices) {
+        if (!v.allFinite()) throw std::invalid_argument(what + "the mesh has a non-finite vertex");
+      }
+      for (const auto& t : shape.mesh->triangles) {
+        for (const std::int32_t i : t) {
+          if (i < 0 || i >= static_cast<std::int32_t>(shape.mesh->vertices.size())) {
+            throw std::invalid_argument(what + "a mesh triangle indexes a missing vertex");
+          }
+        }
+      }
+      return *shape.mesh;
+    }
+    case ObjectShape::Kind::kSphere:
+    case ObjectShape::Kind::kCylinder:
+    case ObjectShape::Kind::kCapsule:
+    case ObjectShape::Kind::kCone: break;
+  }
+  return {};
+}
+
+}  // namespace
+
+ShapeRef exact_shape_of(const CollisionObject& o) {
+  if (o.shape.kind == ObjectShape::Kind::kBox) return ShapeRef{nullptr, nullptr, Primitive::box(o.shape.size)};
+  return shape_of(o);
+}
+
+CollisionObject make_collision_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
+  if (id.empty()) throw std::invalid_argument("a collision object needs a non-empty id");
+  // The object's name part (before any '#k') by the rule for ids; the whole for control characters.
+  std::string problem = object_id_problem(object_name(id));
+  if (problem.empty() && printable_id(id) != id) problem = "id '" + printable_id(id) + "' holds a control character";
+  if (!problem.empty()) throw std::invalid_argument("collision object " + problem);
+  require_rigid(pose, id);
+  CollisionObject o{id, shape, pose, nullptr, nullptr, Primitive{}, Vec3::Zero(), 0.0};
+  if (shape.kind == ObjectShape::Kind::kSphere) {
+    if (!positive(shape.radius)) throw std::invalid_argument("object '" + id + "': sphere radius must be positive and finite");
+    o.primitive = Primitive::sphere(shape.radius);
+  }
+  if (shape.kind == ObjectShape::Kind::kCylinder) {
+    if (!(positive(shape.radius) && positive(shape.length))) {
+      throw std::invalid_argument("object '" + id + "': cylinder radius and length must be positive and finite");
+    }
+    o.primitive = Primitive::cylinder(shape.radius, shape.length);
+  }
+  if (shape.kind == ObjectShape::Kind::kCapsule) {
+    if (!(positive(shape.radius) && std::isfinite(shape.length) && shape.length >= 0.0)) {
+      throw std::invalid_argument("object '" + id + "': capsule radius must be positive and its length non-negative, both finite");
+    }
+    o.primitive = Primitive::capsule(shape.radius, shape.length);
+  }
+  if (shape.kind == ObjectShape::Kind::kCone) {
+    if (!(positive(shape.radius) && positive(shape.length))) {
+      throw std::invalid_argument("object '" + id + "': cone radius and length must be positive and finite");
+    }
+    o.primitive = Primitive::cone(shape.radius, shape.length);
+  }
+  if (o.primitive.radius > 0.0) {  // a sphere, cylinder, capsule or cone: exact, no mesh
+    o.bound_radius = bounding_radius(o.primitive);
+    return o;
+  }
+  const TriangleMesh mesh = object_mesh(shape, id);
+  BuildOptions build{BuildMethod::kSah, 2};
+  build.sampled_slack = shape.kind != ObjectShape::Kind::kBox;  // a box answers states as the exact primitive
+  o.mesh = std::make_shared<const Bvh<Obb>>(Bvh<Obb>::build(mesh, build));
+  o.hull = std::make_shared<const ConvexHull>(convex_hull(used_vertices(mesh)));
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& v : used_vertices(mesh)) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  o.bound_center = 0.5 * (lo + hi);
+  for (const Vec3& v : used_vertices(mesh)) o.bound_radius = std::max(o.bound_radius, (v - o.bound_center).norm());
+  o.bound_radius = grown_radius(o.bound_radius);
+  return o;
+}
+
+Environment::Environment(double octree_resolution, const OccupancyModel& model) : octree_(octree_resolution, model) {}
+
+Environment::Environment(const Environment& other)
+    : octree_(other.octree_),
+      objects_(other.objects_),
+      allowed_(other.allowed_),
+      attached_(other.attached_),
+      field_(std::atomic_load(&other.field_)) {}
+
+Environment& Environment::operator=(const Environment& other) {
+  if (this == &other) return *this;
+  octree_ = other.octree_;
+  objects_ = other.objects_;
+  allowed_ = other.allowed_;
+  attached_ = other.attached_;
+  std::atomic_store(&field_, std::atomic_load(&other.field_));
+  return *this;
+}
+
+std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
+                                                                              std::size_t max_cells, bool build) const {
+  const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
+  if (kept && kept->revision == octree_.revision() && kept->cap >= cap && (kept->lo.array() <= lo.array()).all() &&
+      (kept->hi.array() >= hi.array()).all()) {
+    return std::shared_ptr<const OctreeDistanceField>(kept, &kept->field);
+  }
+  if (!build) return nullptr;
+  auto fresh = std::make_shared<FieldCache>();
+  fresh->revision = octree_.revision();
+  fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
+  try {
+    fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
+  } catch (const std::invalid_argument&) {
+    return nullptr;  // too large a box at this resolution (or not finite): no field
+  }
+  std::shared_ptr<const FieldCache> out = std::move(fresh);
+  std::atomic_store(&field_, out);
+  return std::shared_ptr<const OctreeDistanceField>(out, &out->field);
+}
+
+void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {
+  add_object(make_collision_object(id, shape, pose));  // throws before anything changes
+}
+
+void Environment::add_object(CollisionObject o) {
+  objects_.add(std::make_shared<const CollisionObject>(std::move(o)));
+}
+
+bool Environment::move_object(const std::string& id, const Transform& pose) {
+  const std::ptrdiff_t i = objects_.find(id);
+  if (i < 0) return false;
+  require_rigid(pose, id);
+  auto moved = std::make_shared<CollisionObject>(objects_[static_cast<std::size_t>(i)]);
+  moved->pose = pose;
+  objects_.add(std::move(moved));
+  return true;
+}
+
+bool Environment::remove_object(const std::string& id) { return objects_.remove(id); }
+
+const AttachedBody* Environment::find_attached(const std::string& id) const {
+  const auto it = std::find_if(attached_->begin(), attached_->end(), [&](const AttachedBody& b) { return b.id == id; });
+  return it == attached_->end() ? nullptr : &*it;
+}
+
+void Environment::attach(AttachedBody body) {
+  if (const std::string problem = object_id_problem(body.id); !problem.empty()) {
+    throw std::invalid_argument("attached object " + problem);
+  }
+  if (body.link.empty()) throw std::invalid_argument("attached object '" + body.id + "': no link named");
+  if (body.shapes.empty()) throw std::invalid_argument("attached object '" + body.id + "' has no shapes");
+  auto next = std::make_shared<std::vector<AttachedBody>>(*attached_);
+  const auto it = std::find_if(next->begin(), next->end(), [&](const AttachedBody& b) { return b.id == body.id; });
+  if (it != next->end()) {
+    *it = std::move(body);
+  } else {
+    next->push_back(std::move(body));
+  }
+  attached_ = std::move(next);
+}
+
+bool Environment::detach(const std::string& id) {
+  auto next = std::make_shared<std::vector<AttachedBody>>(*attached_);
+  const auto it = std::find_if(next->begin(), next->end(), [&](const AttachedBody& b) { return b.id == id; });
+  if (it == next->end()) return false;
+  next->erase(it);
+  attached_ = std::move(next);
+  return true;
+}
+
+const CollisionObject* Environment::find_object(const std::string& id) const {
+  const std::ptrdiff_t i = objects_.find(id);
+  return i < 0 ? nullptr : &objects_[static_cast<std::size_t>(i)];
+}
+
+std::string printable_id(const std::string& id) {
+  static const char* const kHex = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : id) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7F) {
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
+std::string object_id_problem(const std::string& id) {
+  if (id.empty()) return "id is empty";
+  for (std::size_t i = 0; i < id.size(); ++i) {
+    const auto c = static_cast<unsigned char>(id[i]);
+    if (c < 0x20 || c == 0x7F) {
+      static const char* const kHex = "0123456789ABCDEF";
+      return std::string("id '") + printable_id(id) + "' holds a control character (0x" + kHex[c >> 4] + kHex[c & 15] +
+             " at byte " + std::to_string(i) + ")";
+    }
+  }
+  if (id.find('#') != std::string::npos) return "id '" + id + "' contains '#' (it names an object's shapes: id#k)";
+  return "";
+}
+
+}  // namespace bvh_collision
