@@ -31,6 +31,7 @@
 #include "bvh_collision/robot/robot_description.h"
 #include "fcl_oracle.h"
 #include "planning_scenes.h"
+#include "advancement_oracle.h"
 
 namespace bvh_collision {
 namespace {
@@ -277,7 +278,8 @@ Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout,
   return run;
 }
 
-// Does any segment collide: by our general certified motion (exact), and by FCL every 1e-3 rad?
+// Does any segment collide: by conservative advancement with exact distances (test/advancement_oracle.h,
+// written apart from the engine that planned), and by FCL every 1e-3 rad?
 std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& checker, const Environment& env, FclPanda& fcl) {
   bool ours = false, theirs = false;
   for (std::size_t w = 0; w + 1 < run.path.size(); ++w) {
@@ -285,7 +287,7 @@ std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& chec
     const std::vector<double>& b = run.path[w + 1];
     MotionRequest exact;
     exact.max_states = 200000;
-    ours = ours || !checker.check_motion(a.data(), b.data(), env, exact).valid;
+    ours = ours || !test::advancement_motion(checker, a.data(), b.data(), env, exact).valid;
     double longest = 0.0;
     for (std::size_t j = 0; j < a.size(); ++j) longest = std::max(longest, std::abs(b[j] - a[j]));
     const int steps = std::max(1, static_cast<int>(std::ceil(longest / 1e-3)));

@@ -459,7 +459,7 @@ def build_report(tables, bench_dir, quick):
     out += ["## 7. Planning", "",
             "OMPL's RRTConnect on panda among generated MoveIt-style scenes, through our checker (exact, and at a 10 mm "
             "tolerance) and through FCL as MoveIt sets it up, the same problems in the same run; every returned path "
-            "re-checked by our general certified motion check and by FCL every 1e-3 rad. A path that either finds "
+            "re-checked by conservative advancement with exact distances (written apart from the engine) and by FCL every 1e-3 rad. A path that either finds "
             "colliding counts against the checker that planned it; ours must have none.", "",
             markdown(need(tables, "planning"))]
 

@@ -12,6 +12,7 @@
 #include "checker_fixtures.h"
 #include "planning_scenes.h"
 #include "robot_data.h"
+#include "advancement_oracle.h"
 
 namespace bvh_collision {
 namespace {
@@ -122,8 +123,8 @@ TEST(AllowedObjects, EnvironmentChecksSkipAllowedPairs) {
       if (!without) ASSERT_TRUE(skipped.empty()) << "scene " << scene << " state " << i;
     }
   }
-  // The general certified motion (conservative advancement): one answered free is free by the
-  // oracle along a dense sweep.
+  // The library's certified motion (the interval engine behind CollisionChecker::check_motion), held
+  // against conservative advancement (advancement_oracle.h) and a dense sweep of the oracle.
   const Environment env = scene_with_allowances(1);
   int motions_free = 0;
   for (int i = 0; i < test::sized(12); ++i) {
@@ -132,7 +133,9 @@ TEST(AllowedObjects, EnvironmentChecksSkipAllowedPairs) {
     for (double& v : b) v += std::uniform_real_distribution<double>(-0.2, 0.2)(rng);
     MotionRequest request;
     request.self = false;
-    if (!checker.check_motion(a.data(), b.data(), env, request).valid) continue;
+    const bool free = checker.check_motion(a.data(), b.data(), env, request).valid;
+    EXPECT_EQ(free, test::advancement_motion(checker, a.data(), b.data(), env, request).valid) << "motion " << i;
+    if (!free) continue;
     ++motions_free;
     std::vector<double> q(a.size());
     for (int k = 0; k <= 100; ++k) {

@@ -25,6 +25,7 @@
 #include "planning_scenes.h"
 #include "robot_data.h"
 #include "scene_checker_fixtures.h"
+#include "advancement_oracle.h"
 
 namespace bvh_collision {
 namespace {
@@ -280,10 +281,10 @@ TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
         }
         ASSERT_EQ(piece.states_checked, 0u) << tolerance << " " << t0 << " " << t1;
         ASSERT_TRUE(piece.valid && piece.certified && piece.last_valid_fraction == 1.0);
-        // The general certified motion (another code path, exact) finds it free too.
+        // Conservative advancement (another algorithm, exact) finds it free too.
         MotionRequest exact;
         exact.max_states = 200000;
-        ASSERT_TRUE(checker.check_motion(a.data(), b.data(), *env, exact).valid) << "a piece of a free motion collides: " << t0 << " " << t1;
+        ASSERT_TRUE(test::advancement_motion(checker, a.data(), b.data(), *env, exact).valid) << "a piece of a free motion collides: " << t0 << " " << t1;
         ++within;
       }
       if (!whole.valid) continue;

@@ -1,6 +1,5 @@
 // CollisionChecker along a motion: the straight joint-space segment between two states, checked
-// at a fixed joint step or certified by conservative advancement (each step shorter than the
-// clearance divided by a bound on how fast any point of any link moves).
+// at a fixed joint step, or certified by the prepared scene's interval engine (scene_checker.h).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +7,7 @@
 #include <stdexcept>
 
 #include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
@@ -117,152 +117,30 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
   return result;
 }
 
-// Clearance of one state: its distance to everything checked, less the padding (nullopt when the
-// state collides). A self pair's padding is the sum of its links' paddings.
-std::optional<double> clearance(const CollisionChecker& checker, const double* state, const Environment& env,
-                                const MotionRequest& request, double max_padding) {
-  double gap = std::numeric_limits<double>::infinity();
-  if (request.self) {
-    SelfCollisionRequest r;
-    r.distance = true;
-    const SelfCollisionResult result = checker.check_self(state, r);
-    if (result.collision) return std::nullopt;
-    if (std::isfinite(result.min_distance)) gap = std::min(gap, result.min_distance - 2.0 * max_padding);
-  }
-  if (request.environment) {
-    EnvironmentRequest r;
-    r.distance = true;
-    r.root_pose = request.root_pose;
-    const EnvironmentResult result = checker.check_environment(state, env, r);
-    if (result.collision) return std::nullopt;
-    if (std::isfinite(result.min_distance)) gap = std::min(gap, result.min_distance - max_padding);
-  }
-  return gap;
-}
-
-// A clearance bound may be this fraction loose where it exceeds the stop (the step shrinks by at
-// most 1 / 1.25): far pairs and links then cost a few sphere tests instead of a walk to the
-// leaves, while a bound at the stop is the leaves' own (ProxySlack).
-constexpr double kClearanceSlack = 0.25;
-
 }  // namespace
 
-// Per self pair and link, the cheapest bound first (bounding spheres, the pair's clearance grid,
-// the distance field), the proxies only where those do not already exceed the smallest gap found.
-double CollisionChecker::proxy_clearance(const double* state, const Environment& env, const MotionRequest& request,
-                                         const ProxyLevel& proxies, const OctreeDistanceField* field, double stop) const {
-  thread_local std::vector<Transform> poses;
-  m_->kinematics().compute(state, poses);
-  const auto centre = [&](std::size_t l) { return Vec3(poses[l] * m_->bounds()[l].center); };
-  const auto margin = [&](std::size_t l) { return pose_margin(poses[l].t.norm() + m_->bounds()[l].center.norm() + m_->bounds()[l].radius); };
-  double gap = std::numeric_limits<double>::infinity();
-  if (request.self) {
-    std::vector<std::pair<double, std::size_t>> order;
-    for (std::size_t p = 0; p < m_->checked_pairs().size(); ++p) {
-      const auto [a, b] = m_->checked_pairs()[p];
-      const double pads = m_->paddings()[a] + m_->paddings()[b];
-      order.emplace_back((centre(a) - centre(b)).norm() - m_->bounds()[a].radius - m_->bounds()[b].radius - pads -
-                             margin(a) - margin(b), p);
-    }
-    std::sort(order.begin(), order.end());
-    for (const auto& [bound, p] : order) {
-      if (bound >= gap) break;
-      const auto [a, b] = m_->checked_pairs()[p];
-      const double pads = m_->paddings()[a] + m_->paddings()[b];
-      if (a_->pair_clearance().lower_bound(p, state) - pads >= gap) continue;
-      gap = proxies_distance(proxies.links[a], poses[a], proxies.links[b], poses[b], gap + pads,
-                             ProxySlack{kClearanceSlack, stop + pads}) - pads;
-      if (gap <= stop) return gap;
-    }
+// The kept scene when it was prepared for this snapshot and these options, else a new one (the
+// old one stays with the motions still running on it).
+std::shared_ptr<const SceneChecker> CollisionChecker::prepared_scene(const Environment& env, const MotionRequest& request) const {
+  SceneCheckOptions options;
+  options.self = request.self;
+  options.environment = request.environment;
+  options.tolerance = request.tolerance;
+  options.root_pose = request.root_pose;
+  options.min_clearance = request.min_clearance;
+  options.max_intervals = request.max_states;
+  const auto same = [&](const SceneChecker& s) {
+    const SceneCheckOptions& o = s.options();
+    return s.environment().same_snapshot(env) && o.self == options.self && o.environment == options.environment &&
+           o.tolerance == options.tolerance && o.root_pose.R == options.root_pose.R && o.root_pose.t == options.root_pose.t &&
+           o.min_clearance == options.min_clearance && o.max_intervals == options.max_intervals;
+  };
+  std::lock_guard<std::mutex> lock(prepared_->mutex);
+  if (!prepared_->scene || !same(*prepared_->scene)) {
+    prepared_->scene = std::make_shared<const SceneChecker>(*this, std::make_shared<const Environment>(env), options);
   }
-  if (!request.environment) return gap;
-  const Octree& tree = env.octree();
-  for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
-    if (m_->shapes()[l].empty()) continue;
-    const Transform pose = request.root_pose * poses[l];
-    const double padding = m_->paddings()[l];
-    const double radius = m_->bounds()[l].radius + pose_margin(pose.t.norm() + m_->bounds()[l].center.norm() + m_->bounds()[l].radius);
-    if (!tree.empty() && !(field != nullptr && field->lower_bound(pose * m_->bounds()[l].center) - radius - padding >= gap)) {
-      gap = proxy_obstacle_distance(proxies.links[l], pose, gap + padding, [&](const Vec3& c, double r, double best) {
-              if (field != nullptr) {
-                const double bound = field->lower_bound(c) - r;
-                if (bound >= best) return bound;
-              }
-              return std::max(0.0, point_octree_distance(c, tree, best + r).distance - r);
-            }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
-      if (gap <= stop) return gap;
-    }
-    for (std::size_t o = 0; o < env.objects().size(); ++o) {
-      if (env.object_allowed(m_->robot().links()[l].name, o)) continue;
-      const CollisionObject& object = env.objects()[o];
-      const double apart = (pose * m_->bounds()[l].center - object.pose * object.bound_center).norm() - radius -
-                           object.bound_radius - padding;
-      if (apart >= gap) continue;
-      const ShapeRef obstacle = shape_of(object);
-      QueryStats stats;
-      gap = proxy_obstacle_distance(proxies.links[l], pose, gap + padding, [&](const Vec3& c, double r, double best) {
-              Vec3 wa, wb;
-              return shapes_distance({nullptr, nullptr, Primitive::sphere(r)}, Transform{Mat3::Identity(), c},
-                                             obstacle, object.pose, best, true, wa, wb, stats);
-            }, ProxySlack{kClearanceSlack, stop + padding}) - padding;
-      if (gap <= stop) return gap;
-    }
-  }
-  return gap;
+  return prepared_->scene;
 }
-
-namespace {
-
-// Conservative advancement. Over a step ds every point of link L moves at most ds * M_L, with
-// M_L = sum_j rate(L, j) |delta_j|; a self pair closes by at most ds (M_a + M_b), an obstacle gap
-// by ds M_L. With M the largest M_L, a step below gap / (2 M) cannot hide a collision.
-MotionResult motion_certified(const CollisionChecker& checker, Segment& segment, const Environment& env,
-                              const MotionRequest& request) {
-  MotionResult result;
-  double speed = 0.0, max_padding = 0.0;
-  for (std::size_t l = 0; l < checker.model().links().size(); ++l) {
-    speed = std::max(speed, checker.link_speed(static_cast<int>(l), segment.start(), segment.goal()));
-    max_padding = std::max(max_padding, checker.link_padding(static_cast<int>(l)));
-  }
-  const double closing = (request.self ? 2.0 : 1.0) * speed;
-  // At a tolerance t, a lower bound on the clearance that is at most e below it (the proxies of
-  // level e) serves as well: a state whose bound is at most t - e is within t of collision. The
-  // coarsest level up to t / 2 leaves at least t / 2 of that room (so the steps near a contact
-  // stay long); failing that, up to t, with min_clearance as the room.
-  ToleranceQuestion question{request.tolerance, Counterpart::kLink};
-  question.motion = true;
-  const ProxyUse use = proxy_use(question);
-  const ProxyLevel* proxies = checker.accelerators().proxies_for(use.prefer_up_to);
-  if (proxies == nullptr) proxies = checker.accelerators().proxies_for(use.decide_up_to);
-  const double stop = proxies ? std::max(request.tolerance - proxies->level, request.min_clearance)
-                              : std::max(request.tolerance, request.min_clearance);
-  const auto field = proxies && request.environment ? checker.kept_distance_field(env, request.root_pose) : nullptr;
-  double s = 0.0;
-  while (result.states_checked < request.max_states) {
-    ++result.states_checked;
-    const double* q = segment.at(s);
-    const auto gap = proxies ? std::optional<double>(checker.proxy_clearance(q, env, request, *proxies, field.get(), stop))
-                             : clearance(checker, q, env, request, max_padding);
-    if (!gap || *gap <= stop) {
-      // In collision, or within the tolerance of it (allowed to count as collision).
-      result.certified = true;
-      result.colliding_fraction = s;
-      return result;
-    }
-    result.last_valid_fraction = s;
-    if (s >= 1.0) {
-      result.valid = result.certified = true;
-      return result;
-    }
-    // 0.99: the clearance and the rates are exact bounds; leave room for their rounding.
-    s = closing > 0.0 ? std::min(1.0, s + 0.99 * *gap / closing) : 1.0;
-  }
-  result.message = "not certified after " + std::to_string(request.max_states) + " states: the motion passes within " +
-                   "rounding of a collision at fraction " + std::to_string(result.last_valid_fraction);
-  return result;
-}
-
-}  // namespace
 
 MotionResult CollisionChecker::check_motion(const double* start, const double* goal, const Environment& env,
                                             const MotionRequest& request) const {
@@ -278,9 +156,9 @@ MotionResult CollisionChecker::check_motion(const double* start, const double* g
   }
   require_finite_state(start, "motion check");
   require_finite_state(goal, "motion check");
+  if (request.resolution == 0.0) return prepared_scene(env, request)->check_motion(start, goal, true);
   Segment segment(start, goal, m_->robot().variable_count());
-  return request.resolution > 0.0 ? motion_in_steps(*this, segment, env, request)
-                                  : motion_certified(*this, segment, env, request);
+  return motion_in_steps(*this, segment, env, request);
 }
 
 }  // namespace bvh_collision

@@ -48,6 +48,8 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     : checker_(std::move(checker)), env_(std::move(environment)), serial_(next_serial++), options_(options) {
   if (!env_) throw std::invalid_argument("scene checker: no environment");
   if (!checker_.carries(*env_)) checker_ = checker_.carrying(*env_);  // what the robot carries moves with it
+  // The checker's kept prepared scene is not this one's to keep (it may hold this very scene).
+  checker_.prepared_ = std::make_shared<CollisionChecker::PreparedMotions>();
   if (!is_rigid(options.root_pose)) throw std::invalid_argument("scene checker: the root pose is not a finite rigid transform");
   if (!std::isfinite(options.tolerance) || options.tolerance < 0.0) throw std::invalid_argument("scene checker: tolerance must be finite and >= 0");
   const RobotCollisionModel& m = checker_.collision_model();

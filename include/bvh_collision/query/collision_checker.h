@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -32,6 +33,8 @@
 #include "bvh_collision/robot/robot_model.h"
 
 namespace bvh_collision {
+
+class SceneChecker;
 
 class CollisionChecker {
  public:
@@ -120,7 +123,10 @@ class CollisionChecker {
                            std::optional<double> carried_padding = std::nullopt) const;
 
   // The motion from `start` to `goal` (both variable_count() values). Throws std::invalid_argument
-  // for a negative or non-finite resolution or tolerance.
+  // for a negative or non-finite resolution or tolerance. Certified (resolution 0) it is the
+  // planner's engine (query/scene_checker.h), on a scene prepared for `env` and kept for the next
+  // motion on the same snapshot (Environment::same_snapshot) and request: the first motion on a
+  // snapshot pays the preparation (the object grid, the distance field), the rest nothing.
   MotionResult check_motion(const double* start, const double* goal, const Environment& env,
                             const MotionRequest& request = {}) const;
 
@@ -157,15 +163,6 @@ class CollisionChecker {
                                                                  const Transform& root_pose = Transform::Identity()) const {
     return env.octree().empty() ? nullptr : octree_field(env, root_pose, false);
   }
-
-  // A lower bound on the clearance of `state` (its distance less padding, per self pair and per
-  // link against each obstacle; the smallest) from the proxies of one level and, if given, the
-  // octree's distance field: at most the level below the exact clearance (each proxy lies within
-  // level / 2 of its link). Returns as soon as it is at most `stop`. What certified motions at a
-  // tolerance step by; request.self / environment / root_pose say what counts.
-  double proxy_clearance(const double* state, const Environment& env, const MotionRequest& request,
-                         const ProxyLevel& proxies, const OctreeDistanceField* field = nullptr,
-                         double stop = -std::numeric_limits<double>::infinity()) const;
 
   // Link BVHs built (only for links some checked pair needs), for reports.
   std::size_t built_meshes() const { return m_->meshes().size(); }
@@ -211,9 +208,18 @@ class CollisionChecker {
   CollisionChecker(std::shared_ptr<const RobotCollisionModel> model, std::shared_ptr<const RobotAccelerators> accelerators)
       : m_(std::move(model)), a_(std::move(accelerators)) {}
 
+  // The scene the last certified motion was answered on (motion_check.cpp), kept for the next.
+  struct PreparedMotions {
+    std::mutex mutex;
+    std::shared_ptr<const SceneChecker> scene;
+  };
+  std::shared_ptr<const SceneChecker> prepared_scene(const Environment& env, const MotionRequest& request) const;
+
   // Shared, never changed: a copy of the checker is cheap and answers the same.
   std::shared_ptr<const RobotCollisionModel> m_;
   std::shared_ptr<const RobotAccelerators> a_;
+  // Shared by copies too (they answer alike on a snapshot); a scene checker's own copy has its own.
+  std::shared_ptr<PreparedMotions> prepared_ = std::make_shared<PreparedMotions>();
 };
 
 }  // namespace bvh_collision

@@ -104,6 +104,14 @@ class Environment {
   Environment(Environment&&) = default;
   Environment& operator=(Environment&&) = default;
 
+  // This snapshot or an unchanged copy of it: the same octree revision and the same object list,
+  // allowed collisions and attached bodies (shared, not compared). What is prepared from one
+  // (a query's prepared scene) answers for the other.
+  bool same_snapshot(const Environment& o) const {
+    return octree_.revision() == o.octree_.revision() && objects_.same_as(o.objects_) && allowed_ == o.allowed_ &&
+           attached_ == o.attached_;
+  }
+
   Octree& octree() { return octree_; }
   const Octree& octree() const { return octree_; }
 

@@ -40,6 +40,7 @@ class ObjectBoxTree {
   // Removes the entry of `slot` whose box is [lo, hi] (as inserted); false when absent.
   bool erase(std::uint32_t slot, const Vec3& lo, const Vec3& hi, PersistentWork* work = nullptr);
   void clear() { root_ = nullptr; }
+  bool same_as(const ObjectBoxTree& o) const { return root_ == o.root_; }
 
   // Calls f(entry) for every entry whose box meets [lo, hi].
   template <class F>
@@ -122,6 +123,8 @@ class ObjectList {
   // The slots of every shape of the object `name` (its shapes "name" or "name#k"), ascending.
   std::vector<std::uint32_t> shapes_of(const std::string& name) const;
   bool has_object(const std::string& name) const { return by_name_.find(name) != nullptr; }
+  // This list or an unchanged copy of it (the same nodes): the same objects in the same slots.
+  bool same_as(const ObjectList& o) const { return records_.same_as(o.records_) && by_name_.same_as(o.by_name_) && boxes_.same_as(o.boxes_); }
 
   // Calls f(slot) for every shape whose world box (object_world_box) meets [lo, hi], in no order.
   template <class F>

@@ -52,6 +52,9 @@ class PersistentMap {
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
 
+  // The same nodes (as PersistentVector::same_as).
+  bool same_as(const PersistentMap& o) const { return root_ == o.root_ && size_ == o.size_; }
+
   const V* find(const K& key) const {
     const std::uint64_t h = hash_of(key);
     const Node* n = root_.get();

@@ -81,6 +81,9 @@ class PersistentVector {
     return leaf_for(i)->items[i & kMask];
   }
   const T& back() const { return (*this)[size_ - 1]; }
+  // Do the two hold the very same nodes (one is a copy of the other, neither changed since)? Then
+  // they hold the same elements; a vector alive beside a copy never has its nodes' addresses reused.
+  bool same_as(const PersistentVector& o) const { return root_ == o.root_ && size_ == o.size_; }
   const_iterator begin() const { return const_iterator(this, 0); }
   const_iterator end() const { return const_iterator(this, size_); }
 
