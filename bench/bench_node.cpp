@@ -52,6 +52,8 @@ std::vector<ScanPoint> wall() {
 }
 
 struct Bench {
+  Bench(const CollisionChecker& c, Environment e, ros::ServiceClient s, ros::ServiceClient b)
+      : checker(c), env(std::move(e)), single(std::move(s)), batch(std::move(b)) {}
   const CollisionChecker& checker;
   Environment env;
   ros::ServiceClient single, batch;
@@ -195,8 +197,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   const CollisionChecker checker = load_checker(urdf);
-  Bench b{checker, Environment(pnh.param("resolution", 0.02)), nh.serviceClient<CheckState>(node + "/check_state", true),
-          nh.serviceClient<CheckStates>(node + "/check_states", true)};
+  Bench b(checker, Environment(pnh.param("resolution", 0.02)), nh.serviceClient<CheckState>(node + "/check_state", true),
+          nh.serviceClient<CheckStates>(node + "/check_states", true));
   // The same wall in the node (published in the root link's frame, so the sensor is at the root's
   // origin; waited for) and in-process, through the same self filter and workspace.
   const std::vector<ScanPoint> points = wall();

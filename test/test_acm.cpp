@@ -238,7 +238,9 @@ TEST(AllowedCollisionMatrix, WhatMoveItSkipsIsAWarningAndSkipped) {
     const Srdf srdf = parse_srdf(xml, &m);
     ASSERT_EQ(srdf.warnings.size(), 1u) << xml;
     EXPECT_NE(srdf.warnings[0].find(reason), std::string::npos) << srdf.warnings[0];
-    for (const auto& [state, joints] : srdf.group_states) EXPECT_TRUE(joints.empty() || state == "half_sitting") << xml;
+    for (const auto& [state, joints] : srdf.group_states) {
+      EXPECT_TRUE(joints.empty() || state == "half_sitting") << xml;
+    }
   }
   // The virtual joint of an unknown type is kept, as fixed; names are trimmed as srdfdom trims them.
   const Srdf hinge = parse_srdf("<robot name=\"humanoid\"><virtual_joint name=\" v \" type=\" Planar \" parent_frame=\"w\" child_link=\" base_link\"/>"

@@ -111,16 +111,24 @@ TEST(AllowedObjects, EnvironmentChecksSkipAllowedPairs) {
       for (const EnvironmentContact& c : r.contacts) {
         ASSERT_FALSE(env.allowed_collisions().allowed(checker.model().links()[c.link].name, object_name(c.object))) << c.object;
       }
-      if (!truth.collision) ASSERT_NEAR(r.min_distance, truth.distance, 1e-9) << "scene " << scene << " state " << i;
+      if (!truth.collision) {
+        ASSERT_NEAR(r.min_distance, truth.distance, 1e-9) << "scene " << scene << " state " << i;
+      }
       colliding += truth.collision;
       const bool without = checker.check_environment(q.data(), plain, EnvironmentRequest{}).collision;
       changed += truth.collision != without;
       // What the checks skipped: allowed pairs only, some whenever the allowances freed the
       // state, none when nothing touches at all.
       const auto skipped = allowed_object_contacts(checker, q.data(), env);
-      for (const auto& [link, object] : skipped) ASSERT_TRUE(env.allowed_collisions().allowed(checker.model().links()[link].name, object));
-      if (without && !truth.collision) ASSERT_FALSE(skipped.empty()) << "scene " << scene << " state " << i;
-      if (!without) ASSERT_TRUE(skipped.empty()) << "scene " << scene << " state " << i;
+      for (const auto& [link, object] : skipped) {
+        ASSERT_TRUE(env.allowed_collisions().allowed(checker.model().links()[link].name, object));
+      }
+      if (without && !truth.collision) {
+        ASSERT_FALSE(skipped.empty()) << "scene " << scene << " state " << i;
+      }
+      if (!without) {
+        ASSERT_TRUE(skipped.empty()) << "scene " << scene << " state " << i;
+      }
     }
   }
   // The library's certified motion (the interval engine behind CollisionChecker::check_motion), held

@@ -141,7 +141,9 @@ TEST(AttachedObjects, CarriedBodyIsOneMoreLink) {
   ASSERT_GE(held, 0);
   EXPECT_EQ(ours.collision_model().shapes()[held].size(), 3u);
   // The robot's own pairs first, unchanged; then the carried body's, none with its link or touch links.
-  for (std::size_t p = 0; p < base.checked_pairs().size(); ++p) EXPECT_EQ(ours.checked_pairs()[p], base.checked_pairs()[p]);
+  for (std::size_t p = 0; p < base.checked_pairs().size(); ++p) {
+    EXPECT_EQ(ours.checked_pairs()[p], base.checked_pairs()[p]);
+  }
   EXPECT_EQ(named(ours, ours.checked_pairs()), named(checkers().oracle, checkers().oracle.checked_pairs()));
   // A proxy at every level, as a link's.
   for (const ProxyLevel& level : ours.accelerators().proxy_levels()) {
@@ -178,7 +180,9 @@ TEST(AttachedObjects, TouchLinksAndTheOwnLinkAreAllowed) {
   q[3] = -1.5, q[5] = 1.5;
   const SelfCollisionResult hit = bare.check_self(q.data(), SelfCollisionRequest{0.0, true});
   ASSERT_TRUE(hit.collision);
-  for (const auto& [a, b] : named(bare, hit.colliding_pairs)) EXPECT_TRUE(a == "held" || b == "held");
+  for (const auto& [a, b] : named(bare, hit.colliding_pairs)) {
+    EXPECT_TRUE(a == "held" || b == "held");
+  }
   EXPECT_FALSE(base.carrying({held_body(kFingers)}, {}).check_self(q.data()).collision);
   // The environment's allowed collisions name the object too (one entry per finger).
   NamedAllowedCollisions allowed;

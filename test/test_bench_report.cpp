@@ -70,7 +70,9 @@ TEST_F(BenchReport, EveryBenchmarkRunsOnSmallInputs) {
   BVH_REQUIRE_ROBOTS();
   const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "scene_scale", "node"};
   ASSERT_EQ(statuses_.size(), 7u);
-  for (std::size_t i = 0; i < statuses_.size(); ++i) EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
+  for (std::size_t i = 0; i < statuses_.size(); ++i) {
+    EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
+  }
 }
 
 TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {

@@ -81,7 +81,9 @@ TYPED_TEST(BvhOracle, VolumesContainTheirTriangles) {
     const auto bvh = Bvh<TypeParam>::build(mesh, {method, 4, 64});
     for (const auto& node : bvh.nodes()) {
       for (int i = node.first; i < node.first + node.count; ++i) {
-        for (int k = 0; k < 3; ++k) ASSERT_TRUE(contains(node.volume, bvh.triangles()[i][k])) << build_method_name(method);
+        for (int k = 0; k < 3; ++k) {
+          ASSERT_TRUE(contains(node.volume, bvh.triangles()[i][k])) << build_method_name(method);
+        }
       }
       if (!node.is_leaf()) {
         EXPECT_EQ(node.count, bvh.nodes()[node.left].count + bvh.nodes()[node.right].count);
@@ -410,8 +412,12 @@ TEST(BoundingVolumes, MergesContainBothVolumes) {
     auto check = [&](auto tag) {
       using BV = decltype(tag);
       const BV merged = merge(fit_volume<BV>(p1.data(), p1.size()), fit_volume<BV>(p2.data(), p2.size()));
-      for (const Vec3& p : p1) ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
-      for (const Vec3& p : p2) ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
+      for (const Vec3& p : p1) {
+        ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
+      }
+      for (const Vec3& p : p2) {
+        ASSERT_TRUE(contains(merged, p)) << volume_name<BV>();
+      }
     };
     check(Aabb{});
     check(Obb{});

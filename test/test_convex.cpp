@@ -73,7 +73,9 @@ void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, 
     for (const Vec3& p : points) s.insert({p.x(), p.y(), p.z()});
     return s;
   }();
-  for (const Vec3& v : hull.vertices) EXPECT_TRUE(input.count({v.x(), v.y(), v.z()})) << "vertex not an input point";
+  for (const Vec3& v : hull.vertices) {
+    EXPECT_TRUE(input.count({v.x(), v.y(), v.z()})) << "vertex not an input point";
+  }
   expect_closed_surface(hull);
   // Every input point on the inner side of (or on) every face, exactly.
   int outside = 0;
@@ -84,7 +86,9 @@ void expect_valid_hull(const std::vector<Vec3>& points, const ConvexHull& hull, 
   // Every extreme point CGAL finds is one of ours.
   std::set<std::array<double, 3>> ours;
   for (const Vec3& v : hull.vertices) ours.insert({v.x(), v.y(), v.z()});
-  for (const Vec3& e : test::cgal_extreme_points(points)) EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
+  for (const Vec3& e : test::cgal_extreme_points(points)) {
+    EXPECT_TRUE(ours.count({e.x(), e.y(), e.z()})) << "missing extreme point";
+  }
   expect_input_support(points, hull, 200);
 }
 
@@ -212,7 +216,9 @@ TEST(ConvexHull, UsedVerticesLeaveOutUnreferencedPoints) {
   EXPECT_EQ(used.size(), 8u);
   const ConvexHull h = convex_hull(used);
   EXPECT_EQ(h.vertices.size(), 8u);
-  for (const Vec3& v : h.vertices) EXPECT_LE(v.cwiseAbs().maxCoeff(), 0.5);
+  for (const Vec3& v : h.vertices) {
+    EXPECT_LE(v.cwiseAbs().maxCoeff(), 0.5);
+  }
 }
 
 TEST(ConvexHull, DegenerateInputsKeepEveryDistinctPoint) {

@@ -167,7 +167,9 @@ TEST(SharedSnapshots, FourOldSnapshotsHoldLessThanTwoMaps) {
   for (int scan = 0; scan < 3; ++scan) {
     store.modify([&](Environment& env) { insert_points(env.octree(), {ScanPoint(0.5f, 0.1f * scan, 0.5f)}); });
   }
-  for (const auto& [env, leaves] : held) EXPECT_EQ(leaf_list(env->octree()), leaves);
+  for (const auto& [env, leaves] : held) {
+    EXPECT_EQ(leaf_list(env->octree()), leaves);
+  }
 }
 
 // A reader walking its snapshot while a writer changes the same pages never sees a change

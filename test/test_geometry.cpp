@@ -288,7 +288,9 @@ TEST(Mesh, OpenEdgesSayWhyAMeshIsNotClosed) {
   hole.triangles.pop_back();
   const auto holes = open_edges(hole);
   ASSERT_EQ(holes.size(), 3u);
-  for (const MeshEdge& e : holes) EXPECT_EQ(e.fault, MeshEdge::Fault::kBoundary);
+  for (const MeshEdge& e : holes) {
+    EXPECT_EQ(e.fault, MeshEdge::Fault::kBoundary);
+  }
   EXPECT_FALSE(is_closed(hole));
   TriangleMesh flipped = box;
   std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);

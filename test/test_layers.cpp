@@ -115,8 +115,12 @@ TEST(Layers, PlanningIncludesNoRosHeaderAndOnlyItIncludesOmpl) {
   for (const auto& [layer, files] : layers) {
     for (const auto& file : files) {
       for (const Include& inc : includes_of(file)) {
-        if (layer == "planning") EXPECT_FALSE(is_ros_header(inc.target)) << inc.file << ":" << inc.line << " includes " << inc.target;
-        if (kCore.count(layer)) EXPECT_NE(inc.target.rfind("ompl/", 0), 0u) << inc.file << ":" << inc.line << ": OMPL in the core";
+        if (layer == "planning") {
+          EXPECT_FALSE(is_ros_header(inc.target)) << inc.file << ":" << inc.line << " includes " << inc.target;
+        }
+        if (kCore.count(layer)) {
+          EXPECT_NE(inc.target.rfind("ompl/", 0), 0u) << inc.file << ":" << inc.line << ": OMPL in the core";
+        }
       }
     }
   }

@@ -225,7 +225,9 @@ class NodeChangingWorld : public testing::Test {
     pub.publish(cloud);
     ++sent_;
     const auto inserted = inserted_->wait(sent_, {kNoReturn, kOctomapRule});
-    for (const char* node : {kNoReturn, kOctomapRule}) EXPECT_EQ(inserted.at(node), sent_) << node;
+    for (const char* node : {kNoReturn, kOctomapRule}) {
+      EXPECT_EQ(inserted.at(node), sent_) << node;
+    }
   }
   // A depth image of the boxes from the camera, stamped now, shown.
   void show_image(const Transform& camera, const std::vector<Box>& boxes, const std::string& frame) {

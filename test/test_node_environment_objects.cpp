@@ -266,12 +266,16 @@ TEST_F(NodeEnvironment, AllowedCollisionsLetLinksTouchAnObject) {
   ASSERT_EQ(allowed.allowed_links.size(), allowed.allowed_objects.size());
   ASSERT_FALSE(allowed.allowed_links.empty());
   EXPECT_NE(std::find(allowed.allowed_links.begin(), allowed.allowed_links.end(), toucher), allowed.allowed_links.end());
-  for (const std::string& o : allowed.allowed_objects) EXPECT_EQ(o, "wrapper") << "the object by its name, not its shapes'";
+  for (const std::string& o : allowed.allowed_objects) {
+    EXPECT_EQ(o, "wrapper") << "the object by its name, not its shapes'";
+  }
   // A pair entry wins over the default: that link is checked against it again.
   ASSERT_EQ(set({toucher}, {"wrapper"}, {}, false, false).error, "");
   const CheckState::Response entry = check(home, 20);
   EXPECT_FALSE(entry.valid);
-  for (const auto& c : entry.contacts) EXPECT_EQ(c.body_a, toucher) << "only the link whose entry says so";
+  for (const auto& c : entry.contacts) {
+    EXPECT_EQ(c.body_a, toucher) << "only the link whose entry says so";
+  }
   // Bad requests are refused by name and change nothing.
   EXPECT_NE(set({"link1"}, {"hand"}, {}, true, false).error.find("names two links"), std::string::npos);
   EXPECT_NE(set({"link1", "hand"}, {"wrapper"}, {}, true, false).error.find("2 names_a but 1 names_b"), std::string::npos);
@@ -308,7 +312,9 @@ TEST_F(NodeEnvironment, AttachedObjectMovesWithTheHand) {
   tilted[4] = 0.2;  // joint5: the parcel swings 4-5 cm towards the wall, the hand 2 cm
   const CheckState::Response before = check(home, 10);
   ASSERT_FALSE(before.valid) << "the parcel sits on the fingers";
-  for (const auto& c : before.contacts) EXPECT_EQ(c.body_b, "parcel");
+  for (const auto& c : before.contacts) {
+    EXPECT_EQ(c.body_b, "parcel");
+  }
   auto attach = [&](const std::string& id, const std::string& link, std::vector<std::string> touch) {
     AttachObject::Request r;
     r.id = id, r.link = link, r.touch_links = std::move(touch);

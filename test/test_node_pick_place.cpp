@@ -188,7 +188,9 @@ TEST(NodePickPlace, PickCarryOverAFenceAndPlace) {
     return r;
   }()).response;
   ASSERT_FALSE(touching.valid) << "the fingers hold the box";
-  for (const auto& c : touching.contacts) EXPECT_EQ(c.body_b, "box");
+  for (const auto& c : touching.contacts) {
+    EXPECT_EQ(c.body_b, "box");
+  }
   SetAllowedCollisions::Request allow;
   allow.names_a = kFingers, allow.names_b = {"box", "box"}, allow.allowed = true;
   ASSERT_EQ(error_of<SetAllowedCollisions>("set_allowed_collisions", allow), "");

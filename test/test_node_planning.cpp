@@ -134,7 +134,9 @@ TEST(NodePlanning, RrtConnectThroughTheServicesAroundAnObstacleSeenOnlyAsACloud)
     const double* next = path.getState(w + 1)->as<ob::RealVectorStateSpace::StateType>()->values;
     EXPECT_TRUE(service->motion_valid(v, next)) << "segment " << w << " is certified free";
   }
-  for (const bool free : service->states_valid(waypoints.data(), path.getStateCount())) EXPECT_TRUE(free);
+  for (const bool free : service->states_valid(waypoints.data(), path.getStateCount())) {
+    EXPECT_TRUE(free);
+  }
 
   // check_motions: every segment and the straight motion in one call, each answered as
   // check_motion answers it (free segments; the straight motion colliding, free up to the same
@@ -148,7 +150,9 @@ TEST(NodePlanning, RrtConnectThroughTheServicesAroundAnObstacleSeenOnlyAsACloud)
   std::vector<double> fractions;
   const std::vector<bool> free = service->motions_valid(starts.data(), goals.data(), motions, &fractions);
   ASSERT_EQ(free.size(), motions);
-  for (std::size_t w = 0; w + 1 < motions; ++w) EXPECT_TRUE(free[w]) << "segment " << w;
+  for (std::size_t w = 0; w + 1 < motions; ++w) {
+    EXPECT_TRUE(free[w]) << "segment " << w;
+  }
   EXPECT_FALSE(free.back());
   double single = -1.0;
   EXPECT_FALSE(service->motion_valid(kStart.data(), kGoal.data(), &single));

@@ -77,7 +77,9 @@ TEST_F(NodeQueries, FreeAndSelfCollidingConfigurations) {
   }
   for (const Contact& c : b.contacts) reported.insert({c.body_a, c.body_b});
   EXPECT_EQ(reported, expected);
-  for (const Contact& c : b.contacts) EXPECT_GE(c.depth, 0.0);
+  for (const Contact& c : b.contacts) {
+    EXPECT_GE(c.depth, 0.0);
+  }
 }
 
 // docs/design.md through the service, whatever serves the tolerance (the link proxies when

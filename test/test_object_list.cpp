@@ -54,7 +54,9 @@ TEST(PersistentVector, MatchesAVectorAndKeepsEverySnapshot) {
     if (step % 997 == 0) snapshots.emplace_back(v, oracle);
   }
   EXPECT_EQ(contents(v), oracle);
-  for (const auto& [snap, expected] : snapshots) EXPECT_EQ(contents(snap), expected);
+  for (const auto& [snap, expected] : snapshots) {
+    EXPECT_EQ(contents(snap), expected);
+  }
   // Emptied and grown again.
   while (!v.empty()) v.pop_back();
   v.push_back(7);
@@ -130,7 +132,9 @@ void expect_same(const ObjectList& list, const std::vector<CollisionObject>& ora
   std::sort(ids.begin(), ids.end());
   std::sort(expected.begin(), expected.end());
   ASSERT_EQ(ids, expected);
-  for (std::size_t s = 0; s < list.size(); ++s) ASSERT_EQ(list.find(list[s].id), static_cast<std::ptrdiff_t>(s));
+  for (std::size_t s = 0; s < list.size(); ++s) {
+    ASSERT_EQ(list.find(list[s].id), static_cast<std::ptrdiff_t>(s));
+  }
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int q = 0; q < 20; ++q) {
     const Vec3 c = Vec3(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5) * 24.0;

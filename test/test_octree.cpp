@@ -202,7 +202,9 @@ TEST(OctreeAgainstOctomap, BitmapAndSetOfCrossedVoxelsGiveOneTree) {
       }
     }
     ASSERT_EQ(ours(a), ours(b)) << "mode " << mode;
-    if (!dense.clip_rays_to_workspace) ASSERT_EQ(ours(a), theirs(reference)) << "mode " << mode;
+    if (!dense.clip_rays_to_workspace) {
+      ASSERT_EQ(ours(a), theirs(reference)) << "mode " << mode;
+    }
     EXPECT_GT(a.leaves().size(), 1000u) << "mode " << mode;
     ++compared;
   }
@@ -272,7 +274,9 @@ TEST(VoxelSet, AgainstStdSet) {
     }
   }
   EXPECT_EQ(a.size(), ra.size());
-  for (const OctreeKey& k : rb) EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+  for (const OctreeKey& k : rb) {
+    EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+  }
   VoxelSet difference = a;
   difference.erase_all(b);
   a.insert_all(b);
@@ -324,13 +328,17 @@ TEST(VoxelBitGrid, AgainstStdSet) {
     }
     EXPECT_GT(refused, 0);
     EXPECT_EQ(a.size(), ra.size());
-    for (const OctreeKey& k : rb) EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+    for (const OctreeKey& k : rb) {
+      EXPECT_EQ(a.contains(k), ra.count(k) == 1);
+    }
     a.insert_all(b);
     ra.insert(rb.begin(), rb.end());
     VoxelSet set;
     a.append_to(set);
     EXPECT_EQ(set.size(), ra.size());
-    for (const OctreeKey& k : ra) ASSERT_TRUE(set.contains(k) && a.contains(k));
+    for (const OctreeKey& k : ra) {
+      ASSERT_TRUE(set.contains(k) && a.contains(k));
+    }
   }
 }
 

@@ -197,7 +197,9 @@ TEST(NoReturn, RaysClearWhatABruteForceWalkCrosses) {
   const KeySet got = observed(tree);
   ASSERT_GT(brute.size(), 500u);
   // Each freed voxel once, as a miss.
-  for (const Octree::Leaf& l : tree.leaves()) EXPECT_FLOAT_EQ(l.log_odds, tree.model().miss);
+  for (const Octree::Leaf& l : tree.leaves()) {
+    EXPECT_FLOAT_EQ(l.log_odds, tree.model().miss);
+  }
   // The longest piece of any ray in the voxel's cube.
   auto chord = [&](const std::array<std::uint16_t, 3>& key) {
     double longest = 0.0;

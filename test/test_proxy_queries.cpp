@@ -263,7 +263,9 @@ TEST(SelfFilterProxies, SamePointsAsTheExactFilter) {
       ASSERT_EQ(a.on_robot, b.on_robot) << "padding " << padding;
       ASSERT_EQ(a.shadowed, b.shadowed);
       ASSERT_EQ(a.obstacles.size(), b.obstacles.size());
-      for (std::size_t i = 0; i < a.obstacles.size(); ++i) ASSERT_EQ(a.obstacles[i], b.obstacles[i]) << i;
+      for (std::size_t i = 0; i < a.obstacles.size(); ++i) {
+        ASSERT_EQ(a.obstacles[i], b.obstacles[i]) << i;
+      }
       ASSERT_EQ(a.clear_only.size(), b.clear_only.size());
       EXPECT_GT(a.on_robot, points.size() / 10) << "too few points near the robot to test";
     }

@@ -254,7 +254,9 @@ TEST(RobotModel, ColladaZUpFollowsTheRosConvention) {
   const RobotModel m = pkg.load(mesh_link("a", "package://test-meshes/meshes/tri.dae"));
   const TriangleMesh& mesh = *m.links()[0].collision[0].mesh;
   ASSERT_EQ(mesh.triangles.size(), 1u);
-  for (const Vec3& v : mesh.vertices) EXPECT_NEAR(v.z(), 5.0, 1e-9) << "root transform reset, child kept";
+  for (const Vec3& v : mesh.vertices) {
+    EXPECT_NEAR(v.z(), 5.0, 1e-9) << "root transform reset, child kept";
+  }
 }
 
 TEST(RobotModel, LoadErrorsNameLinkElementAndFile) {

@@ -37,7 +37,9 @@ TEST(JointValueMap, NamesMapToStateVariables) {
   const JointValueMap map(model);
   std::vector<std::string> warnings;
   const auto columns = map.columns(model.variable_names(), warnings);
-  for (std::size_t i = 0; i < columns.size(); ++i) EXPECT_EQ(columns[i], int(i));
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    EXPECT_EQ(columns[i], int(i));
+  }
   EXPECT_TRUE(warnings.empty());
   std::vector<double> state(model.variable_count(), 0.0);
   const std::vector<std::string> names = {"joint3", "joint1"};
@@ -58,7 +60,9 @@ TEST(JointValueMap, OutlivesTheModelItWasMadeFrom) {
   std::vector<std::string> warnings;
   const auto columns = map.columns(names, warnings);
   ASSERT_EQ(columns.size(), names.size());
-  for (std::size_t i = 0; i < columns.size(); ++i) EXPECT_EQ(columns[i], int(i));
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    EXPECT_EQ(columns[i], int(i));
+  }
   EXPECT_TRUE(map.knows("joint1"));
 }
 

@@ -475,7 +475,9 @@ TEST(ObjectGrid, OffersEveryObjectABallMeets) {
     double lo = 0.0, hi = reach;
     if (!grid.ball_meets(o, c, hi)) continue;
     for (int k = 0; k < 60; ++k) (grid.ball_meets(o, c, 0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-    for (const double r : {lo, hi, hi * (1 + 1e-12), lo * (1 - 1e-12)}) ASSERT_NO_FATAL_FAILURE(expect_offered(c, r));
+    for (const double r : {lo, hi, hi * (1 + 1e-12), lo * (1 - 1e-12)}) {
+      ASSERT_NO_FATAL_FAILURE(expect_offered(c, r));
+    }
   }
   EXPECT_GT(met, 1000);
   EXPECT_LT(offered_in_vain, 3 * met);  // the cells' bounds pass over most of their lists

@@ -202,8 +202,12 @@ TEST(SceneFile, ChecksAsTheSameObjectsAddedOneByOne) {
     const EnvironmentResult b = checker.check_environment(q.data(), by_hand, request);
     ASSERT_EQ(a.collision, b.collision) << i;
     ASSERT_EQ(a.contacts.size(), b.contacts.size()) << i;
-    for (std::size_t c = 0; c < a.contacts.size(); ++c) EXPECT_EQ(a.contacts[c].object, b.contacts[c].object) << i;
-    if (!a.collision) EXPECT_NEAR(a.min_distance, b.min_distance, 1e-12) << i;
+    for (std::size_t c = 0; c < a.contacts.size(); ++c) {
+      EXPECT_EQ(a.contacts[c].object, b.contacts[c].object) << i;
+    }
+    if (!a.collision) {
+      EXPECT_NEAR(a.min_distance, b.min_distance, 1e-12) << i;
+    }
     colliding += a.collision;
   }
   EXPECT_GT(colliding, 0) << "the scene never touched the arm: the comparison shows nothing";
@@ -359,7 +363,9 @@ TEST(SceneFile, ReadsAPlanningSceneInYaml) {
     const std::vector<double> q = random_configuration(checker.model(), rng);
     const EnvironmentResult x = checker.check_environment(q.data(), a, request), y = checker.check_environment(q.data(), b, request);
     ASSERT_EQ(x.collision, y.collision) << i;
-    if (!x.collision) EXPECT_NEAR(x.min_distance, y.min_distance, 1e-9) << i;
+    if (!x.collision) {
+      EXPECT_NEAR(x.min_distance, y.min_distance, 1e-9) << i;
+    }
   }
   // The robot state and the matrix, as pairs.
   ASSERT_EQ(yaml.joint_values.size(), 2u);

@@ -242,7 +242,9 @@ TEST(SceneChecker, CertifiedMotionsHoldOnADenseSweep) {
         };
         if (r.valid) {
           ++free_motions;
-          for (int k = 0; k <= 500; ++k) ASSERT_FALSE(exact_collides(checker, state(k / 500.0).data(), *env)) << "motion " << i << " at " << k;
+          for (int k = 0; k <= 500; ++k) {
+            ASSERT_FALSE(exact_collides(checker, state(k / 500.0).data(), *env)) << "motion " << i << " at " << k;
+          }
         } else {
           const std::vector<double> q = state(r.colliding_fraction);
           EXPECT_LE(exact_clearance(checker, q.data(), *env), tolerance + 2e-5 + 1e-9) << "motion " << i;  // within twice min_clearance

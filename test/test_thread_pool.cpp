@@ -28,9 +28,13 @@ TEST(ThreadPool, EveryIndexOnceOnEveryParticipant) {
   });
   EXPECT_EQ(n, 4u);
   EXPECT_EQ(calls.load(), 4);
-  for (const auto& b : by) EXPECT_EQ(b.load(), 1);
+  for (const auto& b : by) {
+    EXPECT_EQ(b.load(), 1);
+  }
   pool.for_each(seen.size(), 7, [&](std::size_t i) { ++seen[i]; });
-  for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i].load(), 1) << i;
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    ASSERT_EQ(seen[i].load(), 1) << i;
+  }
   pool.for_each(0, 7, [&](std::size_t) { FAIL() << "no work"; });
 }
 

@@ -45,7 +45,9 @@ TEST(Traversal, DepthFirstReachesEveryTriangleOnceAndStops) {
         return false;
       });
   ASSERT_EQ(seen.size(), bvh.triangles().size());
-  for (std::size_t i = 0; i < bvh.triangles().size(); ++i) EXPECT_EQ(seen.count(static_cast<int>(i)), 1u);
+  for (std::size_t i = 0; i < bvh.triangles().size(); ++i) {
+    EXPECT_EQ(seen.count(static_cast<int>(i)), 1u);
+  }
   EXPECT_EQ(visits, static_cast<int>(bvh.nodes().size()));  // every node once
 
   int leaves = 0;
@@ -98,7 +100,9 @@ TEST(Traversal, PairWalksSeeEveryLeafPairAndTheBestFirstMinimum) {
       a, b, [](std::int32_t, std::int32_t) { return Visit::kEnter; },
       [&](const BvhNode<Obb>& na, const BvhNode<Obb>& nb) {
         for (const int i : leaf_triangles(na)) {
-          for (const int j : leaf_triangles(nb)) EXPECT_TRUE(pairs.emplace(i, j).second) << "pair reached twice";
+          for (const int j : leaf_triangles(nb)) {
+            EXPECT_TRUE(pairs.emplace(i, j).second) << "pair reached twice";
+          }
         }
         return false;
       });
@@ -296,7 +300,9 @@ TEST(CubeWalk, WalkNodesVisitsEveryNodeOnceInTheOrderAsked) {
             }
           }
           EXPECT_EQ(static_cast<int>(path.size()), c.depth);
-          if (!path.empty()) EXPECT_EQ((c.index - 1) / 8, path.back().index);
+          if (!path.empty()) {
+            EXPECT_EQ((c.index - 1) / 8, path.back().index);
+          }
           path.push_back(c);
           if (tree.is_leaf(c.node)) {
             ++leaves;

@@ -269,7 +269,7 @@ template <>
 Kdop26 fit_volume<Kdop26>(const Vec3* p, std::size_t n) { return fit_kdop<26>(p, n); }
 
 Obb merge(const Obb& a, const Obb& b) {
-  // The seed's method: refit to the 16 corners.
+  // The textbook's method: refit to the 16 corners.
   Vec3 corners[16];
   for (int i = 0; i < 8; ++i) {
     const Vec3 s((i & 4) ? 1 : -1, (i & 2) ? 1 : -1, (i & 1) ? 1 : -1);

@@ -61,7 +61,7 @@ int split_at_median(Order& order, int begin, int end, const std::vector<Prim>& p
   return mid;
 }
 
-// The seed's split: the plane through the centre of the longest axis of the node's box,
+// The textbook's split: the plane through the centre of the longest axis of the node's box,
 // triangles assigned by centroid. Falls back to the median when one side would be empty.
 int split_at_centre(Order& order, int begin, int end, const std::vector<Prim>& prims) {
   Aabb box;
@@ -276,7 +276,7 @@ struct BvhBuilder {
   }
 
   // Emits the cluster tree as nodes; small subtrees become leaves. Inner volumes are merges of
-  // their children's (the seed's bottom-up update); leaves are fitted.
+  // their children's (the textbook's bottom-up update); leaves are fitted.
   std::int32_t emit(const std::vector<Cluster>& tree, std::int32_t c) {
     const int begin = static_cast<int>(order.size());
     const std::int32_t idx = new_node(begin, begin);

@@ -215,7 +215,7 @@ Vec3 closest_point(const Primitive& prim, const Vec3& p) {
     case Primitive::Kind::kCylinder: {
       // The solid is a disc times an interval: project onto each.
       // (sqrt, not hypot: a point inside the disc needs no root, and hypot's care for overflow
-      // costs 50 instructions in a test the object grid makes millions of times a plan.)
+      // is costly in a test the object grid makes millions of times a plan.)
       const double z = std::clamp(p.z(), -prim.half_length, prim.half_length);
       const double n2 = p.x() * p.x() + p.y() * p.y();
       if (n2 <= prim.radius * prim.radius) return {p.x(), p.y(), z};

@@ -276,7 +276,7 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
   std::size_t sample = 0;
   for (const auto& [q, inward] : surface_samples(field, spacing)) {
     targets.push_back(q);
-    // Candidates from every third sample: as good a cover (measured), a third of the build.
+    // Candidates from every third sample: as good a cover (docs/performance.md), a third of the build.
     if (!field.solid()) {  // a surface only: balls of radius e/2 centred on it
       candidates.push_back({q, half_level * (1.0 - kVolumeMargin) - kVolumeMargin});
       continue;
@@ -421,7 +421,7 @@ class PolyhedralCover {
 // A sphere that holds leaves [begin, end): from the centre of their box, a few steps of
 // Badoiu-Clarkson (move toward the farthest point by 1/(k+2) of the way) tighten it; the radius
 // is then the largest reach from the centre found (any centre gives a valid sphere; the steps
-// only make it smaller: 10-20 % fewer sphere tests in a traversal of pr2's surface proxies).
+// only make it smaller, and a smaller sphere is opened less often in a traversal).
 ProxySphere enclosing_sphere(const std::vector<Chosen>& leaves, std::size_t begin, std::size_t end, const Vec3& start) {
   auto reach = [&](const Vec3& c, std::size_t& farthest) {
     double r = 0.0;
@@ -493,8 +493,8 @@ LinkProxy LinkProxy::build(const std::vector<BodyShape>& shapes, double level) {
     }
     std::vector<Chosen> chosen;
     if (!field.faces.empty()) {
-      // The seed covers its samples with twice the surface margin, so that the proof rarely
-      // needs a sphere of its own (measured: 0-5 per panda link at 20 mm).
+      // The greedy start covers its samples with twice the surface margin, so that the proof
+      // rarely needs a sphere of its own.
       PolyhedralCover cover(field, half_level, greedy_seed(field, half_level, 0.25 * half_level));
       cover.run();
       chosen = cover.chosen();

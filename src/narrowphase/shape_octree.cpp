@@ -72,7 +72,7 @@ struct KeyRange {
       hi[i] = clamped_key(grid, box_hi[i]);
     }
   }
-  // The children of the cube (corner, depth) that meet the range, as a mask of seed bits b
+  // The children of the cube (corner, depth) that meet the range, as a mask of child bits b (docs/design.md)
   // (x is bit 2 of b, y bit 1, z bit 0).
   std::uint8_t children(const OctreeKey& corner, int depth) const {
     static constexpr unsigned kHalves[3][2] = {{0x0F, 0xF0}, {0x33, 0xCC}, {0x55, 0xAA}};
@@ -164,7 +164,7 @@ bool node_meets_cube(const NodeInWorld& n, const Vec3& c, double h, double reach
 }
 
 // The smallest node holding every voxel the box [lo, hi] (world) can touch, found by descending
-// while the box's two corner keys fall into the same child (the seed's box descent): a link's
+// while the box's two corner keys fall into the same child (the textbook's box descent): a link's
 // query starts there instead of 16 levels above.
 std::optional<Cube> start_cube(const Octree& tree, const Vec3& lo, const Vec3& hi) {
   auto cube = occupied_root(tree);

@@ -124,9 +124,8 @@ CollisionRequest collision_request(const PairRequest& request, bool want_contact
 
 // A mesh (its solid too) lies in its convex hull: a hull proven farther from the other set than
 // the padding and the tolerance settles a boolean with no BVH walk (the walk could only count a
-// hit within them: the same answer). Near contact the walk goes down to triangles (64k
-// instructions a link against a box, 118k a self pair, on the planning benchmark's motions),
-// where the hulls' GJK takes a few thousand. Contacts asked for need the walk.
+// hit within them: the same answer). Near contact the walk goes down to triangles, where the
+// hulls' GJK takes a few of its steps (docs/performance.md). Contacts asked for need the walk.
 bool hulls_apart(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, const PairRequest& request) {
   const double beyond = request.padding + request.tolerance;
   return convex_distance(a, b, b_in_a, beyond).lower_bound > beyond;
@@ -193,7 +192,7 @@ double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const 
     }
     const double apart = (q - hull.on_b).norm();
     // (Within 1e-13 of the scale: the BVH's answer to rounding. At 1e-10, as two meshes take it,
-    // 6 % fewer instructions but a distance that moves by 3e-11 when a pose moves by an ulp.)
+    // a little faster but a distance that moves by 3e-11 when a pose moves by an ulp.)
     const double scale = mesh.hull->extent + extent(primitive) + p_in_mesh.t.norm();
     if (apart - hull.lower_bound <= std::max(1e-13 * scale, tolerance)) {
       wa = pm * q;

@@ -220,7 +220,7 @@ std::vector<Octree::Leaf> Octree::leaves() const {
 namespace bvh_collision {
 namespace {
 
-// OctoMap numbers children x = bit 0, y = bit 1, z = bit 2; the seed's b has x = bit 2, z = bit 0.
+// OctoMap numbers children x = bit 0, y = bit 1, z = bit 2; docs/design.md's b has x = bit 2, z = bit 0.
 int octomap_child(int b) { return ((b >> 2) & 1) | (b & 2) | ((b & 1) << 2); }
 
 }  // namespace

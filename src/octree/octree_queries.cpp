@@ -1,4 +1,4 @@
-// The seed's octree queries: point location, box and sphere overlap, ray casting; and clearing a
+// The octree queries of the textbook the design started from: point location, box and sphere overlap, ray casting; and clearing a
 // box. Every search skips a subtree whose node value is below the occupancy threshold: an inner
 // node holds the maximum of its children, so nothing below it is occupied.
 #include <algorithm>

@@ -41,7 +41,7 @@ class PairIndices {
 
 // A self check's scratch, per thread. Reached through a call the compiler cannot see into: in a
 // shared library each use of a thread_local is a call to __tls_get_addr, and GCC re-derives the
-// address at every use rather than keep it (measured: 56 calls per panda check).
+// address at every use rather than keep it (dozens of calls a check).
 struct SelfScratch {
   std::vector<Transform> poses;
   std::vector<Vec3> centers;
@@ -248,8 +248,8 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
   environment.root_pose = request.root_pose;
   environment.contacts = false;  // a batch answers yes or no per state
   // The octree's distance field lets most links skip the octree (answers unchanged): a batch
-  // uses one already kept for this octree, and builds it when large enough to pay for it
-  // (~48 ms for panda at 2 cm against ~2.7 us saved a state).
+  // uses one already kept for this octree, and builds it when large enough to pay for it (its
+  // build against the time it saves a state: docs/performance.md).
   environment.distance_field = count >= kFieldBatch ? EnvironmentRequest::DistanceField::kBuild
                                                     : EnvironmentRequest::DistanceField::kIfKept;
   // Links no joint moves (the root's, and those fixed to it) sit where the root pose puts them in

@@ -95,8 +95,8 @@ bool CollisionChecker::link_meets_object(int link, const Transform& pose, const 
   return false;
 }
 
-// (Against objects a sphere walk measured slower than the exact path, panda amid a box, a mesh
-// ball and a cylinder: 3.9 against 2.2 us a state, so objects stay exact.)
+// (Against objects a sphere walk was slower than the exact path, so objects stay exact:
+// docs/performance.md.)
 bool CollisionChecker::link_proxy_meets_octree(int link, const Transform& pose, const LinkProxy& proxy, const Octree& tree,
                                                const OctreeDistanceField& field, bool contacts, EnvironmentResult& result) const {
   const ProxyOctreeHit h = proxy_meets_octree(proxy, pose, m_->paddings()[link], tree, field, contacts);
@@ -179,8 +179,7 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
   // At a tolerance, a boolean check may answer from a link's proxy against the octree
   // (narrowphase/tolerance_policy.h: against an obstacle its error is half its level); a contact
   // is then an occupied cube within padding + level / 2. Only with the distance field: without it
-  // a walk of the octree per sphere measured slower than the OBB trees (panda, 2 cm table scene:
-  // 180 against 7 us a state).
+  // a walk of the octree per sphere is slower than the OBB trees (docs/performance.md).
   ToleranceQuestion question{request.tolerance, Counterpart::kOctree};
   question.boolean = !request.distance;
   question.solids = request.solids;

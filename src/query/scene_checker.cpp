@@ -80,9 +80,8 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   root_at_origin_ = options.root_pose.R == Mat3::Identity() && options.root_pose.t == Vec3::Zero();
   // Each link's environment first, the links farthest down the chain first, then the self pairs:
   // a planner's states and motions in a scene mostly collide with objects, and with the hand
-  // and forearm first. Replayed from the planning benchmark, against self pairs first: 7 % fewer
-  // instructions for its states, 6 % for its motions (an interval whose midpoint collides stops
-  // there), the same answers.
+  // and forearm first (an interval whose midpoint collides stops there): fewer instructions than
+  // self pairs first, the same answers (docs/performance.md).
   for (auto l = links_.rbegin(); l != links_.rend(); ++l) {
     if (options.environment) components_.push_back(static_cast<int>(pair_rates_.size()) + *l);
   }
@@ -136,16 +135,15 @@ bool SceneChecker::worth(const ProxyLevel* level, double growth) const {
 
 // The one level a link walks against an object, or a self pair walks: the finest worth walking
 // for the growth. A link that meets an object at the coarser levels mostly meets it at the finest
-// too, and a link the object grid offers an object is mostly near it (on the planning benchmark's
-// calls at 10 mm, against walking each level from the coarsest: 4 % fewer instructions in its
-// motions, 3 % in its free states, 13 % in its colliding states). Null without levels.
+// too, and a link the object grid offers an object is mostly near it (fewer instructions than
+// walking each level from the coarsest: docs/performance.md). Null without levels.
 const ProxyLevel* SceneChecker::walked_level(double growth) const {
   const auto finest = std::find_if(proxies_.rbegin(), proxies_.rend(), [&](const ProxyLevel* level) { return worth(level, growth); });
   return finest == proxies_.rend() ? nullptr : *finest;
 }
 
 // An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
-// (some 10-30 us against 1-3 for a proxy test)? Not at a tolerance, where a failed interval is
+// (ten times a proxy test's)? Not at a tolerance, where a failed interval is
 // bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
 // proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
 // where halving the interval no longer helps them; always without proxies.
@@ -210,8 +208,7 @@ bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int 
 // Asked within a slack (a hundredth of the limit, at most 10 um) and returned less it: a lower
 // bound, all a motion needs of it (the stretch it frees shrinks by about the slack over the gap).
 // Exact to the last digit, GJK creeps for dozens of steps towards a curved obstacle (the cage's
-// bars) and refines for hundreds more: 40 % of the instructions of the planning benchmark's
-// slowest motions.
+// bars) and refines for hundreds more, most of the work of a slow motion.
 double SceneChecker::link_object_distance(int link, const Transform& pose, int object, double limit) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const CollisionObject& o = env_->objects()[object];
@@ -245,7 +242,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
       // the link (its level's Hausdorff bound) proves a point of the link inside: a hit with no
       // exact test (the state itself only).
       // A primitive's spheres are carried into its frame at once (one transform a sphere, not
-      // two: 1 % of the planner's motion instructions).
+      // two).
       bool proven = false;
       const bool local = grid_.exact_ball_test(o);
       const Transform in_object = local ? grid_.to_local(o) * s.poses[l] : Transform();
@@ -375,7 +372,7 @@ SceneChecker::Answer SceneChecker::check_posed(const Posed& s) const {
 // with no call and no branch a component: a link whose grown ball the object grid's cell proves
 // clear of every object, with no octree, is free (link_objects_check's first test), and so is a
 // self pair whose bounding balls are apart (pair_check's). Most of a planner's free state ends
-// here (panda's 11 links and 21 pairs took 1.7k instructions as a loop of tests and branches).
+// here (as a loop of tests and branches it cost several times as much).
 // The links' blocks are called before the pairs' are sieved: a colliding state mostly meets an
 // object.
 SceneChecker::Answer SceneChecker::check_still(const Posed& s) const {

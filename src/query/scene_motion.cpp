@@ -29,9 +29,8 @@ constexpr double kEarliestResolution = 1e-3;
 
 // A motion whose whole interval fails, grown by more than this, is cut into pieces grown by about
 // this much rather than halved: a long motion's halves and quarters fail too, each costing a grown
-// check of every pending component and a midpoint check. Measured on the planning benchmark's
-// motions (callgrind, 11,048 motions of its 10 mm planner): 0.2 m cuts the instructions by 12 %
-// (10 % at tolerance 0); 0.15 by 11 %, 0.3 by 8 %.
+// check of every pending component and a midpoint check. The size was chosen on the planning
+// benchmark's motions (docs/performance.md).
 constexpr double kFirstPieceGrowth = 0.2;
 
 // The order in which the m pieces of a motion are checked: breadth first (a boolean answer), the
@@ -137,9 +136,8 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     // grown it meets what is near it (its walk goes deep before it fails) and the pieces will
     // check it again. Its midpoint check still runs. It has no exact distance, so it frees no
     // stretch around the midpoint: another component's distance would free it there too (test
-    // AStretchFreedByOneLinkDoesNotFreeAFasterOne). (40,000 of the planning benchmark's calls,
-    // callgrind: 11 % fewer instructions at 10 mm and at tolerance 0, the same answers; the same
-    // skip in every interval measured 3 % more.)
+    // AStretchFreedByOneLinkDoesNotFreeAFasterOne). (The same answers, fewer instructions; the
+    // same skip in every interval costs more: docs/performance.md.)
     const bool hopeless = hi - lo == 1.0 && (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) > kFirstPieceGrowth;
     if (hopeless) {
       posed.no_free_radius();

@@ -110,8 +110,8 @@ void SceneChecker::interval_chains() {
 //
 // Written out on doubles, each quantity in the order Eigen evaluates it (the same bits), with the
 // joints' changes and each link's turning total computed once a motion (chain_deltas) and each
-// turning joint's origin and axis once an interval: the planner's motions spend a sixth of their
-// instructions here (167 a joint before, 150 after; callgrind on 4,000 of its motions).
+// turning joint's origin and axis once an interval: a good part of the planner's motions is spent
+// here (docs/performance.md).
 double SceneChecker::chain_speed(int l, const Posed& mid, double half, const IntervalRates& rates) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const double cx = mid.centres[l][0], cy = mid.centres[l][1], cz = mid.centres[l][2];

@@ -386,7 +386,7 @@ namespace {
 // the rotation mixes only two columns of parent * fixed, mixed here as they are computed rather
 // than stored and read back, two rows at a time (the same operations on each value as the
 // product then the rotation: the same bits, test KinematicsPlan.StepsEqualTheScalarProducts...;
-// panda's pose in 2.2k instructions against 3.2k, callgrind).
+// a third fewer instructions a pose: docs/performance.md).
 template <int K>
 void compose_axis_rotation(const Transform& parent, const Transform& fixed, double c, double s, Transform& out) {
   constexpr int i = (K + 1) % 3, j = (K + 2) % 3;  // R_K(q) maps e_i -> c e_i + s e_j, e_j -> -s e_i + c e_j
@@ -427,7 +427,7 @@ void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, std::size_t fi
 }  // namespace
 
 // Built twice, the CPU choosing at load time: with AVX's three-operand forms the split columns
-// need no register copies (a panda pose 2.24k -> 2.03k instructions, callgrind), and no fused
+// need no register copies (docs/performance.md), and no fused
 // multiply-add is enabled, so both give the same bits. Flattened: a clone inlines only what it
 // is given.
 __attribute__((target_clones("avx2", "default"), flatten)) void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,

@@ -13,7 +13,7 @@
 namespace bvh_collision {
 
 enum class BuildMethod {
-  kTopDownMedian,  // the seed's: split at the centre of the longest axis, by triangle centroid
+  kTopDownMedian,  // the textbook's: split at the centre of the longest axis, by triangle centroid
   kSah,            // binned surface area heuristic
   kBottomUp,       // agglomerative: repeatedly merge the closest pair of clusters
 };

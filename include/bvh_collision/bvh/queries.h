@@ -14,7 +14,7 @@
 
 namespace bvh_collision {
 
-// The seed's cost terms: T = Nu*Cu + Nv*Cv + Np*Cp.
+// The textbook's cost terms: T = Nu*Cu + Nv*Cv + Np*Cp.
 struct QueryStats {
   std::uint64_t volume_updates = 0;   // Nu: volumes carried into another frame
   std::uint64_t volume_tests = 0;     // Nv: volume overlap / distance-bound tests

@@ -42,7 +42,7 @@ inline double ray_ball_entry(const Vec3& origin, const Vec3& unit, double length
 }
 
 // Closed sphere against closed axis-aligned box, exactly as the geometry is: the squared distance
-// from the centre to the box is at most r^2. (The seed's "distance between the centres <= r"
+// from the centre to the box is at most r^2. (The textbook's "distance between the centres <= r"
 // misses a sphere touching a large box's face, and accepts nothing it should not only by luck.)
 inline bool sphere_intersects_box(const Vec3& centre, double r, const Vec3& box_min, const Vec3& box_max) {
   double d2 = 0.0;

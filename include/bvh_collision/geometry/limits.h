@@ -1,4 +1,4 @@
-// Bounds on the work one request, one cloud or one robot may ask for (issue 19; in the geometry
+// Bounds on the work one request, one cloud or one robot may ask for (in the geometry
 // layer so that every layer can check its own: the octree its scans, the checker its robot and
 // queries, the node its messages and parameters): a motion checked
 // at 1e-9 rad over 3 rad once kept the node busy for ten minutes. Each limit exceeded is a

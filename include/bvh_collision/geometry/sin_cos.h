@@ -1,5 +1,5 @@
-// Sine and cosine of one angle together, for forward kinematics: the C library's sincos costs
-// about 190 instructions a call and is a third of a panda pose; this one is about 60, with no
+// Sine and cosine of one angle together, for forward kinematics: the C library's sincos is a
+// large part of a pose (docs/performance.md); this one is a third of its cost, with no
 // call and no branch but the quadrant's, and the batch kernel (model/proxy_batch_kernel.h)
 // evaluates the same constants and the same operations in its lanes, so both give the same bits.
 //
@@ -44,7 +44,7 @@ inline void sin_cos(double x, double& s, double& c) {
   const double n = shifted - k::kRoundShift;
   const double r = ((x - n * k::kPiOver2Hi) - n * k::kPiOver2Mid) - n * k::kPiOver2Lo;
   const double r2 = r * r;
-  // Horner written out (at -O2 GCC keeps the loops, at three times the instructions).
+  // Horner written out (at -O2 GCC keeps the loops, several times slower).
   const double ps = ((((((k::kSine[0] * r2 + k::kSine[1]) * r2 + k::kSine[2]) * r2 + k::kSine[3]) * r2 + k::kSine[4]) * r2 +
                       k::kSine[5]) * r2 + k::kSine[6]) * r2 + k::kSine[7];
   const double sin_r = r + r * r2 * ps;

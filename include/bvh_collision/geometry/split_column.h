@@ -1,6 +1,6 @@
 // A column of three doubles held as rows 0-1 in one SSE2 register and row 2 alone (the baseline
 // x86-64 has two lanes), for products of poses written out: at -O2 GCC leaves Eigen's small
-// products as calls and keeps loops over three rows, at twice the instructions. Lane arithmetic
+// products as calls and keeps loops over three rows, twice the work. Lane arithmetic
 // rounds as scalar arithmetic does and the sums keep one order (row r: a(r,0) b0 + a(r,1) b1 +
 // a(r,2) b2), so the results are the scalar products bit for bit (and the batch kernel's,
 // model/proxy_batch_kernel.h).

@@ -18,7 +18,7 @@ struct Transform {
   static Transform Translation(const Vec3& t) { return {Mat3::Identity(), t}; }
 
   // Written out: GCC does not inline Eigen's assignment loop for R * p + t (a call in the proxy
-  // walks' innermost loop, 4 % of a planner's instructions). The sums are grouped as Eigen's SSE2
+  // walks' innermost loop). The sums are grouped as Eigen's SSE2
   // product groups them (rows 0-1 as a packet, row 2 alone), so every result is bit for bit the
   // same as before.
   Vec3 operator*(const Vec3& p) const {

@@ -36,6 +36,11 @@ struct SceneShape {
 enum class SceneOperation { kAdd, kAppend, kRemove, kMove };
 
 struct SceneObject {
+  SceneObject() = default;
+  // An object of these shapes (the common case: what a scene generator or a test writes).
+  SceneObject(std::string id, const Transform& pose, std::vector<SceneShape> shapes, std::string frame_id = {})
+      : id(std::move(id)), pose(pose), shapes(std::move(shapes)), frame_id(std::move(frame_id)) {}
+
   std::string id;
   Transform pose;  // in the frame `frame_id` names (empty: the scene's world frame)
   std::vector<SceneShape> shapes;

@@ -3,8 +3,8 @@
 // apart), or on three when a fine grid fits the budget (panda's forearm and a finger: two wrist
 // joints and the finger's short travel), a grid over those variables holding, per cell, a lower bound on the pair's exact
 // distance anywhere in the cell. Such pairs sit close in every state, so a sphere tree or an OBB
-// hierarchy has to descend far to tell them apart each time (measured on panda: link6-hand,
-// link5-link7 and the fingers took 60 % of the sphere tests of a proxy self check); the table
+// hierarchy has to descend far to tell them apart each time (a few such pairs took most of the
+// sphere tests of a proxy self check: docs/performance.md); the table
 // settles them with one lookup whenever the bound clears the padding.
 //
 // Why the bound holds: the exact distance d(c) between the two links at the cell's centre c

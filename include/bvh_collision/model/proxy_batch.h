@@ -1,4 +1,4 @@
-// Batches of boolean self checks on the link proxies, vectorised over states (issue 18, point 3):
+// Batches of boolean self checks on the link proxies, vectorised over states:
 // states in the lanes of one kernel (src/model/proxy_batch_kernel.h) that does their forward
 // kinematics, the bounding-sphere broad phase, the clearance grids and one proxy tree traversal
 // for all lanes. The kernel is built twice, for SSE2 (two lanes; any x86-64, the default -O2

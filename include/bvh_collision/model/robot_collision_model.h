@@ -26,8 +26,8 @@ namespace bvh_collision {
 struct CheckerOptions {
   double padding = 0.0;                        // every link's padding (m)...
   std::map<std::string, double> link_padding;  // ...unless named here
-  // How link BVHs are built: two triangles per leaf took 6-15% fewer instructions than one for
-  // boolean and distance self-collision on panda, ur5e and pr2 (three was worse on pr2).
+  // How link BVHs are built: two triangles per leaf answered self-collision, boolean and
+  // distance, with fewer instructions than one or three (docs/performance.md).
   BuildOptions bvh = {BuildMethod::kSah, 2};
   // The accelerators built beside the model (model/robot_accelerators.h) read the next three.
   // Proxy levels e (m) for bounded-error sphere proxies (narrowphase/link_proxy.h), built at

@@ -1,7 +1,7 @@
 // Link proxies kept on disk by content. A proxy depends only on its link's shapes and its level,
 // and proves its bounds for that geometry (narrowphase/link_proxy.h), so it can be stored once and
-// read at every later start: panda's three levels (20, 10, 5 mm) took 11.8 s to build here, and
-// a node restart read them back in 3 ms. The key is a 64-bit FNV-1a hash of every number that describes the link
+// read at every later start (a build takes seconds, a read milliseconds: docs/performance.md).
+// The key is a 64-bit FNV-1a hash of every number that describes the link
 // (shape origins, primitives, each mesh's triangles and whether it is closed), the level and the
 // builder's version; a file is used only when its key, format, structure and checksum all agree,
 // and any other is rebuilt and replaced (written to a temporary name, then renamed).

@@ -25,7 +25,7 @@
 
 namespace bvh_collision {
 
-// A node of the octree with its cube: depth, the key of its lowest voxel, its seed index.
+// A node of the octree with its cube: depth, the key of its lowest voxel, its index (docs/design.md's numbering).
 struct OctreeCube {
   std::int32_t node;
   int depth;
@@ -33,7 +33,7 @@ struct OctreeCube {
   std::uint64_t index;
 };
 
-// Every child (a mask of the seed's child bits b: x is bit 2, y bit 1, z bit 0).
+// Every child (a mask of the child bits b of docs/design.md: x is bit 2, y bit 1, z bit 0).
 struct AllChildren {
   std::uint8_t operator()(const OctreeCube&) const { return 0xFF; }
 };
@@ -64,7 +64,7 @@ void for_occupied_children(const Octree& tree, const OctreeCube& c, F&& f, std::
   }
 }
 
-// The octree's occupied cubes as geometry/tree_walk.h walks them: children in the seed's order
+// The octree's occupied cubes as geometry/tree_walk.h walks them: children in docs/design.md's order
 // (child 0 walked first), only occupied ones, and of those only the ones `which(cube)` masks in.
 template <class MaskFn = AllChildren>
 struct OccupiedCubeView {
@@ -104,8 +104,8 @@ void nearest_cubes_first(const Octree& tree, const OctreeCube& start, BoundFn&& 
   nearest_first_walk(OccupiedCubeView<>{tree, {}}, start, bound, leaf, cutoff);
 }
 
-// Orders of a cube's children by seed child bits b: the seed's (b = 0 first) and OctoMap's (its x
-// is bit 0 where the seed's is bit 2: the order of the .ot node stream).
+// Orders of a cube's children by child bits b (docs/design.md): that numbering's (b = 0 first) and OctoMap's (its x
+// is bit 0 where docs/design.md's is bit 2: the order of the .ot node stream).
 inline constexpr std::array<std::uint8_t, 8> kSeedChildOrder{0, 1, 2, 3, 4, 5, 6, 7};
 inline constexpr std::array<std::uint8_t, 8> kOctomapChildOrder{0, 4, 2, 6, 1, 5, 3, 7};
 
@@ -138,7 +138,7 @@ void walk_nodes(const Octree& tree, VisitFn&& visit, const std::array<std::uint8
                    [](const OctreeCube&) { return false; });
 }
 
-// f(leaf) for every leaf, free or occupied (pruned ones above depth 16 included), in the seed's order.
+// f(leaf) for every leaf, free or occupied (pruned ones above depth 16 included), in docs/design.md's order.
 template <class F>
 void for_each_leaf(const Octree& tree, F&& f) {
   walk_nodes(tree, [&](const OctreeCube& c) {
@@ -147,7 +147,7 @@ void for_each_leaf(const Octree& tree, F&& f) {
   });
 }
 
-// f(leaf) for every occupied leaf, in the seed's order.
+// f(leaf) for every occupied leaf, in docs/design.md's order.
 template <class F>
 void for_each_occupied_leaf(const Octree& tree, F&& f) {
   const auto root = occupied_root(tree);

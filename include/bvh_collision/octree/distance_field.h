@@ -1,5 +1,5 @@
 // Lower bounds on the distance to the octree's occupied cubes over a box, from one exact squared
-// Euclidean distance transform of its voxels (issue 18: the step toward answering "is this
+// Euclidean distance transform of its voxels (the step toward answering "is this
 // sphere clear of every obstacle?" with one lookup: check_environment, check_batch and certified
 // motions use it through Environment::octree_distance_field).
 //

@@ -1,4 +1,4 @@
-// The environment octree: OctoMap's occupancy model on the seed's node scheme (octree_key.h).
+// The environment octree: OctoMap's occupancy model on docs/design.md's node numbering (octree_key.h).
 //
 // Nodes live in numbered slots; an inner node owns a block of eight consecutive slots (slot b
 // holds the child with seed bits b, present when bit b of `mask` is set). Only nodes that some
@@ -97,8 +97,8 @@ class Octree {
   }
   double cube_size(int depth) const { return grid_.resolution() * double(1 << (kOctreeDepth - depth)); }
 
-  // Queries of the seed (octree_queries.cpp). Unknown space counts as free.
-  // The smallest existing node containing p (the descent of the seed's listing 9.4).
+  // Point, box, sphere and ray queries (octree_queries.cpp). Unknown space counts as free.
+  // The smallest existing node containing p (a descent from the root, one level a step).
   std::optional<Leaf> locate(const Vec3& p) const;
   // Occupied leaves whose cubes meet the closed box [min, max] (touching counts).
   std::vector<Leaf> occupied_in_box(const Vec3& min, const Vec3& max) const;

@@ -4,10 +4,10 @@
 // key = floor(coordinate * (1 / resolution)) + 32768, computed exactly as OctoMap computes it
 // (multiplying by the reciprocal, which for a coordinate on a voxel boundary can differ by one
 // key from dividing). A point exactly on a splitting plane therefore belongs to the voxel on the
-// plane's positive side. (The seed's quadtree remark assigns such points to the left/lower side;
+// plane's positive side. (The textbook's quadtree remark assigns such points to the left/lower side;
 // we follow OctoMap so that both trees hold the same voxels.)
 //
-// Node indices are the seed's: the root is 0, the children of node i are 8i + j (j = 1..8), and
+// Node indices are docs/design.md's: the root is 0, the children of node i are 8i + j (j = 1..8), and
 // the bits of b = j - 1 give the child's side of its parent's centre, highest bit x, middle y,
 // lowest z (1: positive side). At depth d (root 0) the side along an axis is bit (15 - d) of that
 // axis's key, so a voxel's index follows from its key alone.
@@ -34,7 +34,7 @@ struct OctreeKey {
   }
 };
 
-// The side of the parent's centre at `depth` (0 = the root's children), as the seed's b bits.
+// The side of the parent's centre at `depth` (0 = the root's children), as docs/design.md's b bits.
 inline int child_bits(const OctreeKey& key, int depth) {
   const int bit = kOctreeDepth - 1 - depth;
   return (((key.k[0] >> bit) & 1) << 2) | (((key.k[1] >> bit) & 1) << 1) | ((key.k[2] >> bit) & 1);
@@ -44,7 +44,7 @@ inline std::uint64_t child_index(std::uint64_t parent, int b) { return 8 * paren
 inline std::uint64_t parent_index(std::uint64_t node) { return (node - 1) / 8; }
 inline int bits_of_index(std::uint64_t node) { return static_cast<int>((node - 1) % 8); }
 
-// The seed index of the node at `depth` (0 = root, 16 = voxel) that contains `key`.
+// The index (docs/design.md's numbering) of the node at `depth` (0 = root, 16 = voxel) that contains `key`.
 inline std::uint64_t node_index(const OctreeKey& key, int depth) {
   std::uint64_t index = 0;
   for (int d = 0; d < depth; ++d) index = child_index(index, child_bits(key, d));

@@ -29,8 +29,8 @@ struct EnvironmentRequest {
   // proves every occupied cube farther than its radius + padding) skips the octree, and at a
   // tolerance a proxy level fits, the link's proxy spheres answer against the field and its grid
   // (within padding + level / 2). The field covers the robot's reach around the root; it is
-  // kept until the octree changes (Environment::octree_distance_field; a 2 cm map around panda:
-  // ~48 ms to build, 23 MB). kIfKept (the default) uses one already built
+  // kept until the octree changes (Environment::octree_distance_field; its build time and size:
+  // docs/performance.md). kIfKept (the default) uses one already built
   // (CollisionChecker::prepare_distance_field, which the node calls after each map change);
   // kBuild builds it if needed; kOff never uses it. Exact answers are unchanged by it.
   enum class DistanceField { kOff, kIfKept, kBuild };

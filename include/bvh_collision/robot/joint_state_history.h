@@ -1,5 +1,5 @@
 // The robot's joint values over the last seconds, to place the robot at the moment a sensor saw
-// it (issue 19): a camera cloud stamped 100 ms ago must be filtered against the arm where it was
+// it: a camera cloud stamped 100 ms ago must be filtered against the arm where it was
 // then, not where it is now, or the arm's own points stay as obstacles (a ghost it then collides
 // with) and real points near its present pose are dropped.
 //

@@ -76,16 +76,15 @@ struct NodeParameters {
   // Bounded-error link proxy levels (m) (narrowphase/link_proxy.h), built after start-up on a thread
   // of their own, coarsest first, each put to use as it is done (until then queries at a
   // tolerance take the exact path, within the same contract). Finer levels are skipped once a
-  // level needs more than kProxySphereBudget spheres (pr2: 105,893 at 10 mm). 2 mm is not a
-  // default: it took 47-113 s to build (demo arm, panda, ur5e) and answered panda's self checks
-  // slower than the exact path (1.8 against 1.35 us).
+  // level needs more than kProxySphereBudget spheres. 2 mm is not a default: slow to build, and
+  // no faster than the exact path (docs/performance.md).
   std::vector<double> proxy_levels = {0.005, 0.01, 0.02};
   // Where built link proxies are kept by content (narrowphase/link_proxy_cache.h), so that a restart
   // reads them instead of building them again. Unset: $ROS_HOME (or ~/.ros)/bvh_collision/proxy_cache;
   // empty: none.
   std::string proxy_cache;
   // Build the octree's distance field after each cloud (on the cloud thread), so that boolean
-  // checks and motions skip the octree for links it clears (a 2 cm map around panda: ~48 ms).
+  // checks and motions skip the octree for links it clears.
   bool distance_field = true;
   // Octree bounds in world_frame; unset: a cube of half-edge reach + 0.5 m around the root link.
   std::optional<Vec3> workspace_min, workspace_max;

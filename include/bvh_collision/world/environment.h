@@ -59,7 +59,7 @@ struct CollisionObject {
 // The object as the narrowphase takes it (its mesh and hull, or its primitive) ...
 inline ShapeRef shape_of(const CollisionObject& o) { return ShapeRef{o.mesh.get(), o.hull.get(), o.primitive}; }
 // ... and as the single-state tests take it: a box as the exact primitive it is (kept as 12
-// triangles too, which the general queries use; mesh against box primitive measured faster).
+// triangles too, which the general queries use; mesh against box primitive is the faster test).
 ShapeRef exact_shape_of(const CollisionObject& o);
 
 // Why `id` cannot name a collision object, or "" when it can: an id is not empty and holds no

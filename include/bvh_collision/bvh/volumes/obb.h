@@ -16,7 +16,7 @@ inline Vec3 center(const Obb& b) { return b.center; }
 inline double radius(const Obb& b) { return b.radius; }
 Obb merge(const Obb& a, const Obb& b);
 
-// b carried into a's mesh frame (the seed's "volume update"): done once per node and query.
+// b carried into a's mesh frame (the textbook's "volume update"): done once per node and query.
 BVH_HOT Obb carry(const Obb& b, const RelativeFrame& f) {
   return {detail::times(f.R, b.axes), f.apply(b.center), b.half, b.radius};
 }
