@@ -1,6 +1,7 @@
 // What the environment benchmark's units share (bench_environment.cpp, the insertion, octree and
 // clutter tables; bench_environment_world.cpp, the self filter and the snapshots;
-// bench_environment_updates.cpp, the clearing and per-core insertion tables):
+// bench_environment_updates.cpp, the clearing and per-core insertion tables;
+// bench_environment_motions.cpp, the motion table):
 // the run's sizes and the depth camera's table scene.
 #pragma once
 
@@ -54,5 +55,9 @@ void clearing_table(bool quick, const std::string& dir);
 // Insertion against OctoMap per core (CPU time) on a room's depth image and a LiDAR scan, at 2 and
 // 5 cm, trees compared (bench_environment_updates.cpp).
 void insertion_cpu_table(bool quick, const std::string& dir);
+// Motions against tolerance on the demo arm and its pillar (bench_environment_motions.cpp).
+void motion_table(const Sizes& sizes, const std::string& dir);
+// "5, 10 and 20 mm": the proxy levels a table was measured with.
+std::string levels_mm(const std::vector<double>& levels);
 
 }  // namespace bvh_collision::environment_bench

@@ -34,7 +34,7 @@ san_build_pid=""
 start_sanitized_build() {
   ( nice -n 19 cmake -S . -B "$SAN_BUILD" -DBVH_COLLISION_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" > "$SAN_BUILD.configure.log" 2>&1 \
-    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_query bvh_collision_io "${own_tests[@]}" ) > "$SAN_BUILD.build.log" 2>&1 &
+    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_session bvh_collision_io "${own_tests[@]}" ) > "$SAN_BUILD.build.log" 2>&1 &
   san_build_pid=$!
 }
 

@@ -40,51 +40,18 @@ CollisionCheckerNode::CollisionCheckerNode(ros::NodeHandle nh, ros::NodeHandle p
   log_solidity();
   publish_status();  // before any service: a client that sees one sees the whole summary
   advertise();
-  if (!params_.proxy_levels.empty() && has_geometry_) proxy_builder_ = std::thread([this] { build_proxy_levels(); });
+  if (has_geometry_) checkers_->start_proxy_levels();
 }
 
 CollisionCheckerNode::~CollisionCheckerNode() {
   if (ros::ok()) private_nh_.setParam("ready", false);
-  stop_building_ = true;  // the build stops at its next link
-  if (proxy_builder_.joinable()) proxy_builder_.join();
-  {
-    std::lock_guard<std::mutex> lock(carried_mutex_);  // (no new carried build starts after this)
-    carried_.base = nullptr;
-  }
-  if (carried_builder_.joinable()) carried_builder_.join();
   if (cloud_spinner_) cloud_spinner_->stop();
+  checkers_.reset();  // stops the proxy builds (at their next link) and waits for them
 }
 
 void CollisionCheckerNode::mark_ready() {
   private_nh_.setParam("ready", true);
   ROS_INFO("collision_checker: ready (%zu services)", services_.size());
-}
-
-// Coarsest first: the cheapest level serves the widest range of tolerances soonest. Each level
-// is built into a copy of the checker, which then replaces the one queries take (a query in
-// flight keeps the one it took).
-void CollisionCheckerNode::build_proxy_levels() {
-  std::vector<double> levels = params_.proxy_levels;
-  std::sort(levels.rbegin(), levels.rend());
-  for (std::size_t i = 0; i < levels.size() && !stop_building_; ++i) {
-    try {
-      auto next = std::make_shared<const CollisionChecker>(checker()->with_proxy_level(levels[i], &stop_building_));
-      const ProxyLevel* built = next->accelerators().proxies_for(levels[i]);
-      std::atomic_store(&checker_, std::shared_ptr<const CollisionChecker>(next));
-      ROS_INFO("collision_checker: proxy level %.4g m ready: %zu spheres, %.1f KiB, in %.2f s (%zu links from the cache)",
-               built->level, built->leaves, built->memory_bytes / 1024.0, built->build_seconds, built->links_from_cache);
-      if (built->leaves > kProxySphereBudget && i + 1 < levels.size()) {
-        ROS_INFO("collision_checker: finer proxy levels skipped: %.4g m needed %zu spheres (budget %zu)", built->level,
-                 built->leaves, kProxySphereBudget);
-        return;
-      }
-    } catch (const ProxyBuildCancelled&) {
-      return;
-    } catch (const std::exception& e) {
-      ROS_ERROR_STREAM("collision_checker: proxy level " << levels[i] << " m not built: " << e.what());
-      return;
-    }
-  }
 }
 
 void CollisionCheckerNode::load_robot() {
@@ -132,9 +99,8 @@ void CollisionCheckerNode::load_robot() {
   }
   has_geometry_ = has_collision_geometry(model);
   root_link_ = model.links()[model.root_link()].name;
-  state_ = neutral_state(model);
   try {
-    history_ = std::make_unique<JointStateHistory>(model, params_.joint_state_history, params_.joint_state_lead);
+    joints_ = std::make_unique<JointStates>(model, neutral_state(model), params_.joint_state_history, params_.joint_state_lead);
   } catch (const std::invalid_argument& e) {
     throw NodeStartupError(std::string("parameters ~joint_state_history and ~joint_state_lead: ") + e.what());
   }
@@ -143,9 +109,14 @@ void CollisionCheckerNode::load_robot() {
   options.link_padding = params_.link_padding;
   options.limits = params_.limits;
   options.proxy_cache = params_.proxy_cache;
-  // The proxy levels come later, from build_proxy_levels.
+  // The proxy levels come later, built beside the queries (session/robot_checkers.h).
   try {
-    checker_ = std::make_shared<const CollisionChecker>(std::move(model), std::move(acm), options);
+    checkers_ = std::make_unique<RobotCheckers>(CollisionChecker(std::move(model), std::move(acm), options), params_.proxy_levels,
+                                                kProxySphereBudget, [](SessionLogLevel level, const std::string& line) {
+                                                  if (level == SessionLogLevel::kInfo) ROS_INFO_STREAM("collision_checker: " << line);
+                                                  else if (level == SessionLogLevel::kWarning) ROS_WARN_STREAM("collision_checker: " << line);
+                                                  else ROS_ERROR_STREAM("collision_checker: " << line);
+                                                });
   } catch (const LimitExceeded& e) {
     throw NodeStartupError(std::string("robot '") + summary_.name + "': " + e.what());
   }
@@ -297,58 +268,36 @@ void CollisionCheckerNode::on_joint_state(const sensor_msgs::JointState::ConstPt
                       msg->name.size(), msg->position.size());
     return;
   }
-  // Joint states may come from several publishers and other robots: take what is ours and
-  // finite, ignore the rest.
-  const std::shared_ptr<const CollisionChecker> checker = this->checker();  // keeps `model` alive
-  const RobotModel& model = checker->model();
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  bool ours = false;
-  for (std::size_t i = 0; i < msg->name.size(); ++i) {
-    const int j = model.joint_index(msg->name[i]);
-    if (j < 0 || !std::isfinite(msg->position[i])) continue;
-    const int variable = model.joints()[j].variable;
-    if (variable >= 0) state_[variable] = msg->position[i];
-    ours = ours || variable >= 0;
-  }
   // The merged state at the message's stamp (its arrival when unstamped): what a cloud taken
   // then must be filtered against.
-  if (!ours) return;
-  last_joint_state_ = ros::Time::now();
-  history_->record((msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp).toSec(), state_);
-  ++joint_states_recorded_;
-  history_grew_.notify_all();
+  const ros::Time now = ros::Time::now();
+  joints_->record(msg->name, msg->position, (msg->header.stamp.isZero() ? now : msg->header.stamp).toSec(), now.toSec());
 }
 
-std::vector<double> CollisionCheckerNode::current_state() const {
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  return state_;
-}
+std::vector<double> CollisionCheckerNode::current_state() const { return joints_->current(); }
 
 std::vector<double> CollisionCheckerNode::current_state_for(const std::vector<int>& columns) const {
-  std::vector<char> given(state_.size(), 0);
+  const std::size_t n = checker()->model().variable_count();
+  std::vector<char> given(n, 0);
   for (const int c : columns) {
     if (c >= 0) given[c] = 1;
   }
   const bool needs_joint_states = std::find(given.begin(), given.end(), 0) != given.end();
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  if (needs_joint_states && params_.joint_state_timeout > 0.0 && last_joint_state_) {
-    const double age = (ros::Time::now() - *last_joint_state_).toSec();
+  const std::optional<double> last = joints_->last_arrival();
+  if (needs_joint_states && params_.joint_state_timeout > 0.0 && last) {
+    const double age = ros::Time::now().toSec() - *last;
     if (age > params_.joint_state_timeout) {
       throw RequestError("the last joint_states arrived " + std::to_string(age) + " s ago (~joint_state_timeout " +
                          std::to_string(params_.joint_state_timeout) + " s): the joints this request leaves out " +
                          "are not known; give every joint, or restore joint_states");
     }
   }
-  return state_;
+  return joints_->current();
 }
 
 std::optional<std::vector<double>> CollisionCheckerNode::state_at(const ros::Time& stamp,
                                                                  const ros::WallDuration& timeout) const {
-  std::unique_lock<std::mutex> lock(state_mutex_);
-  if (stamp.isZero() || history_->empty()) return state_;
-  const double t = stamp.toSec();
-  history_grew_.wait_for(lock, std::chrono::duration<double>(timeout.toSec()), [&] { return history_->newest() >= t; });
-  return history_->at(t);
+  return joints_->at(stamp.isZero() ? 0.0 : stamp.toSec(), timeout.toSec());
 }
 
 // The latest transform from `frame` to world_frame, unless a dynamic one has gone quiet.
@@ -363,37 +312,6 @@ geometry_msgs::TransformStamped CollisionCheckerNode::latest_transform(const std
     }
   }
   return t;
-}
-
-std::shared_ptr<const CollisionChecker> CollisionCheckerNode::checker_for(const std::shared_ptr<const Environment>& env) const {
-  std::shared_ptr<const CollisionChecker> base = checker();
-  if (env->attached().empty()) return base;
-  std::lock_guard<std::mutex> lock(carried_mutex_);
-  const Carried key{base, env->attached_list(), env->allowed_collisions_shared(), nullptr};
-  if (!carried_.same(key)) {
-    // At once and exact; the levels follow (a query never waits for a proxy build).
-    carried_ = key;
-    carried_.checker = std::make_shared<const CollisionChecker>(base->carrying(*env, false));
-    carried_.levels = base->accelerators().proxy_levels().empty();
-  }
-  if (!carried_.levels) build_carried_levels(env);
-  return carried_.checker;
-}
-
-void CollisionCheckerNode::build_carried_levels(const std::shared_ptr<const Environment>& env) const {
-  if (carried_building_ || carried_.base == nullptr) return;
-  if (carried_builder_.joinable()) carried_builder_.join();  // finished: it cleared carried_building_ last
-  carried_building_ = true;
-  carried_builder_ = std::thread([this, key = carried_, env] {
-    try {
-      auto full = std::make_shared<const CollisionChecker>(key.base->carrying(*env));
-      std::lock_guard<std::mutex> lock(carried_mutex_);
-      if (carried_.same(key)) carried_.checker = std::move(full), carried_.levels = true;  // else attached anew meanwhile
-    } catch (const std::exception& e) {
-      ROS_WARN_STREAM("collision_checker: carried objects' proxy levels not built (exact answers go on): " << e.what());
-    }
-    carried_building_ = false;
-  });
 }
 
 Transform CollisionCheckerNode::link_in_world(int link) const {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <map>
 
-#include "bvh_collision/world/object_filter.h"
+#include "bvh_collision/session/scan_update.h"
 #include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/ros/collision_checker_node.h"
@@ -147,33 +147,21 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
     return;
   }
   const std::vector<double>& state = *at_stamp;
-  // The robot with what it carries, and the world's objects: points on a known object are not
-  // voxels (it would be counted twice, and leave debris when it moves).
-  const double object_padding = params_.object_padding.value_or(params_.self_filter_padding);
-  const std::shared_ptr<const Environment> scene = store_->snapshot();
-  FilteredScan filtered =
-      checker_for(scene)->filter_scan(state.data(), points, origin, params_.self_filter_padding, root, object_padding);
-  filter_objects(scene->objects(), origin, object_padding, filtered);
-  if (!dark.empty()) {
-    // A dark pixel's ray clears up to the robot where it passes through it, as a shadow's does.
-    FilteredScan rays =
-        checker_for(scene)->filter_scan(state.data(), dark, origin, params_.self_filter_padding, root, object_padding);
-    filtered.clear_only.insert(filtered.clear_only.end(), rays.obstacles.begin(), rays.obstacles.end());
-    filtered.clear_only.insert(filtered.clear_only.end(), rays.clear_only.begin(), rays.clear_only.end());
-    clouds_.no_return += dark.size();
-  }
-  const ScanStats stats = store_->modify([&](Environment& env) {
-    return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options);
-  });
-  // The new map's distance field, here on the cloud thread rather than in the first query.
-  if (params_.distance_field) checker()->prepare_distance_field(*store_->snapshot(), root);
+  ScanUpdateOptions update;
+  update.self_filter_padding = params_.self_filter_padding;
+  update.object_padding = params_.object_padding.value_or(params_.self_filter_padding);
+  update.scan = options;
+  update.distance_field = params_.distance_field;
+  const ScanUpdateResult result = update_scan(*store_, *checkers_, points, dark, origin, state.data(), root, update);
+  const ScanStats& stats = result.stats;
+  clouds_.no_return += dark.size();
   clouds_.points += stats.points;
   clouds_.skipped_invalid += stats.skipped_invalid;
   clouds_.skipped_outside += stats.skipped_outside;
   clouds_.skipped_workspace += stats.skipped_workspace;
-  clouds_.on_robot += filtered.on_robot;
-  clouds_.shadowed += filtered.shadowed;
-  clouds_.on_objects += filtered.on_objects;
+  clouds_.on_robot += result.on_robot;
+  clouds_.shadowed += result.shadowed;
+  clouds_.on_objects += result.on_objects;
   clouds_.last_insert_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // Last: diagnostics read this first, so a cloud counted inserted has its points counted and its
   // octree in the store.

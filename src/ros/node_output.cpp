@@ -158,7 +158,7 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
   const std::uint64_t in_progress = received - (inserted + no_transform + no_state + malformed + over_limit);
   const std::shared_ptr<const Environment> env = store_->snapshot();
   environment.values = {
-      kv("joint states recorded", std::to_string(joint_states_recorded_.load())),
+      kv("joint states recorded", std::to_string(joints_->recorded())),
       kv("clouds received", std::to_string(received)),
       kv("clouds inserted", std::to_string(inserted)),
       kv("clouds in progress", std::to_string(in_progress)),
@@ -182,11 +182,9 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("octree resolution (m)", std::to_string(env->octree().resolution())),
       kv("collision objects", std::to_string(env->objects().size())),
       kv("attached objects", std::to_string(env->attached().size())),
-      kv("attached objects' proxy levels", [&] {
-        if (env->attached().empty()) return std::string("none attached");
-        std::lock_guard<std::mutex> lock(carried_mutex_);
-        return std::string(carried_.attached == env->attached_list() && carried_.levels ? "built" : "building");
-      }()),
+      kv("attached objects' proxy levels", env->attached().empty()            ? std::string("none attached")
+                                           : checkers_->carried_levels_built(*env) ? std::string("built")
+                                                                                   : std::string("building")),
   };
   diagnostic_msgs::DiagnosticStatus queries;
   queries.name = name + ": queries";

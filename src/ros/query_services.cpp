@@ -240,26 +240,6 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
   });
 }
 
-std::shared_ptr<const SceneChecker> CollisionCheckerNode::scene_checker(const std::shared_ptr<const Environment>& env, bool self,
-                                                                         bool environment, const Transform& root) const {
-  const std::shared_ptr<const CollisionChecker> now = checker_for(env);
-  std::lock_guard<std::mutex> lock(scene_mutex_);
-  const auto same = [&](const SceneChecker& s) {
-    const SceneCheckOptions& o = s.options();
-    return &s.environment() == env.get() && &s.checker().collision_model() == &now->collision_model() && o.self == self &&
-           o.environment == environment && o.root_pose.R == root.R && o.root_pose.t == root.t;
-  };
-  if (!scene_ || !same(*scene_)) {
-    SceneCheckOptions options;
-    options.self = self;
-    options.environment = environment;
-    options.tolerance = params_.tolerance;
-    options.root_pose = root;
-    scene_ = std::make_shared<const SceneChecker>(*now, env, options);
-  }
-  return scene_;
-}
-
 bool CollisionCheckerNode::check_motions(CheckMotions::Request& req, CheckMotions::Response& res) {
   return serve("check_motions", res, [&] {
     require_geometry();

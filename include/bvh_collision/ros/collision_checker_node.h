@@ -38,6 +38,8 @@
 #include "bvh_collision/CastRay.h"
 #include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/io/scene_file.h"
+#include "bvh_collision/session/joint_states.h"
+#include "bvh_collision/session/robot_checkers.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/CheckMotion.h"
 #include "bvh_collision/CheckMotions.h"
@@ -162,20 +164,15 @@ class CollisionCheckerNode {
   void advertise();
   void publish_status();
   void log_solidity();
-  // The proxy levels, coarsest first, on proxy_builder_ (collision_checker_node.cpp).
-  void build_proxy_levels();
   // The checker queries use now: proxy levels join it as they are built. Hold the pointer while
   // using references into it (a swap may free the old one).
-  std::shared_ptr<const CollisionChecker> checker() const { return std::atomic_load(&checker_); }
-  // The checker a query on snapshot `env` uses: checker() carrying env's attached objects
-  // (CollisionChecker::carrying), built once per attachment and proxy level and kept; checker()
-  // itself when nothing is attached. A query takes the snapshot first and this from it, so it
-  // sees an object on the link or in the world, never both or neither. A new attachment is
-  // carried at once without proxy levels (exact answers); carried_builder_ builds its proxies
-  // and swaps in the checker with levels (a large object's take seconds).
-  std::shared_ptr<const CollisionChecker> checker_for(const std::shared_ptr<const Environment>& env) const;
-  // Starts carried_builder_ for `env` when the kept checker lacks its levels (carried_mutex_ held).
-  void build_carried_levels(const std::shared_ptr<const Environment>& env) const;
+  std::shared_ptr<const CollisionChecker> checker() const { return checkers_->current(); }
+  // The checker a query on snapshot `env` uses (RobotCheckers::for_snapshot: what it carries). A
+  // query takes the snapshot first and this from it, so it sees an object on the link or in the
+  // world, never both or neither.
+  std::shared_ptr<const CollisionChecker> checker_for(const std::shared_ptr<const Environment>& env) const {
+    return checkers_->for_snapshot(env);
+  }
   // Where link `link` is in world_frame now (joint_states, tf2): attaching and detaching fix an
   // object's pose between the two frames with it.
   Transform link_in_world(int link) const;
@@ -205,10 +202,12 @@ class CollisionCheckerNode {
   bool check_states(CheckStates::Request& req, CheckStates::Response& res);
   bool check_motion(CheckMotion::Request& req, CheckMotion::Response& res);
   bool check_motions(CheckMotions::Request& req, CheckMotions::Response& res);
-  // The checker certified motions go through (query/scene_checker.h) for this snapshot, these
-  // checks and this root pose: the one kept since the last such request when nothing changed.
+  // The prepared scene certified motions go through for this snapshot, these checks and this
+  // root pose (RobotCheckers::prepared): the one kept since the last such request when nothing changed.
   std::shared_ptr<const SceneChecker> scene_checker(const std::shared_ptr<const Environment>& env, bool self,
-                                                    bool environment, const Transform& root) const;
+                                                    bool environment, const Transform& root) const {
+    return checkers_->prepared(env, self, environment, root, params_.tolerance);
+  }
   bool cast_ray(CastRay::Request& req, CastRay::Response& res);
   void answer_check_state(const CheckState::Request& req, CheckState::Response& res);
   void self_part(const CollisionChecker& checker, const double* state, const CheckState::Request& req, double tolerance,
@@ -254,36 +253,12 @@ class CollisionCheckerNode {
   RobotSummary summary_;
   std::vector<std::string> solid_links_, open_meshes_;  // link_solidity(), for the log and parameters
   PackageResolver resolver_;
-  std::shared_ptr<const CollisionChecker> checker_;  // read and replaced atomically (checker())
-  std::thread proxy_builder_;
-  std::atomic<bool> stop_building_{false};
+  std::unique_ptr<RobotCheckers> checkers_;  // the robot's, the carried objects', the prepared scene
   std::unique_ptr<const JointValueMap> joint_map_;
   std::string root_link_;
   bool has_geometry_ = false;
   std::unique_ptr<EnvironmentStore> store_;
-  mutable std::mutex scene_mutex_;
-  mutable std::shared_ptr<const SceneChecker> scene_;  // the last scene_checker(), kept for the next
-  // The last checker_for(): the checker it carries the attached objects on, the snapshot's list
-  // and allowed collisions it was built for (held, so that their addresses stay theirs), and it.
-  struct Carried {
-    std::shared_ptr<const CollisionChecker> base;
-    std::shared_ptr<const std::vector<AttachedBody>> attached;
-    std::shared_ptr<const NamedAllowedCollisions> allowed;
-    std::shared_ptr<const CollisionChecker> checker;
-    bool levels = false;  // `checker` has base's proxy levels (else none yet)
-    bool same(const Carried& o) const { return base == o.base && attached == o.attached && allowed == o.allowed; }
-  };
-  mutable std::mutex carried_mutex_;
-  mutable Carried carried_;
-  mutable std::thread carried_builder_;
-  mutable std::atomic<bool> carried_building_{false};
-
-  mutable std::mutex state_mutex_;
-  std::vector<double> state_;  // from joint_states; neutral_state() until the first message
-  std::optional<ros::Time> last_joint_state_;  // when the last one of ours arrived
-  std::unique_ptr<JointStateHistory> history_;  // every merged state_, at its message's stamp
-  mutable std::condition_variable history_grew_;  // notified on each joint state recorded
-  std::atomic<std::uint64_t> joint_states_recorded_{0};  // messages that set a joint of ours
+  std::unique_ptr<JointStates> joints_;  // from joint_states: the current state and its history
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
