@@ -94,7 +94,7 @@ void motion_table(const Sizes& sizes, const std::string& dir) {
              "field kept; " + std::to_string(sizes.motions) + " random motions between uniform states. Certified: intervals of "
              "the motion proven free whole by the interval engine (query/scene_checker.h), through the public "
              "CollisionChecker::check_motion (its prepared scene kept between motions; the first run prepares it) and "
-             "through a SceneChecker a planner holds (prepared before the runs); each run's goals a nanoradian from the "
+             "through a SceneChecker a planner holds (prepared before the runs); each run's goals 1e-9 rad from the "
              "last's, so that no motion is answered from memory; states: one per interval and the two ends. Fixed step: every 0.02 rad; at 10 "
              "and 20 mm the self checks run several states at a time in SIMD lanes on the proxies and the environment "
              "checks on the proxies and the field.");

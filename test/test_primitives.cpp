@@ -50,6 +50,7 @@ double point_cone(double r, double h, const Vec3& q) {
 double point_primitive(const Primitive& prim, const Transform& pose, const Vec3& p) {
   const Vec3 q = pose.inverse() * p;
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return std::max(0.0, q.norm() - prim.radius);
     case Primitive::Kind::kBox: return point_box(prim.half, q);
     case Primitive::Kind::kCylinder: return point_cylinder(prim.radius, prim.half_length, q);

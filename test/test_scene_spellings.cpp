@@ -115,11 +115,12 @@ std::string benchmark_spelling(const SceneFile& scene, bool flow) {
           e << YAML::EndSeq << YAML::EndMap;
           continue;
         }
-        const int kind = static_cast<int>(s.shape.kind);  // kBox 0, kSphere 1, kCylinder 2, kCone 4
-        e << YAML::BeginMap << YAML::Key << "type" << YAML::Value << kNames[kind == 4 ? 3 : kind] << YAML::Key << "dimensions" << YAML::Value;
-        if (kind == 0) emit_numbers(e, {s.shape.size.x(), s.shape.size.y(), s.shape.size.z()});
-        if (kind == 1) emit_numbers(e, {s.shape.radius});
-        if (kind == 2 || kind == 4) emit_numbers(e, {s.shape.length, s.shape.radius});
+        const ObjectShape::Kind kind = s.shape.kind;
+        const int name = kind == ObjectShape::Kind::kBox ? 0 : kind == ObjectShape::Kind::kSphere ? 1 : kind == ObjectShape::Kind::kCylinder ? 2 : 3;
+        e << YAML::BeginMap << YAML::Key << "type" << YAML::Value << kNames[name] << YAML::Key << "dimensions" << YAML::Value;
+        if (name == 0) emit_numbers(e, {s.shape.size.x(), s.shape.size.y(), s.shape.size.z()});
+        if (name == 1) emit_numbers(e, {s.shape.radius});
+        if (name >= 2) emit_numbers(e, {s.shape.length, s.shape.radius});
         e << YAML::EndMap;
       }
       e << YAML::EndSeq << YAML::Key << (meshes ? "mesh_poses" : "primitive_poses") << YAML::Value << YAML::BeginSeq;

@@ -122,7 +122,9 @@ double primitive_link_distance(const RobotModel& m, const std::vector<Transform>
       case CollisionElement::Shape::kBox:
         best = std::min(best, (q.cwiseAbs() - 0.5 * e.size).cwiseMax(0.0).norm());
         break;
-      case CollisionElement::Shape::kMesh: return std::numeric_limits<double>::quiet_NaN();
+      case CollisionElement::Shape::kMesh:
+      case CollisionElement::Shape::kCapsule:  // not in URDF
+      case CollisionElement::Shape::kCone: return std::numeric_limits<double>::quiet_NaN();
     }
   }
   return best;

@@ -105,6 +105,7 @@ double cone_entry(const Primitive& c, const Vec3& o, const Vec3& u, double lengt
 
 const char* primitive_name(Primitive::Kind kind) {
   switch (kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return "sphere";
     case Primitive::Kind::kBox: return "box";
     case Primitive::Kind::kCylinder: return "cylinder";
@@ -116,6 +117,7 @@ const char* primitive_name(Primitive::Kind kind) {
 
 Vec3 support(const Primitive& p, const Vec3& d) {
   switch (p.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: {
       const double n = d.norm();
       return n > 0.0 ? Vec3(d * (p.radius / n)) : Vec3(Vec3::Zero());
@@ -146,6 +148,7 @@ Vec3 support(const Primitive& p, const Vec3& d) {
 
 Vec3 half_extents(const Primitive& p) {
   switch (p.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return Vec3::Constant(p.radius);
     case Primitive::Kind::kBox: return p.half;
     case Primitive::Kind::kCylinder: return {p.radius, p.radius, p.half_length};
@@ -157,6 +160,7 @@ Vec3 half_extents(const Primitive& p) {
 
 double inscribed_depth(const Primitive& prim, const Vec3& p) {
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return prim.radius - p.norm();
     case Primitive::Kind::kBox: return (prim.half - p.cwiseAbs()).minCoeff();
     case Primitive::Kind::kCylinder:
@@ -177,6 +181,7 @@ double inscribed_depth(const Primitive& prim, const Vec3& p) {
 
 double bounding_radius(const Primitive& p) {
   switch (p.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return p.radius;
     case Primitive::Kind::kBox: return p.half.norm();
     case Primitive::Kind::kCylinder: return std::hypot(p.radius, p.half_length);
@@ -188,6 +193,7 @@ double bounding_radius(const Primitive& p) {
 
 bool contains(const Primitive& prim, const Vec3& p) {
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return p.squaredNorm() <= prim.radius * prim.radius;
     case Primitive::Kind::kBox: return (p.cwiseAbs().array() <= prim.half.array()).all();
     case Primitive::Kind::kCylinder:
@@ -207,6 +213,7 @@ bool contains(const Primitive& prim, const Vec3& p) {
 
 Vec3 closest_point(const Primitive& prim, const Vec3& p) {
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: {
       const double n = p.norm();
       return n <= prim.radius ? p : Vec3(p * (prim.radius / n));
@@ -235,6 +242,7 @@ Vec3 closest_point(const Primitive& prim, const Vec3& p) {
 
 double ray_entry(const Primitive& prim, const Vec3& origin, const Vec3& unit, double length) {
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return ray_ball_entry(origin, unit, length, Vec3::Zero(), prim.radius);
     case Primitive::Kind::kBox: {
       double lo = 0.0, hi = length;

@@ -61,14 +61,7 @@ bool links_within(const RobotCollisionModel& model, int a, int b, const std::vec
   PairRequest request;
   request.padding = padding;
   QueryStats stats;
-  for (const LinkShape& sa : model.shapes()[a]) {
-    for (const LinkShape& sb : model.shapes()[b]) {
-      if (shapes_collide(model.ref(sa), poses[a] * sa.origin, model.ref(sb), poses[b] * sb.origin, request, nullptr, stats)) {
-        return true;
-      }
-    }
-  }
-  return false;
+  return compounds_collide(model.compound(a), poses[a], model.compound(b), poses[b], request, nullptr, stats);
 }
 
 using Cells = std::array<int, PairClearanceGrid::kMaxDims>;

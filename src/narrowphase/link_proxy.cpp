@@ -22,6 +22,7 @@ constexpr int kMaxDepth = 40;
 // The point of the primitive's surface nearest p (p inside the primitive, its frame).
 Vec3 nearest_surface_point(const Primitive& prim, const Vec3& p) {
   switch (prim.kind) {
+    case Primitive::Kind::kMesh: break;  // not a primitive
     case Primitive::Kind::kSphere: return p.norm() > 0.0 ? Vec3(p * (prim.radius / p.norm())) : Vec3(prim.radius, 0, 0);
     case Primitive::Kind::kBox: {
       int axis = 0;

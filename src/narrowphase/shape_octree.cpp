@@ -501,10 +501,13 @@ OctreeDistance primitive_octree_distance(const Primitive& primitive, const Trans
 
 // ---- The dispatch over the shape's kind ----------------------------------------------------------
 
-bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, double padding, double tolerance,
-                        bool solids, OctreeContact* contact, QueryStats* stats) {
-  if (shape.mesh != nullptr) return mesh_meets_octree(*shape.mesh, pose, tree, padding, tolerance, solids, contact, stats);
-  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_meets_octree(shape.primitive, pose, tree, padding, contact, stats);
+bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, const PairRequest& request,
+                        OctreeContact* contact, QueryStats& stats) {
+  const double padding = request.padding;
+  if (shape.mesh != nullptr) {
+    return mesh_meets_octree(*shape.mesh, pose, tree, padding, request.tolerance, request.solids, contact, &stats);
+  }
+  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_meets_octree(shape.primitive, pose, tree, padding, contact, &stats);
   const auto cubes = tree.occupied_in_sphere(pose.t, shape.primitive.radius + padding, true);
   if (cubes.empty()) return false;
   if (contact != nullptr) {
@@ -515,9 +518,9 @@ bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octr
 }
 
 OctreeDistance shape_octree_distance(const ShapeRef& shape, const Transform& pose, const Octree& tree, bool solids,
-                                     double upper_bound, QueryStats* stats) {
-  if (shape.mesh != nullptr) return mesh_octree_distance(*shape.mesh, pose, tree, solids, upper_bound, stats);
-  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_octree_distance(shape.primitive, pose, tree, upper_bound, stats);
+                                     double upper_bound, QueryStats& stats) {
+  if (shape.mesh != nullptr) return mesh_octree_distance(*shape.mesh, pose, tree, solids, upper_bound, &stats);
+  if (shape.primitive.kind != Primitive::Kind::kSphere) return primitive_octree_distance(shape.primitive, pose, tree, upper_bound, &stats);
   // A sphere is its centre with the radius taken off: the surface point towards the cube, or
   // inside the sphere the cube point itself.
   const double radius = shape.primitive.radius;

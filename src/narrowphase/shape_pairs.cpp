@@ -297,7 +297,7 @@ double swapped_distance(const ShapeRef& a, const Transform& pa, const ShapeRef& 
   return F(b, pb, a, pa, best, solids, wb, wa, stats, tolerance);
 }
 
-constexpr int kKinds = static_cast<int>(ShapeKind::kCount);
+constexpr int kKinds = kShapeKinds;
 
 struct Table {
   CollideFn collide[kKinds][kKinds];
@@ -337,17 +337,6 @@ const Table& table() {
 
 }  // namespace
 
-ShapeKind kind_of(const ShapeRef& s) {
-  if (s.mesh) return ShapeKind::kMesh;
-  switch (s.primitive.kind) {
-    case Primitive::Kind::kSphere: return ShapeKind::kSphere;
-    case Primitive::Kind::kBox: return ShapeKind::kBox;
-    case Primitive::Kind::kCylinder: return ShapeKind::kCylinder;
-    case Primitive::Kind::kCapsule: return ShapeKind::kCapsule;
-    case Primitive::Kind::kCone: return ShapeKind::kCone;
-  }
-  return ShapeKind::kMesh;
-}
 
 bool shapes_collide(const ShapeRef& a, const Transform& pa, const ShapeRef& b, const Transform& pb,
                     const PairRequest& request, std::vector<MeshContact>* contacts, QueryStats& stats) {

@@ -65,19 +65,9 @@ bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>&
   pair.tolerance = request.tolerance;
   pair.max_contacts = request.max_contacts;
   pair.solids = request.solids;
-  bool hit = false;
   std::vector<MeshContact> contacts;
-  for (const LinkShape& sa : m_->shapes()[a]) {
-    for (const LinkShape& sb : m_->shapes()[b]) {
-      const bool want_contacts = request.max_contacts > 0 && contacts.size() < request.max_contacts;
-      if (shapes_collide(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, pair,
-                                 want_contacts ? &contacts : nullptr, result.stats)) {
-        hit = true;
-        if (request.max_contacts == 0) return true;
-      }
-    }
-  }
-  contacts.resize(std::min(contacts.size(), request.max_contacts));
+  const bool hit = compounds_collide(m_->compound(a), poses[a], m_->compound(b), poses[b], pair,
+                                     request.max_contacts > 0 ? &contacts : nullptr, result.stats);
   for (const MeshContact& c : contacts) result.contacts.push_back({a, b, c});
   return hit;
 }
@@ -92,23 +82,16 @@ CollisionChecker CollisionChecker::carrying(const std::vector<AttachedBody>& bod
 
 double CollisionChecker::pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
                                        const SelfCollisionRequest& request, SelfCollisionResult& result) const {
-  for (const LinkShape& sa : m_->shapes()[a]) {
-    for (const LinkShape& sb : m_->shapes()[b]) {
-      Vec3 wa, wb;
-      const double d =
-          shapes_distance(m_->ref(sa), poses[a] * sa.origin, m_->ref(sb), poses[b] * sb.origin, best, request.solids, wa, wb,
-                          result.stats, request.tolerance);
-      if (d < best) {
-        best = d;
-        result.min_distance = d;
-        result.closest_a = a;
-        result.closest_b = b;
-        result.point_a = wa;
-        result.point_b = wb;
-      }
-    }
-  }
-  return best;
+  Vec3 wa, wb;
+  const double d = compounds_distance(m_->compound(a), poses[a], m_->compound(b), poses[b], best, request.solids, wa, wb,
+                                      result.stats, request.tolerance);
+  if (!(d < best)) return best;
+  result.min_distance = d;
+  result.closest_a = a;
+  result.closest_b = b;
+  result.point_a = wa;
+  result.point_b = wb;
+  return d;
 }
 
 namespace {

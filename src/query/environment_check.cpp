@@ -61,16 +61,14 @@ void CollisionChecker::objects_near_robot(const std::vector<Transform>& poses, c
 
 bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const Octree& tree,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
-  const double padding = m_->paddings()[link];
-  for (const LinkShape& s : m_->shapes()[link]) {
-    const Transform p = pose * s.origin;
-    OctreeContact contact;
-    if (shape_meets_octree(m_->ref(s), p, tree, padding, request.tolerance, request.solids, &contact, &result.stats)) {
-      result.contacts.push_back({link, std::string(), contact.voxel, contact.position});
-      return true;
-    }
-  }
-  return false;
+  PairRequest r;
+  r.padding = m_->paddings()[link];
+  r.tolerance = request.tolerance;
+  r.solids = request.solids;
+  OctreeContact contact;
+  if (!compound_meets_octree(m_->compound(link), pose, tree, r, &contact, result.stats)) return false;
+  result.contacts.push_back({link, std::string(), contact.voxel, contact.position});
+  return true;
 }
 
 bool CollisionChecker::link_meets_object(int link, const Transform& pose, const CollisionObject& object,
@@ -84,15 +82,10 @@ bool CollisionChecker::link_meets_object(int link, const Transform& pose, const 
   r.tolerance = request.tolerance;
   r.max_contacts = 1;
   r.solids = request.solids;
-  for (const LinkShape& s : m_->shapes()[link]) {
-    std::vector<MeshContact> contacts;
-    if (shapes_collide(m_->ref(s), pose * s.origin, obstacle, object.pose, r, &contacts, result.stats)) {
-      EnvironmentContact c{link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position};
-      result.contacts.push_back(c);
-      return true;
-    }
-  }
-  return false;
+  std::vector<MeshContact> contacts;
+  if (!compound_collides(m_->compound(link), pose, obstacle, object.pose, r, &contacts, result.stats)) return false;
+  result.contacts.push_back({link, object.id, {}, contacts.empty() ? Vec3(pose.t) : contacts.front().position});
+  return true;
 }
 
 // (Against objects a sphere walk was slower than the exact path, so objects stay exact:
@@ -106,37 +99,29 @@ bool CollisionChecker::link_proxy_meets_octree(int link, const Transform& pose, 
 
 double CollisionChecker::link_octree_distance(int link, const Transform& pose, const Octree& tree, double best,
                                               bool solids, EnvironmentResult& result) const {
-  for (const LinkShape& s : m_->shapes()[link]) {
-    const OctreeDistance d = shape_octree_distance(m_->ref(s), pose * s.origin, tree, solids, best, &result.stats);
-    if (d.distance < best) {
-      best = d.distance;
-      result.min_distance = best;
-      result.closest_link = link;
-      result.closest_object.clear();
-      result.closest_voxel = d.voxel;
-      result.point_link = d.on_link;
-      result.point_obstacle = d.on_cube;
-    }
-  }
-  return best;
+  const OctreeDistance d = compound_octree_distance(m_->compound(link), pose, tree, solids, best, result.stats);
+  if (!(d.distance < best)) return best;
+  result.min_distance = d.distance;
+  result.closest_link = link;
+  result.closest_object.clear();
+  result.closest_voxel = d.voxel;
+  result.point_link = d.on_link;
+  result.point_obstacle = d.on_cube;
+  return d.distance;
 }
 
 double CollisionChecker::link_object_distance(int link, const Transform& pose, const CollisionObject& object,
                                               double best, bool solids, EnvironmentResult& result) const {
   const ShapeRef obstacle = shape_of(object);
-  for (const LinkShape& s : m_->shapes()[link]) {
-    Vec3 wa, wb;
-    const double d = shapes_distance(m_->ref(s), pose * s.origin, obstacle, object.pose, best, solids, wa, wb, result.stats);
-    if (d < best) {
-      best = d;
-      result.min_distance = best;
-      result.closest_link = link;
-      result.closest_object = object.id;
-      result.point_link = wa;
-      result.point_obstacle = wb;
-    }
-  }
-  return best;
+  Vec3 wa, wb;
+  const double d = compound_distance(m_->compound(link), pose, obstacle, object.pose, best, solids, wa, wb, result.stats);
+  if (!(d < best)) return best;
+  result.min_distance = d;
+  result.closest_link = link;
+  result.closest_object = object.id;
+  result.point_link = wa;
+  result.point_obstacle = wb;
+  return d;
 }
 
 // The distance field over the robot's reach around its root (RobotCollisionModel::reach: every

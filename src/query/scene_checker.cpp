@@ -199,10 +199,7 @@ bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int 
   r.padding = m.paddings()[link];
   r.tolerance = tolerance;
   QueryStats stats;
-  for (const LinkShape& shape : m.shapes()[link]) {
-    if (shapes_collide(m.ref(shape), pose * shape.origin, obstacle, o.pose, r, nullptr, stats)) return true;
-  }
-  return false;
+  return compound_collides(m.compound(link), pose, obstacle, o.pose, r, nullptr, stats);
 }
 
 // Asked within a slack (a hundredth of the limit, at most 10 um) and returned less it: a lower
@@ -215,11 +212,9 @@ double SceneChecker::link_object_distance(int link, const Transform& pose, int o
   const ShapeRef obstacle = exact_shape_of(o);
   QueryStats stats;
   const double slack = std::min(1e-5, 0.01 * limit);
-  double best = limit * (1 + 1e-9) + 1e-12 + slack;
-  for (const LinkShape& shape : m.shapes()[link]) {
-    Vec3 wa, wb;
-    best = std::min(best, shapes_distance(m.ref(shape), pose * shape.origin, obstacle, o.pose, best, true, wa, wb, stats, slack));
-  }
+  Vec3 wa, wb;
+  const double best = compound_distance(m.compound(link), pose, obstacle, o.pose, limit * (1 + 1e-9) + 1e-12 + slack, true,
+                                        wa, wb, stats, slack);
   return best - slack;
 }
 

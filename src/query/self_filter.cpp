@@ -63,17 +63,12 @@ int proxy_point_verdict(const LinkProxy& proxy, const Transform& pose, const Vec
 
 bool CollisionChecker::point_on_link(int link, const Transform& pose, const Vec3& p, double padding) const {
   // "On or within": a point exactly at the padding distance counts.
-  return std::any_of(m_->shapes()[link].begin(), m_->shapes()[link].end(),
-                     [&](const LinkShape& s) { return shape_holds_point(m_->ref(s), pose * s.origin, p, padding); });
+  return compound_holds_point(m_->compound(link), pose, p, padding);
 }
 
 double CollisionChecker::ray_meets_link(int link, const Transform& pose, const Vec3& origin, const Vec3& unit,
                                         double length) const {
-  double first = std::numeric_limits<double>::infinity();
-  for (const LinkShape& s : m_->shapes()[link]) {
-    first = std::min(first, shape_ray_entry(m_->ref(s), pose * s.origin, origin, unit, std::min(first, length)));
-  }
-  return first;
+  return compound_ray_entry(m_->compound(link), pose, origin, unit, length);
 }
 
 FilteredScan CollisionChecker::filter_scan(const double* state, const std::vector<ScanPoint>& points,

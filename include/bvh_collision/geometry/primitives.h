@@ -12,8 +12,13 @@
 
 namespace bvh_collision {
 
+// The kinds of shape, one list for every layer: the exact primitives, and a triangle mesh (a
+// link's or an object's, with its hierarchy and hull). The narrowphase's tables are indexed by it.
+enum class ShapeKind : std::uint8_t { kSphere, kBox, kCylinder, kCapsule, kCone, kMesh };
+constexpr int kShapeKinds = 6;
+
 struct Primitive {
-  enum class Kind : std::uint8_t { kSphere, kBox, kCylinder, kCapsule, kCone };
+  using Kind = ShapeKind;  // never kMesh
   Kind kind = Kind::kSphere;
   Vec3 half = Vec3::Zero();  // box: half the edge lengths
   double radius = 0.0;       // sphere, cylinder, capsule; cone: of its base

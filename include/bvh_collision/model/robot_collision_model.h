@@ -17,7 +17,7 @@
 #include "bvh_collision/geometry/convex_hull.h"
 #include "bvh_collision/geometry/limits.h"
 #include "bvh_collision/geometry/primitives.h"
-#include "bvh_collision/narrowphase/shape.h"
+#include "bvh_collision/narrowphase/compound_shape.h"
 #include "bvh_collision/robot/allowed_collision_matrix.h"
 #include "bvh_collision/robot/robot_model.h"
 
@@ -50,11 +50,9 @@ struct CheckerOptions {
 };
 
 // One collision element of a link.
-struct LinkShape {
-  Transform origin;  // in the link frame
-  int mesh = -1;     // index into RobotCollisionModel::meshes(), or -1 for an exact primitive
-  Primitive primitive;
-};
+// One shape of a link, in the link frame: a part of the link's compound (its mesh index into
+// RobotCollisionModel::meshes(), or -1 for an exact primitive).
+using LinkShape = CompoundPart;
 
 // A sphere in the link frame that holds every shape of the link.
 struct LinkBound {
@@ -105,6 +103,8 @@ class RobotCollisionModel {
   ShapeRef ref(const LinkShape& s) const { return shape_ref(meshes_, hulls_, s.mesh, s.primitive); }
   // Link `link`'s shapes so, in the link frame.
   std::vector<BodyShape> placed_shapes(int link) const;
+  // Link `link` as one shape of the narrowphase, all its parts.
+  CompoundShape compound(int link) const { return CompoundShape(shapes_[static_cast<std::size_t>(link)], meshes_, hulls_); }
 
  private:
   void build_shapes(const CheckerOptions& options, const std::vector<bool>& needed);

@@ -20,9 +20,8 @@ struct ShapeRef {
   Primitive primitive;
 };
 
-// The kinds the dispatch tables are indexed by.
-enum class ShapeKind : int { kSphere, kBox, kCylinder, kCapsule, kCone, kMesh, kCount };
-ShapeKind kind_of(const ShapeRef& s);
+// The kind the dispatch tables index the shape by (geometry/primitives.h's ShapeKind).
+inline ShapeKind kind_of(const ShapeRef& s) { return s.mesh != nullptr ? ShapeKind::kMesh : s.primitive.kind; }
 
 // The shape's exact primitive, or null for a mesh (for accelerators that keep primitives apart).
 inline const Primitive* exact_primitive(const ShapeRef& s) { return s.mesh == nullptr ? &s.primitive : nullptr; }

@@ -12,6 +12,7 @@
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/narrowphase/shape.h"
+#include "bvh_collision/narrowphase/shape_pairs.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -27,19 +28,22 @@ struct OctreeDistance {
   Octree::Leaf voxel;
 };
 
-// Does the shape (pose in world) come within `padding` of an occupied cube? With tolerance > 0
-// it may also answer yes up to padding + tolerance, never no below padding; `contact` (when not
-// null) gets the cube and a point of the shape within padding of it.
-bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, double padding, double tolerance,
-                        bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);
+// The pair calling convention of shape_pairs.h, the octree the second shape (its pose the world):
+// does the shape come within request.padding of an occupied cube? With a tolerance it may also
+// answer yes up to padding + tolerance, never no below padding; `contact` (when not null) gets the
+// cube and a point of the shape within padding of it. (request.max_contacts is not read: one
+// contact, the cube's.)
+bool shape_meets_octree(const ShapeRef& shape, const Transform& pose, const Octree& tree, const PairRequest& request,
+                        OctreeContact* contact, QueryStats& stats);
 
 // The distance from the shape to the nearest occupied cube, if below `upper_bound` (else
 // infinity), with witnesses.
 OctreeDistance shape_octree_distance(const ShapeRef& shape, const Transform& pose, const Octree& tree, bool solids,
-                                     double upper_bound = std::numeric_limits<double>::infinity(),
-                                     QueryStats* stats = nullptr);
+                                     double upper_bound, QueryStats& stats);
 
-// The kinds, for the dispatch above and their tests. Does the mesh (pose in world) come within `padding` of an occupied cube? With tolerance > 0
+// The kinds, for the dispatch above and their tests.
+
+// Does the mesh (pose in world) come within `padding` of an occupied cube? With tolerance > 0
 // it may also answer yes up to padding + tolerance, never no below padding.
 bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
                        double tolerance, bool solids, OctreeContact* contact = nullptr, QueryStats* stats = nullptr);

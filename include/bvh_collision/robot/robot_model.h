@@ -11,6 +11,7 @@
 #include <urdf_model/model.h>
 
 #include "bvh_collision/geometry/mesh.h"
+#include "bvh_collision/geometry/primitives.h"
 #include "bvh_collision/robot/package_resolver.h"
 
 namespace bvh_collision {
@@ -25,7 +26,7 @@ enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic, kFloating, kP
 
 // One <collision> element.
 struct CollisionElement {
-  enum class Shape { kMesh, kBox, kSphere, kCylinder };
+  using Shape = ShapeKind;  // a mesh, a box, a sphere or a cylinder (URDF's)
   Shape shape = Shape::kMesh;
   Transform origin;  // the element's frame in its link's frame
   // Triangles for meshes and boxes (exact, 12 triangles); null for spheres and cylinders, which

@@ -18,7 +18,7 @@
 namespace bvh_collision {
 
 struct ObjectShape {
-  enum class Kind { kBox, kSphere, kCylinder, kCapsule, kCone, kMesh };
+  using Kind = ShapeKind;
   Kind kind = Kind::kBox;
   Vec3 size = Vec3::Zero();  // box: edge lengths
   double radius = 0.0;       // sphere, cylinder, capsule; cone: its base
