@@ -137,7 +137,9 @@ std::shared_ptr<const SceneChecker> CollisionChecker::prepared_scene(const Envir
   };
   std::lock_guard<std::mutex> lock(prepared_->mutex);
   if (!prepared_->scene || !same(*prepared_->scene)) {
-    prepared_->scene = std::make_shared<const SceneChecker>(*this, std::make_shared<const Environment>(env), options);
+    // The scene gets a copy of this checker without the kept scene: it would hold itself.
+    CollisionChecker own(m_, a_);
+    prepared_->scene = std::make_shared<const SceneChecker>(own, std::make_shared<const Environment>(env), options);
   }
   return prepared_->scene;
 }

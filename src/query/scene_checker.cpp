@@ -48,8 +48,6 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
     : checker_(std::move(checker)), env_(std::move(environment)), serial_(next_serial++), options_(options) {
   if (!env_) throw std::invalid_argument("scene checker: no environment");
   if (!checker_.carries(*env_)) checker_ = checker_.carrying(*env_);  // what the robot carries moves with it
-  // The checker's kept prepared scene is not this one's to keep (it may hold this very scene).
-  checker_.prepared_ = std::make_shared<CollisionChecker::PreparedMotions>();
   if (!is_rigid(options.root_pose)) throw std::invalid_argument("scene checker: the root pose is not a finite rigid transform");
   if (!std::isfinite(options.tolerance) || options.tolerance < 0.0) throw std::invalid_argument("scene checker: tolerance must be finite and >= 0");
   const RobotCollisionModel& m = checker_.collision_model();
@@ -179,16 +177,21 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
     if (!exact_distance_pays(s, grow, level_)) return s.no_free_radius();
     const double limit = grown_radius(pads) + margin;
-    SelfCollisionResult r;
-    const double d = checker_.pair_distance(a, b, s.poses, limit * (1 + 1e-9) + 1e-12, SelfCollisionRequest{}, r);
+    Vec3 wa, wb;
+    QueryStats stats;
+    const double d = compounds_distance(m.compound(a), s.poses[a], m.compound(b), s.poses[b], query_limit_above(limit), true,
+                                        wa, wb, stats);
     if (d > limit) return Answer::kFree;
     s.note_free_radius(d - margin - (pads - grow) - options_.min_clearance, grow);
     return Answer::kNear;
   }
   if (proxies_decide_self_ && s.tolerant()) return Answer::kHit;
-  SelfCollisionResult r;
-  const SelfCollisionRequest request{s.tolerant() ? options_.tolerance : 0.0};
-  return checker_.pair_collides(a, b, s.poses, request, r) ? Answer::kHit : Answer::kFree;
+  PairRequest request;
+  request.padding = m.paddings()[a] + m.paddings()[b];
+  request.tolerance = s.tolerant() ? options_.tolerance : 0.0;
+  QueryStats stats;
+  return compounds_collide(m.compound(a), s.poses[a], m.compound(b), s.poses[b], request, nullptr, stats) ? Answer::kHit
+                                                                                                          : Answer::kFree;
 }
 
 bool SceneChecker::link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const {
@@ -213,7 +216,7 @@ double SceneChecker::link_object_distance(int link, const Transform& pose, int o
   QueryStats stats;
   const double slack = std::min(1e-5, 0.01 * limit);
   Vec3 wa, wb;
-  const double best = compound_distance(m.compound(link), pose, obstacle, o.pose, limit * (1 + 1e-9) + 1e-12 + slack, true,
+  const double best = compound_distance(m.compound(link), pose, obstacle, o.pose, query_limit_above(limit) + slack, true,
                                         wa, wb, stats, slack);
   return best - slack;
 }
@@ -309,7 +312,7 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     });
   });
   if (apart) return Answer::kFree;
-  EnvironmentResult result;
+  QueryStats stats;
   if (s.growth != nullptr) {
     if (!exact_distance_pays(s, s.grow(l), level_ / 2)) return s.no_free_radius();
     const double margin = pose_margin(c.norm() + m.bounds()[l].radius);
@@ -320,21 +323,21 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     double d = -1.0;
     if (field_ && !proxies_.empty()) {
       const LinkProxy& proxy = proxies_.back()->links[l];
-      d = proxy_obstacle_distance(proxy, s.poses[l], limit * (1 + 1e-9) + 1e-12, [&](const Vec3& pc, double pr, double) {
+      d = proxy_obstacle_distance(proxy, s.poses[l], query_limit_above(limit), [&](const Vec3& pc, double pr, double) {
         return std::max(0.0, field_->lower_bound(pc) - grown_radius(pr));
       });
       if (d > limit) return Answer::kFree;
     }
-    d = std::max(d, checker_.link_octree_distance(l, s.poses[l], tree, limit * (1 + 1e-9) + 1e-12, true, result));
+    d = std::max(d, compound_octree_distance(m.compound(l), s.poses[l], tree, true, query_limit_above(limit), stats).distance);
     if (d > limit) return Answer::kFree;
     s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
     return Answer::kNear;
   }
   if (proxies_decide_objects_ && s.tolerant()) return Answer::kHit;
-  EnvironmentRequest request;
+  PairRequest request;
+  request.padding = m.paddings()[l];
   request.tolerance = s.tolerant() ? options_.tolerance : 0.0;
-  request.contacts = false;
-  return checker_.link_meets_octree(l, s.poses[l], tree, request, result) ? Answer::kHit : Answer::kFree;
+  return compound_meets_octree(m.compound(l), s.poses[l], tree, request, nullptr, stats) ? Answer::kHit : Answer::kFree;
 }
 
 // Component k: a checked self pair (k below the pair count), else the environment of one link.

@@ -114,7 +114,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     const int k = arena[j];
     const double g = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
     // min_clearance on top: a certified interval stays that far from every collision.
-    (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) = g * (1.0 + 1e-9) + pose_margin(g) + options_.min_clearance;
+    (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) = grown_growth(g) + options_.min_clearance;
   }
   posed.growth = s.growth.data();
   posed.pair_growth = s.pair_growth.data();
@@ -256,13 +256,13 @@ void SceneChecker::speeds_over(const double* start, const double* goal, double l
 double SceneChecker::link_growth(int link, const double* start, const double* goal, double lo, double hi) const {
   speeds_over(start, goal, lo, hi);
   const double g = motion_scratch().interval_speed[link] * 0.5 * (hi - lo);
-  return g * (1.0 + 1e-9) + pose_margin(g);
+  return grown_growth(g);
 }
 
 double SceneChecker::pair_growth(std::size_t pair, const double* start, const double* goal, double lo, double hi) const {
   speeds_over(start, goal, lo, hi);
   const double g = motion_scratch().interval_pair_speed[pair] * 0.5 * (hi - lo);
-  return g * (1.0 + 1e-9) + pose_margin(g);
+  return grown_growth(g);
 }
 
 MotionResult SceneChecker::check_motion(const double* start, const double* goal, bool earliest) const {

@@ -40,4 +40,13 @@ inline double grown_radius(double r) { return r * (1 + kVolumeMargin) + kVolumeM
 // The margin of a bound whose coordinates have magnitude up to `magnitude` after a pose chain.
 inline double pose_margin(double magnitude) { return kPoseMargin * (1.0 + std::abs(magnitude)); }
 
+// A motion's growth bound (how far a link moves over an interval, computed from rounded speeds)
+// grown by the relative error of that computation and the pose margin of its magnitude.
+inline double grown_growth(double g) { return g * (1.0 + kPoseMargin) + pose_margin(g); }
+
+// An upper bound for a distance query that must not miss a distance equal to `limit`: above it by
+// the pose margin's relative part and the volume margin's absolute one (the query may stop early
+// at its bound; a distance at `limit` exactly is then still found).
+inline double query_limit_above(double limit) { return limit * (1.0 + kPoseMargin) + kVolumeMargin; }
+
 }  // namespace bvh_collision

@@ -173,8 +173,6 @@ class CollisionChecker {
       throw std::invalid_argument("the environment has attached objects this checker does not carry: query with checker.carrying(env)");
     }
   }
-  friend class SceneChecker;  // query/scene_checker.h: the exact tests behind its proxies
-
   bool pair_collides(int a, int b, const std::vector<Transform>& poses, const SelfCollisionRequest& request,
                      SelfCollisionResult& result) const;
   double pair_distance(int a, int b, const std::vector<Transform>& poses, double best,
