@@ -268,6 +268,25 @@ Crossing classify_crossing(const Vec3& q, const Vec3& far, const Triangle& t, in
   return Crossing::kProper;
 }
 
+// A lower bound on the distance from q (the mesh frame) to anything in the node: its circumscribed
+// sphere's, and for an OBB the box's own (tighter where the box is thin: a point beside a long
+// edge run is not kept waiting for every box whose sphere reaches it), less the box's rounding.
+template <class BV>
+double point_node_bound(const BvhNode<BV>& node, const Vec3& q) {
+  return (q - center(node.volume)).norm() - node.size;
+}
+template <>
+double point_node_bound(const BvhNode<Obb>& node, const Vec3& q) {
+  const Vec3 offset = q - node.volume.center;
+  const double sphere = offset.norm() - node.size;
+  if (sphere <= 0.0) {
+    const Vec3 local = node.volume.axes.transpose() * offset;
+    const double box = (local.cwiseAbs() - node.volume.half).cwiseMax(0.0).norm();
+    return box - kVolumeMargin * (offset.norm() + node.volume.radius) - kVolumeMargin;
+  }
+  return sphere;
+}
+
 }  // namespace
 
 template <class BV>
@@ -372,8 +391,7 @@ DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const V
   double best = upper_bound;
   auto bound = [&](std::int32_t n) {
     ++result.stats.volume_tests;
-    const BvhNode<BV>& node = bvh.nodes()[n];
-    return (q - center(node.volume)).norm() - node.size;  // node.size circumscribes the volume
+    return point_node_bound(bvh.nodes()[n], q);
   };
   auto leaf = [&](const BvhNode<BV>& n) {
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {

@@ -9,6 +9,7 @@
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/geometry/mesh.h"
 #include "bvh_collision/geometry/safety_margin.h"
+#include "proxy_build_index.h"
 
 namespace bvh_collision {
 namespace {
@@ -107,7 +108,7 @@ struct Chosen {
 // for a cube small enough, its own ball; else the cube is split.
 class ShapeCover {
  public:
-  ShapeCover(const ShapeField& field, double half_level) : field_(field), half_level_(half_level) {}
+  ShapeCover(const ShapeField& field, double half_level) : field_(field), half_level_(half_level), index_(half_level) {}
 
   void run(const Vec3& center, double half_edge) {
     std::vector<std::pair<Vec3, double>> level{{center, half_edge}}, next;
@@ -132,9 +133,10 @@ class ShapeCover {
   // Settles the cube (true) or asks for it to be split (false).
   bool cell(const Vec3& c, double half_edge) {
     const double h = grown_radius(half_edge * std::sqrt(3.0));
-    for (const Chosen& s : chosen_) {
-      if ((s.center - c).norm() + h <= s.radius * (1.0 - kVolumeMargin)) return true;
-    }
+    const bool held = index_.any_near(c, [&](std::uint32_t i) {
+      return (chosen_[i].center - c).norm() + h <= chosen_[i].radius * (1.0 - kVolumeMargin);
+    });
+    if (held) return true;
     const bool in = field_.solid() && field_.inside(c);
     Vec3 nearest;
     const double limit = 4.0 * h + 8.0 * half_level_;
@@ -163,6 +165,7 @@ class ShapeCover {
   double low(double d) const { return d * (1.0 - kVolumeMargin) - kVolumeMargin; }
   double high(double d) const { return grown_radius(d) + kVolumeMargin; }
   bool choose(const Vec3& c, double radius, double bound) {
+    index_.insert(static_cast<std::uint32_t>(chosen_.size()), c, radius);
     chosen_.push_back({c, radius});
     worst_ = std::max(worst_, bound);
     return true;
@@ -171,6 +174,7 @@ class ShapeCover {
   const ShapeField& field_;
   double half_level_;
   std::vector<Chosen> chosen_;
+  SphereGrid index_;  // chosen_ by position
   double worst_ = 0.0;
 };
 
@@ -290,13 +294,12 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
     targets.push_back(p);
     if (auto s = builder.interior_sphere(p)) candidates.push_back(*s);
   }
-  // Which targets each candidate covers (brute force: a few thousand of each).
+  // Which targets each candidate covers.
+  const PointTree target_tree(targets);
   std::vector<std::vector<int>> covers(candidates.size());
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    const double r2 = std::pow(std::max(0.0, candidates[c].radius - margin), 2);
-    for (std::size_t t = 0; t < targets.size(); ++t) {
-      if ((targets[t] - candidates[c].center).squaredNorm() <= r2) covers[c].push_back(static_cast<int>(t));
-    }
+    target_tree.in_ball(candidates[c].center, std::max(0.0, candidates[c].radius - margin),
+                        [&](std::uint32_t t) { covers[c].push_back(static_cast<int>(t)); });
   }
   std::vector<char> covered(targets.size(), 0);
   std::vector<Chosen> chosen;
@@ -332,7 +335,9 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
 class PolyhedralCover {
  public:
   PolyhedralCover(const ShapeField& field, double half_level, std::vector<Chosen> seed)
-      : field_(field), half_level_(half_level), delta_(0.125 * half_level), chosen_(std::move(seed)), builder_(field, half_level) {}
+      : field_(field), half_level_(half_level), delta_(0.125 * half_level), builder_(field, half_level), index_(half_level) {
+    for (const Chosen& s : seed) add(s);
+  }
 
   void run() {
     for (const Triangle& t : field_.faces) surface(t[0], t[1], t[2], 0);
@@ -364,10 +369,15 @@ class PolyhedralCover {
         holds(chosen_[last_], c, delta_)) {
       return true;
     }
-    for (std::size_t i = 0; i < chosen_.size(); ++i) {
-      if (holds(chosen_[i], a, delta_) && holds(chosen_[i], b, delta_) && holds(chosen_[i], c, delta_)) return last_ = i, true;
-    }
-    return false;
+    return index_.any_near(a, [&](std::uint32_t i) {
+      const bool all = holds(chosen_[i], a, delta_) && holds(chosen_[i], b, delta_) && holds(chosen_[i], c, delta_);
+      if (all) last_ = i;
+      return all;
+    });
+  }
+  void add(const Chosen& s) {
+    index_.insert(static_cast<std::uint32_t>(chosen_.size()), s.center, s.radius);
+    chosen_.push_back(s);
   }
   void surface(const Vec3& a, const Vec3& b, const Vec3& c, int depth) {
     if (held(a, b, c)) return;
@@ -384,29 +394,32 @@ class PolyhedralCover {
     if (field_.solid() && normal.norm() > 0.0) {
       if (auto s = builder_.medial_sphere(g, -normal.normalized(), 2.0 * field_.box().second.maxCoeff())) {
         if (holds(*s, a, delta_) && holds(*s, b, delta_) && holds(*s, c, delta_)) {
-          chosen_.push_back(*s);
+          add(*s);
           return;
         }
       }
     }
-    chosen_.push_back({g, half_level_ * (1.0 - kVolumeMargin) - kVolumeMargin});
+    add({g, half_level_ * (1.0 - kVolumeMargin) - kVolumeMargin});
     if (!held(a, b, c)) throw std::logic_error("link proxy: a surface piece larger than the level");
   }
   // Settles the cube (true) or asks for it to be split (false).
   bool cube(const Vec3& c, double half_edge) {
     const double h = grown_radius(half_edge * std::sqrt(3.0));
     if (last_cube_ < chosen_.size() && holds(chosen_[last_cube_], c, h)) return true;
-    for (std::size_t i = 0; i < chosen_.size(); ++i) {
-      if (holds(chosen_[i], c, h)) return last_cube_ = i, true;
-    }
-    const bool in = field_.inside(c);
+    const bool held_cube = index_.any_near(c, [&](std::uint32_t i) { return holds(chosen_[i], c, h) ? (last_cube_ = i, true) : false; });
+    if (held_cube) return true;
+    // Whether c is in the solid matters only for a cube the surface does not cross; a mesh's
+    // distance does not need it (a ray cast, asked only then).
     const double limit = 4.0 * h + 8.0 * half_level_;
-    const double d = field_.surface_distance(c, in, limit, nullptr);
+    std::optional<bool> in;
+    if (field_.mesh == nullptr) in = field_.inside(c);
+    const double d = field_.surface_distance(c, in.value_or(false), limit, nullptr);
     const double d_low = d * (1.0 - kVolumeMargin) - kVolumeMargin, d_high = grown_radius(d) + kVolumeMargin;
-    if (!in && d_low > h) return true;        // no point of the solid here
-    if (d_high + h < delta_) return true;      // every point within delta of the surface
-    if (in && d_low > h && h <= half_level_) {  // deep enough: the interior sphere at c holds it
-      chosen_.push_back({c, d_low + half_level_});
+    if (d_low > h && !in.has_value()) in = field_.inside(c);
+    if (d_low > h && !*in) return true;          // no point of the solid here
+    if (d_high + h < delta_) return true;         // every point within delta of the surface
+    if (d_low > h && *in && h <= half_level_) {  // deep enough: the interior sphere at c holds it
+      add({c, d_low + half_level_});
       return true;
     }
     return false;
@@ -416,6 +429,7 @@ class PolyhedralCover {
   double half_level_, delta_;
   std::vector<Chosen> chosen_;
   SeedBuilder builder_;
+  SphereGrid index_;  // chosen_ by position
   std::size_t last_ = 0, last_cube_ = 0;
 };
 

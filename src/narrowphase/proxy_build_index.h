@@ -1,0 +1,141 @@
+// The proxy build's two searches, so that it grows as n log n of what it builds instead of n^2
+// (link_proxy.cpp): which chosen sphere holds a point (the cover's proof asks it for every
+// surface piece and every cube), and which sample points a candidate sphere covers (the greedy
+// seed). Private to the narrowphase's proxy build.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <unordered_map>
+#include <vector>
+
+#include "bvh_collision/geometry/types.h"
+
+namespace bvh_collision {
+
+// Spheres by position, for "is p inside some sphere (by a margin)?": a hashed grid per scale. A
+// sphere lives at the finest scale whose cell is more than twice its radius, in the cell of its
+// centre; a sphere holding p then has its centre in one of the 2 x 2 x 2 cells around p at its
+// scale. A query costs 8 look-ups per scale in use (a link's spheres span a few scales), not a
+// walk over every sphere; spheres may be added between queries.
+class SphereGrid {
+ public:
+  explicit SphereGrid(double finest_cell) : finest_(finest_cell) {}
+
+  void insert(std::uint32_t id, const Vec3& centre, double radius) {
+    int scale = 0;
+    double cell = finest_;
+    while (radius > kFill * cell && scale < kScales - 1) cell *= 2.0, ++scale;
+    used_ |= 1u << scale;
+    const std::uint64_t key = key_of(scale, cell_of(centre.x(), cell), cell_of(centre.y(), cell), cell_of(centre.z(), cell));
+    auto [it, fresh] = heads_.try_emplace(key, id);
+    next_.resize(std::max<std::size_t>(next_.size(), id + 1), kNone);
+    if (!fresh) next_[id] = it->second, it->second = id;
+  }
+
+  // Calls visit(id) for every sphere that may hold p (a superset of them) until it returns true;
+  // whether one did.
+  template <class Visit>
+  bool any_near(const Vec3& p, Visit&& visit) const {
+    double cell = finest_;
+    for (int scale = 0; scale < kScales; ++scale, cell *= 2.0) {
+      if (!(used_ & (1u << scale))) continue;
+      const std::int64_t x = cell_of(p.x() - 0.5 * cell, cell), y = cell_of(p.y() - 0.5 * cell, cell),
+                         z = cell_of(p.z() - 0.5 * cell, cell);
+      for (int k = 0; k < 8; ++k) {
+        const auto it = heads_.find(key_of(scale, x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1)));
+        if (it == heads_.end()) continue;
+        for (std::uint32_t id = it->second; id != kNone; id = next_[id]) {
+          if (visit(id)) return true;
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  static constexpr int kScales = 30;            // 2^30 times the finest cell: beyond any link
+  static constexpr double kFill = 0.49;         // radius / cell: the half a cell, with room for rounding
+  static constexpr std::uint32_t kNone = ~0u;
+  static std::int64_t cell_of(double x, double cell) { return static_cast<std::int64_t>(std::floor(x / cell)); }
+  // 5 bits of scale and 19 of each coordinate (wrapped: a collision only adds candidates).
+  static std::uint64_t key_of(int scale, std::int64_t x, std::int64_t y, std::int64_t z) {
+    constexpr std::uint64_t kMask = (1u << 19) - 1;
+    return (static_cast<std::uint64_t>(scale) << 57) | ((static_cast<std::uint64_t>(x) & kMask) << 38) |
+           ((static_cast<std::uint64_t>(y) & kMask) << 19) | (static_cast<std::uint64_t>(z) & kMask);
+  }
+
+  double finest_;
+  std::uint32_t used_ = 0;
+  std::unordered_map<std::uint64_t, std::uint32_t> heads_;  // cell -> its latest sphere
+  std::vector<std::uint32_t> next_;                         // sphere -> the one before it in its cell
+};
+
+// Points for ball queries: a k-d tree (median splits on the widest axis, boxes per node), built
+// once in n log n; a ball query costs the depth plus what it finds.
+class PointTree {
+ public:
+  explicit PointTree(const std::vector<Vec3>& points) : points_(points), order_(points.size()) {
+    std::iota(order_.begin(), order_.end(), 0u);
+    if (!points_.empty()) build(0, static_cast<std::uint32_t>(order_.size()));
+  }
+
+  // Calls found(index) for every point within `radius` of `centre` (inclusive), in index order
+  // within each leaf (not overall).
+  template <class Found>
+  void in_ball(const Vec3& centre, double radius, Found&& found) const {
+    if (nodes_.empty() || !(radius >= 0.0)) return;
+    const double r2 = radius * radius;
+    std::uint32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if ((centre - centre.cwiseMax(n.lo).cwiseMin(n.hi)).squaredNorm() > r2) continue;
+      if (n.right == 0) {
+        for (std::uint32_t i = n.begin; i < n.end; ++i) {
+          if ((points_[order_[i]] - centre).squaredNorm() <= r2) found(order_[i]);
+        }
+        continue;
+      }
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    }
+  }
+
+ private:
+  struct Node {
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+    std::uint32_t begin = 0, end = 0;
+    std::uint32_t left = 0, right = 0;  // right == 0: a leaf
+  };
+  static constexpr std::uint32_t kLeafSize = 8;
+
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end) {
+    const std::uint32_t index = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.emplace_back();
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (std::uint32_t i = begin; i < end; ++i) lo = lo.cwiseMin(points_[order_[i]]), hi = hi.cwiseMax(points_[order_[i]]);
+    Node n{lo, hi, begin, end, 0, 0};
+    if (end - begin > kLeafSize) {
+      int axis = 0;
+      (hi - lo).maxCoeff(&axis);
+      const std::uint32_t mid = begin + (end - begin) / 2;
+      std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                       [&](std::uint32_t a, std::uint32_t b) { return points_[a][axis] < points_[b][axis]; });
+      n.left = build(begin, mid);
+      n.right = build(mid, end);
+    }
+    nodes_[index] = n;
+    return index;
+  }
+
+  const std::vector<Vec3>& points_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+}  // namespace bvh_collision
