@@ -140,6 +140,44 @@ TYPED_TEST(BvhOracle, DistanceEqualsBruteForce) {
   }
 }
 
+// A point against a mesh: the distance the BVH finds is the smallest over every triangle, with
+// or without an upper bound, and point_within answers "closer than r" as that minimum does, for
+// points inside, on and around bumpy closed meshes and real link meshes, posed.
+TYPED_TEST(BvhOracle, PointDistanceAndWithinEqualBruteForce) {
+  std::mt19937_64 random(11);  // its own: the shared one's draws are the other tests'
+  std::vector<TriangleMesh> meshes{test::bumpy_sphere(random, 0.1, 10, 16, 0.15), test::triangle_soup(random, 150, 0.2, 0.03)};
+  for (const MeshPair& mp : mesh_pairs()) meshes.push_back(mp.a);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), scale(0.0, 1.6);
+  int within = 0, queries = 0;
+  for (const TriangleMesh& mesh : meshes) {
+    const auto bvh = Bvh<TypeParam>::build(mesh);
+    const Vec3 centre = center(bvh.root().volume);
+    const double size = radius(bvh.root().volume);
+    const Transform pose{Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix(), Vec3(0.3, -0.2, 0.5)};
+    for (int i = 0; i < test::sized(400); ++i, ++queries) {
+      const Vec3 local = centre + scale(random) * size * Vec3(u(random), u(random), u(random)).normalized();
+      double brute = std::numeric_limits<double>::infinity();
+      for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const Triangle tri = mesh.triangle(t);
+        brute = std::min(brute, (closest_point_on_triangle(local, tri[0], tri[1], tri[2]) - local).norm());
+      }
+      const Vec3 p = pose * local;
+      const DistanceResult d = point_distance(bvh, pose, p);
+      ASSERT_NEAR(d.distance, brute, 1e-12 * (1.0 + size)) << "mesh " << &mesh - meshes.data() << ", point " << i;
+      ASSERT_NEAR((d.point_b - p).norm(), d.distance, 1e-12 * (1.0 + size));
+      const double r = brute * (i % 2 == 0 ? 1.0 + 1e-6 : 1.0 - 1e-6) + (i % 3 == 0 ? 1e-9 : 0.0);
+      const bool expected = brute < r;
+      within += expected;
+      QueryStats stats;
+      ASSERT_EQ(point_within(bvh, pose, p, r, &stats), expected) << "point " << i << ", radius " << r << ", nearest " << brute;
+      ASSERT_EQ(point_distance(bvh, pose, p, r).distance < r, expected);
+      EXPECT_LE(stats.primitive_tests, mesh.triangles.size());
+    }
+  }
+  EXPECT_GT(within, queries / 4);
+  EXPECT_LT(within, 3 * queries / 4);
+}
+
 TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
   const double tolerances[] = {0.0, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05};
   int shortcuts = 0;

@@ -287,6 +287,26 @@ double point_node_bound(const BvhNode<Obb>& node, const Vec3& q) {
   return sphere;
 }
 
+// point_node_bound clamped at 0 and squared, for a yes/no question at radius r (cutoff r^2):
+// a node farther than its circumscribed sphere by `reach` (>= r) is pruned without a square
+// root; only a node near enough pays for its box's distance.
+template <class BV>
+double point_node_bound_squared(const BvhNode<BV>& node, const Vec3& q, double /*reach*/) {
+  const double d = std::max(0.0, point_node_bound(node, q));
+  return d * d;
+}
+template <>
+double point_node_bound_squared(const BvhNode<Obb>& node, const Vec3& q, double reach) {
+  const Vec3 offset = q - node.volume.center;
+  const double far = offset.squaredNorm(), sphere = node.size + reach;
+  if (far > sphere * sphere) return far;  // |offset| - size > reach: the sphere bound prunes it
+  // |offset| <= size + reach here, so this margin is at least point_node_bound's.
+  const double margin = kVolumeMargin * (2.0 * node.size + reach) + kVolumeMargin;
+  const Vec3 local = node.volume.axes.transpose() * offset;
+  const double d = std::max(0.0, std::sqrt((local.cwiseAbs() - node.volume.half).cwiseMax(0.0).squaredNorm()) - margin);
+  return d * d;
+}
+
 }  // namespace
 
 template <class BV>
@@ -413,6 +433,55 @@ DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const V
 }
 
 template <class BV>
+bool point_within(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p, double radius, QueryStats* stats) {
+  if (bvh.empty() || !(radius > 0.0)) return false;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const Vec3 q = pose.R.transpose() * (p - pose.t);
+  bool found = false;
+  // (reach: the radius with room for the rounding of a squared norm against a norm.)
+  const double reach = radius * (1.0 + 1e-9) + kVolumeMargin, cutoff = radius * radius;
+  auto bound = [&](std::int32_t n) {
+    ++s.volume_tests;
+    return point_node_bound_squared(bvh.nodes()[n], q, reach);
+  };
+  auto leaf = [&](const BvhNode<BV>& n) {
+    for (std::int32_t i = n.first; i < n.first + n.count && !found; ++i) {
+      ++s.primitive_tests;
+      const Triangle& t = bvh.triangles()[i];
+      found = (closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm() < radius;
+    }
+    return found;
+  };
+  nearest_first(bvh, bound, leaf, [&] { return cutoff; });
+  return found;
+}
+
+template <class BV>
+bool triangles_near(const Bvh<BV>& bvh, const Vec3& p, double radius, std::size_t max_count,
+                    std::vector<std::int32_t>& out, QueryStats* stats) {
+  if (bvh.empty() || !(radius > 0.0)) return true;
+  QueryStats local;
+  QueryStats& s = stats ? *stats : local;
+  const double reach = radius * (1.0 + 1e-9) + kVolumeMargin, cutoff = radius * radius;
+  std::size_t found = 0;
+  auto bound = [&](std::int32_t n) {
+    ++s.volume_tests;
+    return point_node_bound_squared(bvh.nodes()[n], p, reach);
+  };
+  auto leaf = [&](const BvhNode<BV>& n) {
+    for (std::int32_t i = n.first; i < n.first + n.count && found <= max_count; ++i) {
+      ++s.primitive_tests;
+      const Triangle& t = bvh.triangles()[i];
+      if ((closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm() < radius) out.push_back(i), ++found;
+    }
+    return found > max_count;
+  };
+  nearest_first(bvh, bound, leaf, [&] { return cutoff; });
+  return found <= max_count;
+}
+
+template <class BV>
 RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, const Vec3& direction,
                double max_range, bool any_hit, QueryStats* stats) {
   RayHit hit;
@@ -459,7 +528,10 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
   template RayHit raycast<BV>(const Bvh<BV>&, const Transform&, const Vec3&, const Vec3&, double, bool,   \
                               QueryStats*);                                                            \
   template bool contains_point<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);                         \
-  template DistanceResult point_distance<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double);
+  template DistanceResult point_distance<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double);   \
+  template bool point_within<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double, QueryStats*);     \
+  template bool triangles_near<BV>(const Bvh<BV>&, const Vec3&, double, std::size_t, std::vector<std::int32_t>&, \
+                                   QueryStats*);
 
 BVH_COLLISION_INSTANTIATE_QUERIES(Aabb)
 BVH_COLLISION_INSTANTIATE_QUERIES(Obb)

@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
-#include <unordered_map>
 #include <vector>
 
 #include "bvh_collision/geometry/types.h"
@@ -20,36 +19,47 @@ namespace bvh_collision {
 // sphere lives at the finest scale whose cell is more than twice its radius, in the cell of its
 // centre; a sphere holding p then has its centre in one of the 2 x 2 x 2 cells around p at its
 // scale. A query costs 8 look-ups per scale in use (a link's spheres span a few scales), not a
-// walk over every sphere; spheres may be added between queries.
+// walk over every sphere; spheres may be added between queries. The cells are an open-addressed
+// table, and each sphere's centre and radius sit in its cell's list: a query reads no other array.
 class SphereGrid {
  public:
-  explicit SphereGrid(double finest_cell) : finest_(finest_cell) {}
+  struct Entry {
+    Vec3 centre;
+    double radius;
+    std::uint32_t id;
+    std::uint32_t next;  // the entry before it in its cell, or kNone
+  };
+
+  explicit SphereGrid(double finest_cell) : finest_(finest_cell), keys_(kInitialSlots, kEmpty), heads_(kInitialSlots) {}
 
   void insert(std::uint32_t id, const Vec3& centre, double radius) {
     int scale = 0;
     double cell = finest_;
     while (radius > kFill * cell && scale < kScales - 1) cell *= 2.0, ++scale;
     used_ |= 1u << scale;
+    if (2 * (count_ + 1) > keys_.size()) grow();
     const std::uint64_t key = key_of(scale, cell_of(centre.x(), cell), cell_of(centre.y(), cell), cell_of(centre.z(), cell));
-    auto [it, fresh] = heads_.try_emplace(key, id);
-    next_.resize(std::max<std::size_t>(next_.size(), id + 1), kNone);
-    if (!fresh) next_[id] = it->second, it->second = id;
+    std::size_t slot = slot_of(key);
+    if (keys_[slot] == kEmpty) keys_[slot] = key, heads_[slot] = kNone, ++count_;
+    entries_.push_back({centre, radius, id, heads_[slot]});
+    heads_[slot] = static_cast<std::uint32_t>(entries_.size() - 1);
   }
 
-  // Calls visit(id) for every sphere that may hold p (a superset of them) until it returns true;
-  // whether one did.
+  // Calls visit(entry) for every sphere of radius >= min_radius that may hold p (a superset of
+  // them) until it returns true; whether one did.
   template <class Visit>
-  bool any_near(const Vec3& p, Visit&& visit) const {
+  bool any_near(const Vec3& p, double min_radius, Visit&& visit) const {
     double cell = finest_;
     for (int scale = 0; scale < kScales; ++scale, cell *= 2.0) {
       if (!(used_ & (1u << scale))) continue;
+      if (kFill * cell < min_radius && scale < kScales - 1) continue;  // every sphere here is smaller
       const std::int64_t x = cell_of(p.x() - 0.5 * cell, cell), y = cell_of(p.y() - 0.5 * cell, cell),
                          z = cell_of(p.z() - 0.5 * cell, cell);
       for (int k = 0; k < 8; ++k) {
-        const auto it = heads_.find(key_of(scale, x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1)));
-        if (it == heads_.end()) continue;
-        for (std::uint32_t id = it->second; id != kNone; id = next_[id]) {
-          if (visit(id)) return true;
+        const std::size_t slot = slot_of(key_of(scale, x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1)));
+        if (keys_[slot] == kEmpty) continue;
+        for (std::uint32_t e = heads_[slot]; e != kNone; e = entries_[e].next) {
+          if (visit(entries_[e])) return true;
         }
       }
     }
@@ -60,6 +70,8 @@ class SphereGrid {
   static constexpr int kScales = 30;            // 2^30 times the finest cell: beyond any link
   static constexpr double kFill = 0.49;         // radius / cell: the half a cell, with room for rounding
   static constexpr std::uint32_t kNone = ~0u;
+  static constexpr std::uint64_t kEmpty = ~0ull;  // no key has all its bits set (the scale has 5)
+  static constexpr std::size_t kInitialSlots = 64;
   static std::int64_t cell_of(double x, double cell) { return static_cast<std::int64_t>(std::floor(x / cell)); }
   // 5 bits of scale and 19 of each coordinate (wrapped: a collision only adds candidates).
   static std::uint64_t key_of(int scale, std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -67,11 +79,30 @@ class SphereGrid {
     return (static_cast<std::uint64_t>(scale) << 57) | ((static_cast<std::uint64_t>(x) & kMask) << 38) |
            ((static_cast<std::uint64_t>(y) & kMask) << 19) | (static_cast<std::uint64_t>(z) & kMask);
   }
+  // The key's slot, or the empty one where it would go (linear probing; the table is at most half full).
+  std::size_t slot_of(std::uint64_t key) const {
+    const std::size_t mask = keys_.size() - 1;
+    std::size_t slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 32) & mask;
+    while (keys_[slot] != kEmpty && keys_[slot] != key) slot = (slot + 1) & mask;
+    return slot;
+  }
+  void grow() {
+    std::vector<std::uint64_t> keys(keys_.size() * 2, kEmpty);
+    std::vector<std::uint32_t> heads(keys.size());
+    keys.swap(keys_), heads.swap(heads_);
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (keys[i] == kEmpty) continue;
+      const std::size_t slot = slot_of(keys[i]);
+      keys_[slot] = keys[i], heads_[slot] = heads[i];
+    }
+  }
 
   double finest_;
   std::uint32_t used_ = 0;
-  std::unordered_map<std::uint64_t, std::uint32_t> heads_;  // cell -> its latest sphere
-  std::vector<std::uint32_t> next_;                         // sphere -> the one before it in its cell
+  std::size_t count_ = 0;              // cells in use
+  std::vector<std::uint64_t> keys_;    // cell key per slot
+  std::vector<std::uint32_t> heads_;   // slot -> its cell's latest entry
+  std::vector<Entry> entries_;         // in insertion order
 };
 
 // Points for ball queries: a k-d tree (median splits on the widest axis, boxes per node), built
@@ -83,8 +114,8 @@ class PointTree {
     if (!points_.empty()) build(0, static_cast<std::uint32_t>(order_.size()));
   }
 
-  // Calls found(index) for every point within `radius` of `centre` (inclusive), in index order
-  // within each leaf (not overall).
+  // Calls found(index) for every point within `radius` of `centre` (inclusive), in the tree's
+  // order (not the points').
   template <class Found>
   void in_ball(const Vec3& centre, double radius, Found&& found) const {
     if (nodes_.empty() || !(radius >= 0.0)) return;
@@ -95,6 +126,11 @@ class PointTree {
     while (top > 0) {
       const Node& n = nodes_[stack[--top]];
       if ((centre - centre.cwiseMax(n.lo).cwiseMin(n.hi)).squaredNorm() > r2) continue;
+      const Vec3 far = (n.lo - centre).cwiseAbs().cwiseMax((n.hi - centre).cwiseAbs());
+      if (far.squaredNorm() <= r2) {  // the node's box is in the ball: all of its points are
+        for (std::uint32_t i = n.begin; i < n.end; ++i) found(order_[i]);
+        continue;
+      }
       if (n.right == 0) {
         for (std::uint32_t i = n.begin; i < n.end; ++i) {
           if ((points_[order_[i]] - centre).squaredNorm() <= r2) found(order_[i]);

@@ -85,6 +85,19 @@ template <class BV>
 DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p,
                               double upper_bound = std::numeric_limits<double>::infinity());
 
+// Is some point of the mesh (pose in world) closer than `radius` to p (world)? The answer of
+// point_distance(bvh, pose, p, radius).distance < radius, but the walk stops at the first triangle
+// found closer: a yes/no question near a surface costs a few triangles, not the nearest one's search.
+template <class BV>
+bool point_within(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p, double radius, QueryStats* stats = nullptr);
+
+// The triangles (indices into bvh.triangles()) with a point closer than `radius` to p (the mesh's
+// own frame), each as point_within would find it, appended to `out`; false when there are more
+// than `max_count` (out then holds some of them).
+template <class BV>
+bool triangles_near(const Bvh<BV>& bvh, const Vec3& p, double radius, std::size_t max_count,
+                    std::vector<std::int32_t>& out, QueryStats* stats = nullptr);
+
 // First hit (or, with any_hit, some hit) of the ray origin + s * direction, 0 <= s <= max_range
 // (direction need not be unit; distances are along the unit direction), in world frame.
 template <class BV>

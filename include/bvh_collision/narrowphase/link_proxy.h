@@ -45,12 +45,27 @@ struct ProxySphere {
   std::int32_t skip = 0;
 };
 
+// The work a build did, counted (docs/performance.md, "proxy build"): what a test bounds instead
+// of a time. Every cube and surface piece asks a constant number of nearby spheres (a hashed grid
+// of the chosen ones) and at most one distance and one containment query of the mesh's BVH.
+struct ProxyBuildStats {
+  std::size_t cubes = 0;             // cubes of the volume proofs
+  std::size_t surface_pieces = 0;    // triangle pieces of the surface proofs
+  std::size_t sphere_tests = 0;      // chosen spheres tested for holding a cube or a piece
+  std::size_t distance_queries = 0;  // distances (or "closer than") to the surface asked
+  std::size_t inside_queries = 0;    // point-in-solid tests asked
+  std::size_t bvh_volume_tests = 0;  // BVH volumes those queries opened
+  std::size_t triangle_tests = 0;    // triangles measured from a cube's kept list (not through the BVH)
+  std::size_t candidates = 0;        // spheres the greedy start chose among
+  std::size_t leaves = 0;            // leaf spheres built
+};
+
 class LinkProxy {
  public:
   LinkProxy() = default;
   // The proxy of a link's shapes (in the link frame) at level e > 0; a closed mesh stands for its
-  // solid, an open one for its surface.
-  static LinkProxy build(const std::vector<BodyShape>& shapes, double level);
+  // solid, an open one for its surface. The work is added to `stats` when given.
+  static LinkProxy build(const std::vector<BodyShape>& shapes, double level, ProxyBuildStats* stats = nullptr);
 
   const std::vector<ProxySphere>& spheres() const { return spheres_; }
   bool empty() const { return spheres_.empty(); }
