@@ -430,7 +430,9 @@ def build_report(tables, bench_dir, quick):
     out += ["Solids, the node's default, with the link proxies (narrowphase/link_proxy.h) answering at tolerances "
             "from their level up; `build/bench/tables/speed_error.json` holds these rows.", "",
             markdown(need(tables, "speed_error")), markdown(need(tables, "proxy_proof")),
-            markdown(need(tables, "motion_speed_error"))]
+            markdown(need(tables, "motion_speed_error")),
+            "What the proxies cost to build at a first start, per robot and level (later starts read them from the "
+            "cache):", "", markdown(need(tables, "proxy_build"))]
 
     out += ["## 2. Distance: time against the allowed error", "", headline_distance(tables), "",
             f"![distance against allowed error]({plot_self(tables, plots_dir, 'distance')})", ""]

@@ -178,6 +178,64 @@ TYPED_TEST(BvhOracle, PointDistanceAndWithinEqualBruteForce) {
   EXPECT_LT(within, 3 * queries / 4);
 }
 
+// The winding number a ray cast counts (winding_number) is what contains_point decides by, and
+// it can be carried from one point to another by the signed crossings of the segment between
+// them (signed_crossing over every triangle): on a bumpy sphere, two overlapping boxes (winding
+// 2 where they overlap) and a box with a cavity, for random segments and for segments lying in
+// the boxes' face planes (the cases a carried count could get wrong), against the boxes themselves.
+TYPED_TEST(BvhOracle, WindingNumbersCarryAlongSegments) {
+  std::mt19937_64 random(13);
+  auto shell = [](const Vec3& size, const Vec3& at, bool inward) {
+    TriangleMesh m = box_mesh(size);
+    for (Vec3& v : m.vertices) v += at;
+    if (inward) {
+      for (auto& t : m.triangles) std::swap(t[1], t[2]);
+    }
+    return m;
+  };
+  auto join = [](TriangleMesh a, const TriangleMesh& b) {
+    const auto offset = static_cast<std::int32_t>(a.vertices.size());
+    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    return a;
+  };
+  const std::vector<TriangleMesh> meshes{test::bumpy_sphere(random, 0.5, 12, 16, 0.2),
+                                         join(shell(Vec3(1, 0.6, 0.6), Vec3::Zero(), false), shell(Vec3(1, 0.6, 0.6), Vec3(0.5, 0.1, 0.05), false)),
+                                         join(shell(Vec3(1, 1, 1), Vec3::Zero(), false), shell(Vec3(0.4, 0.4, 0.4), Vec3::Zero(), true))};
+  std::uniform_real_distribution<double> u(-0.9, 1.2);
+  const double planes[] = {0.5, -0.5, 0.3, -0.3, 0.2, -0.2};  // the boxes' face planes
+  int carried = 0, inside = 0, twice = 0;
+  for (const TriangleMesh& mesh : meshes) {
+    const auto bvh = Bvh<TypeParam>::build(mesh);
+    ASSERT_TRUE(bvh.closed());
+    for (int i = 0; i < test::sized(1500); ++i) {
+      Vec3 a(u(random), u(random), u(random)), b(u(random), u(random), u(random));
+      if (i % 3 == 1) a.z() = b.z() = planes[i % 6];  // a segment in a face plane
+      if (i % 3 == 2) a.x() = planes[i % 6], b = a + Vec3(0.0, u(random), 0.0);
+      const std::optional<int> wa = winding_number(bvh, a), wb = winding_number(bvh, b);
+      if (wa) {
+        ASSERT_EQ(*wa != 0, contains_point(bvh, a)) << a.transpose();
+      }
+      if (!wa || !wb) continue;
+      int w = *wa;
+      bool decided = true;
+      for (const Triangle& t : bvh.triangles()) {
+        const std::optional<int> c = signed_crossing(a, b, t);
+        decided = decided && c.has_value();
+        if (c) w -= *c;
+      }
+      if (!decided) continue;
+      ASSERT_EQ(w, *wb) << "from " << a.transpose() << " to " << b.transpose();
+      ++carried;
+      inside += *wb != 0;
+      twice += *wb == 2;
+    }
+  }
+  EXPECT_GT(carried, test::sized(1500));
+  EXPECT_GT(inside, carried / 20);
+  EXPECT_GT(twice, 10) << "points in both overlapping boxes";
+}
+
 TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
   const double tolerances[] = {0.0, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05};
   int shortcuts = 0;

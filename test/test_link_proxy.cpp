@@ -172,6 +172,48 @@ TEST(LinkProxy, PrimitivesAreCoveredWithinTheBound) {
   }
 }
 
+// The build's work, counted on a large mesh (a bumpy sphere of 30,000 triangles, 0.3 m across):
+// every cube and surface piece asks a bounded number of spheres (a scan of every sphere chosen,
+// as the first build did, asked hundreds of thousands per piece here), every query of the mesh
+// opens a number of BVH volumes that grows with the log of its triangles, and halving the level
+// (four times the leaves) multiplies the work by about four, not sixteen: n log n of the leaves.
+TEST(LinkProxy, BuildWorkGrowsAsNLogNOfTheLeaves) {
+  std::mt19937_64 random(3);
+  const int rings = test::sanitized() ? 62 : 123;  // a quarter of the triangles under the sanitizers
+  const TriangleMesh mesh = test::bumpy_sphere(random, 0.15, rings, rings, 0.02);
+  const Bvh<Obb> bvh = Bvh<Obb>::build(mesh);
+  ASSERT_TRUE(bvh.closed());
+  ASSERT_GT(mesh.triangles.size(), test::sanitized() ? 7000u : 30000u);
+  const std::vector<BodyShape> shapes{BodyShape{ShapeRef{&bvh, nullptr, Primitive{}}, Transform()}};
+  const double coarse = test::sanitized() ? 0.02 : 0.01;
+  std::vector<ProxyBuildStats> work;
+  for (const double level : {coarse, coarse / 2}) {
+    ProxyBuildStats stats;
+    const LinkProxy proxy = LinkProxy::build(shapes, level, &stats);
+    ASSERT_EQ(stats.leaves, proxy.leaf_count());
+    const double steps = static_cast<double>(stats.cubes + stats.surface_pieces);
+    const double queries = static_cast<double>(stats.distance_queries + stats.inside_queries);
+    std::printf("level %.0f mm: %zu leaves, %zu cubes, %zu pieces, %zu sphere tests (%.1f a step), %zu queries opening %zu "
+                "volumes (%.1f a query), %zu kept-triangle tests, %zu candidates\n",
+                level * 1e3, stats.leaves, stats.cubes, stats.surface_pieces, stats.sphere_tests, stats.sphere_tests / steps,
+                stats.distance_queries + stats.inside_queries, stats.bvh_volume_tests, stats.bvh_volume_tests / queries,
+                stats.triangle_tests, stats.candidates);
+    EXPECT_LE(stats.sphere_tests, 40.0 * steps) << "level " << level;
+    EXPECT_LE(stats.bvh_volume_tests, 8.0 * std::log2(static_cast<double>(mesh.triangles.size())) * queries) << "level " << level;
+    EXPECT_LE(stats.triangle_tests, 64.0 * steps) << "a kept list holds at most 64 triangles";
+    work.push_back(stats);
+  }
+  const double leaves = static_cast<double>(work[1].leaves) / work[0].leaves;
+  auto total = [](const ProxyBuildStats& s) {
+    return static_cast<double>(s.cubes + s.surface_pieces + s.sphere_tests + s.distance_queries + s.inside_queries +
+                               s.bvh_volume_tests + s.triangle_tests);
+  };
+  const double growth = total(work[1]) / total(work[0]);
+  std::printf("halving the level: %.2f times the leaves, %.2f times the work\n", leaves, growth);
+  EXPECT_GT(leaves, 2.5);
+  EXPECT_LE(growth, 1.5 * leaves * std::log2(static_cast<double>(work[1].leaves)) / std::log2(static_cast<double>(work[0].leaves)));
+}
+
 TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
   const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
   const Bvh<Obb> finger = Bvh<Obb>::build(test::robot_mesh(dir + "finger.stl"));

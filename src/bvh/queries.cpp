@@ -307,13 +307,16 @@ double point_node_bound_squared(const BvhNode<Obb>& node, const Vec3& q, double 
   return d * d;
 }
 
-}  // namespace
+// The surface around a point, by exact ray crossings: on it, or the winding number of the first
+// ray that grazes no edge (none decided: every ray grazed one).
+struct Winding {
+  bool on_surface = false, decided = false;
+  int number = 0;
+};
 
 template <class BV>
-bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
-  if (bvh.empty()) return false;
-  QueryStats local;
-  QueryStats& s = stats ? *stats : local;
+Winding wind(const Bvh<BV>& bvh, const Vec3& point, QueryStats& s) {
+  Winding w;
   const BV& root = bvh.root().volume;
   const double reach = 2.0 * (radius(root) + (point - center(root)).norm()) + 1.0;
   // Directions with no simple rational relation to axis-aligned geometry.
@@ -325,7 +328,6 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
     const Ray ray(point, far - point, 1.0);
     int winding = 0;  // signed crossings: the winding number of the surface around the point
     bool degenerate = false;
-    bool on_surface = false;
     auto visit = [&](const BvhNode<BV>& n) {
       ++s.volume_tests;
       return ray_hits(n.volume, ray) ? Visit::kEnter : Visit::kSkip;
@@ -335,20 +337,52 @@ bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
         ++s.primitive_tests;
         int sign = 0;
         const Crossing c = classify_crossing(point, far, bvh.triangles()[i], sign);
-        on_surface = c == Crossing::kOnSurface;
+        w.on_surface = c == Crossing::kOnSurface;
         degenerate = c == Crossing::kDegenerate;
-        if (on_surface || degenerate) return true;  // decided, or this ray cannot decide
+        if (w.on_surface || degenerate) return true;  // decided, or this ray cannot decide
         if (c == Crossing::kProper) winding += sign;
       }
       return false;
     });
-    if (on_surface) return true;
-    // A closed, consistently oriented surface winds an integer number of times around each point
-    // not on it: 0 outside, +-1 inside one shell, 2 where two shells overlap (parity would call
-    // that outside). A cavity's inward shell cancels its outer one.
-    if (!degenerate) return bvh.closed() && winding != 0;
+    if (w.on_surface) return w;
+    if (!degenerate) return {false, true, winding};
   }
+  return w;
+}
+
+}  // namespace
+
+template <class BV>
+bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
+  if (bvh.empty()) return false;
+  QueryStats local;
+  const Winding w = wind(bvh, point, stats ? *stats : local);
+  if (w.on_surface) return true;
+  // A closed, consistently oriented surface winds an integer number of times around each point
+  // not on it: 0 outside, +-1 inside one shell, 2 where two shells overlap (parity would call
+  // that outside). A cavity's inward shell cancels its outer one.
+  if (w.decided) return bvh.closed() && w.number != 0;
   return bvh.closed();  // every ray grazed an edge: err towards "inside" (never a false negative)
+}
+
+template <class BV>
+std::optional<int> winding_number(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats) {
+  if (bvh.empty() || !bvh.closed()) return std::nullopt;
+  QueryStats local;
+  const Winding w = wind(bvh, point, stats ? *stats : local);
+  if (w.on_surface || !w.decided) return std::nullopt;
+  return w.number;
+}
+
+std::optional<int> signed_crossing(const Vec3& a, const Vec3& b, const Triangle& t) {
+  int sign = 0;
+  switch (classify_crossing(a, b, t, sign)) {
+    case Crossing::kNone: return 0;
+    case Crossing::kProper: return sign;
+    case Crossing::kOnSurface:
+    case Crossing::kDegenerate: break;
+  }
+  return std::nullopt;
 }
 
 template <class BV>
@@ -528,6 +562,7 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
   template RayHit raycast<BV>(const Bvh<BV>&, const Transform&, const Vec3&, const Vec3&, double, bool,   \
                               QueryStats*);                                                            \
   template bool contains_point<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);                         \
+  template std::optional<int> winding_number<BV>(const Bvh<BV>&, const Vec3&, QueryStats*);            \
   template DistanceResult point_distance<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double);   \
   template bool point_within<BV>(const Bvh<BV>&, const Transform&, const Vec3&, double, QueryStats*);     \
   template bool triangles_near<BV>(const Bvh<BV>&, const Vec3&, double, std::size_t, std::vector<std::int32_t>&, \

@@ -41,6 +41,16 @@ struct ShapeField {
     stats->bvh_volume_tests += q.volume_tests;
     return in;
   }
+  // The winding number of a closed mesh's surface around p (nothing for a primitive, an open
+  // mesh, a point on the surface): inside() is whether it is not 0.
+  std::optional<int> winding(const Vec3& p) const {
+    if (!mesh) return std::nullopt;
+    ++stats->inside_queries;
+    QueryStats q;
+    const std::optional<int> w = winding_number(*mesh, p, &q);
+    stats->bvh_volume_tests += q.volume_tests;
+    return w;
+  }
   // Is the surface closer than `radius` to p? surface_distance(p, in, radius, nullptr) < radius,
   // answered by a walk that stops at the first closer triangle.
   bool within(const Vec3& p, bool in, double radius) const {

@@ -1,6 +1,7 @@
 // The proven covers of a link proxy (proxy_build.h; the proof is told in link_proxy.h): by cubes
 // for a curved primitive, by surface pieces and cubes for a shape bounded by triangles.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <optional>
@@ -150,23 +151,43 @@ class PolyhedralCover {
   struct SplitCube {
     Vec3 center;
     std::int8_t in;                // its centre in the solid: -1 not yet asked, 0 no, 1 yes
+    bool wound;                    // whether `winding` is known
+    std::int32_t winding;          // the surface's winding number around its centre
     std::uint32_t begin, end;      // in lists_, the spheres of the cover's start that meet it
     bool kept;                     // whether the mesh's triangles near it were kept (few enough):
-    std::uint32_t near_begin, near_end;  // in near_, those within kept_reach of its centre
+    std::uint32_t near_begin, near_end;  // in near_, those within 2 h + delta of its centre, nearest first
   };
   // Triangles kept per split cube at most: more, and its cubes ask the mesh's BVH.
   static constexpr std::size_t kMaxKept = 64;
+  // A kept triangle: its index in the mesh's BVH and its distance from the split cube's centre.
+  struct NearTriangle {
+    std::int32_t triangle;
+    double distance;
+  };
 
  public:
   PolyhedralCover(const ShapeField& field, double half_level, std::vector<Chosen> seed)
-      : field_(field), half_level_(half_level), delta_(0.125 * half_level), builder_(field, half_level),
-        index_(2.05 * half_level), added_(2.05 * half_level) {
-    for (const Chosen& s : seed) add(s);
-  }
+      : field_(field), half_level_(half_level), delta_(0.125 * half_level), chosen_(std::move(seed)),
+        builder_(field, half_level), added_(2.05 * half_level) {}
 
   void run() {
-    for (const Triangle& t : field_.faces) surface(t[0], t[1], t[2], 0);
+    // The surface: a sphere that holds a piece may hold part of the piece it was split from, so
+    // each piece asks the seed's spheres that may hold part of its parent (from a k-d tree of their centres for a whole
+    // triangle) and those added since (their own index).
+    std::vector<Vec3> centres;
+    double largest = 0.0;
+    for (const Chosen& s : chosen_) centres.push_back(s.center), largest = std::max(largest, s.radius);
+    const PointTree seeds(centres);
+    for (const Triangle& t : field_.faces) {
+      const Piece whole = piece(t[0], t[1], t[2]);
+      seeds.in_ball(whole.centre, whole.radius + largest, [&](std::uint32_t i) {
+        if (may_hold(chosen_[i], whole)) piece_lists_.push_back(i);
+      });
+      surface(t[0], t[1], t[2], 0, 0);
+      piece_lists_.clear();
+    }
     if (!field_.solid()) return;  // an open mesh is its surface: nothing inside to cover
+    added_ = SphereGrid(2.05 * half_level_);  // what the surface added is in every cube's list
     // The volume: a sphere that holds a cube meets the cube it was split from, so each cube asks
     // only the spheres that met its parent (a list that shrinks with the cubes) and those added
     // since the volume began (their own index): the same answer as asking all of them.
@@ -174,12 +195,12 @@ class PolyhedralCover {
     std::vector<Cube> level{{center, half.maxCoeff() * (1.0 + 1e-9) + 1e-12, -1}}, next;
     std::vector<SplitCube> next_split;
     std::vector<std::uint32_t> next_lists;
-    std::vector<std::int32_t> next_near;
+    std::vector<NearTriangle> next_near;
     start_ = chosen_.size();
     lists_.resize(start_);
     std::iota(lists_.begin(), lists_.end(), 0u);
     // The first cube's "parent" is itself, with every sphere (and no triangles kept).
-    split_.push_back({center, -1, 0, static_cast<std::uint32_t>(start_), false, 0, 0});
+    split_.push_back({center, -1, false, 0, 0, static_cast<std::uint32_t>(start_), false, 0, 0});
     level.front().parent = 0;
     for (int depth = 0; !level.empty(); ++depth) {
       if (depth > kMaxDepth) throw std::logic_error("link proxy: no cube small enough for the level");
@@ -197,8 +218,9 @@ class PolyhedralCover {
         const auto parent = static_cast<std::int32_t>(next_split.size());
         const auto near_begin = static_cast<std::uint32_t>(next_near.size());
         const bool kept = keep_near(q, from, next_near);
-        next_split.push_back({q.center, cube_in_, begin, static_cast<std::uint32_t>(next_lists.size()), kept, near_begin,
+        next_split.push_back({q.center, cube_in_, false, 0, begin, static_cast<std::uint32_t>(next_lists.size()), kept, near_begin,
                               static_cast<std::uint32_t>(next_near.size())});
+        carry_winding(q, from, next_split.back());
         for (int k = 0; k < 8; ++k) {
           const Vec3 offset((k & 1) ? 0.5 : -0.5, (k & 2) ? 0.5 : -0.5, (k & 4) ? 0.5 : -0.5);
           next.push_back({q.center + q.half_edge * offset, 0.5 * q.half_edge, parent});
@@ -215,13 +237,33 @@ class PolyhedralCover {
     return r > 0.0 && (p - centre).squaredNorm() <= r * r;
   }
   static bool holds(const Chosen& s, const Vec3& p, double margin) { return holds(s.center, s.radius, p, margin); }
-  bool held(const Vec3& a, const Vec3& b, const Vec3& c) {
+  // A surface piece's bounding ball (centroid, farthest corner).
+  struct Piece {
+    Vec3 centre;
+    double radius;
+  };
+  static Piece piece(const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 g = (a + b + c) / 3.0;
+    return {g, grown_radius(std::sqrt(std::max({(a - g).squaredNorm(), (b - g).squaredNorm(), (c - g).squaredNorm()})))};
+  }
+  // Whether the sphere may hold some part of the piece with the margin delta: it then holds a point
+  // of the piece, within the piece's radius of its centroid, delta inside its own radius.
+  bool may_hold(const Chosen& s, const Piece& p) const {
+    if (!(s.radius > delta_)) return false;
+    const double r = grown_radius(s.radius - delta_ + p.radius);
+    return (s.center - p.centre).squaredNorm() <= r * r;
+  }
+  // Whether one sphere holds the piece a b c, with the margin delta: its parent's spheres (from
+  // piece_lists_[begin]) and those added since the seed.
+  bool held(const Vec3& a, const Vec3& b, const Vec3& c, std::size_t begin) {
     ++field_.stats->sphere_tests;
-    if (last_ < chosen_.size() && holds(chosen_[last_], a, delta_) && holds(chosen_[last_], b, delta_) &&
-        holds(chosen_[last_], c, delta_)) {
-      return true;
+    auto all = [&](const Chosen& s) { return holds(s, a, delta_) && holds(s, b, delta_) && holds(s, c, delta_); };
+    if (last_ < chosen_.size() && all(chosen_[last_])) return true;
+    for (std::size_t k = begin; k < piece_lists_.size(); ++k) {
+      ++field_.stats->sphere_tests;
+      if (all(chosen_[piece_lists_[k]])) return last_ = piece_lists_[k], true;
     }
-    return index_.any_near(a, delta_, [&](const SphereGrid::Entry& s) {
+    return added_.any_near(a, delta_, [&](const SphereGrid::Entry& s) {
       ++field_.stats->sphere_tests;
       const bool all = holds(s.centre, s.radius, a, delta_) && holds(s.centre, s.radius, b, delta_) &&
                        holds(s.centre, s.radius, c, delta_);
@@ -230,17 +272,26 @@ class PolyhedralCover {
     });
   }
   void add(const Chosen& s) {
-    index_.insert(static_cast<std::uint32_t>(chosen_.size()), s.center, s.radius);
-    if (start_ != kSurface) added_.insert(static_cast<std::uint32_t>(chosen_.size()), s.center, s.radius);
+    added_.insert(static_cast<std::uint32_t>(chosen_.size()), s.center, s.radius);
     chosen_.push_back(s);
   }
-  void surface(const Vec3& a, const Vec3& b, const Vec3& c, int depth) {
+  // The piece a b c, whose candidate spheres are piece_lists_[begin, end()).
+  void surface(const Vec3& a, const Vec3& b, const Vec3& c, int depth, std::size_t begin) {
     ++field_.stats->surface_pieces;
-    if (held(a, b, c)) return;
+    if (held(a, b, c, begin)) return;
     const double edge = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
     if (edge > delta_ && depth < kMaxDepth) {
       const Vec3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
-      surface(a, ab, ca, depth + 1), surface(ab, b, bc, depth + 1), surface(ca, bc, c, depth + 1), surface(ab, bc, ca, depth + 1);
+      const std::array<std::array<Vec3, 3>, 4> parts{{{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}}};
+      const std::size_t end = piece_lists_.size();
+      for (const auto& [p, q, r] : parts) {
+        const Piece part = piece(p, q, r);
+        for (std::size_t k = begin; k < end; ++k) {
+          if (may_hold(chosen_[piece_lists_[k]], part)) piece_lists_.push_back(piece_lists_[k]);
+        }
+        surface(p, q, r, depth + 1, end);
+        piece_lists_.resize(end);
+      }
       return;
     }
     // A piece no sphere holds: the interior sphere touching it at its centroid, if that holds it,
@@ -256,7 +307,7 @@ class PolyhedralCover {
       }
     }
     add({g, half_level_ * (1.0 - kVolumeMargin) - kVolumeMargin});
-    if (!held(a, b, c)) throw std::logic_error("link proxy: a surface piece larger than the level");
+    if (!held(a, b, c, begin)) throw std::logic_error("link proxy: a surface piece larger than the level");
   }
   // Settles the cube (true) or asks for it to be split (false; cube_in_ then says which side
   // of the surface its centre is on, when that was asked: -1 unknown, 0 out, 1 in).
@@ -311,10 +362,11 @@ class PolyhedralCover {
       return field_.surface_distance(q.center, in, limit, nullptr);
     }
     ++field_.stats->distance_queries;
+    const double offset = grown_radius(q.half_edge * std::sqrt(3.0));  // from the parent's centre, at most
     double best = limit;
-    for (std::uint32_t k = from.near_begin; k < from.near_end; ++k) {
+    for (std::uint32_t k = from.near_begin; k < from.near_end && !beyond(near_[k], offset, limit); ++k) {
       ++field_.stats->triangle_tests;
-      const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(near_[k])];
+      const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(near_[k].triangle)];
       const double d = (closest_point_on_triangle(q.center, t[0], t[1], t[2]) - q.center).norm();
       if (d < best) {
         best = d;
@@ -323,27 +375,40 @@ class PolyhedralCover {
     }
     return best;
   }
+  // Whether a kept triangle, and every one after it (they are kept nearest first), is at least
+  // `limit` from a point `offset` or less from the centre it was measured from: its distance
+  // less the offset, less the rounding of both distances.
+  static bool beyond(const NearTriangle& t, double offset, double limit) {
+    return t.distance * (1.0 - kVolumeMargin) - kVolumeMargin - offset >= grown_radius(limit);
+  }
   // Keeps, for the cube being split, the mesh's triangles within kept_reach of its centre (from
   // its parent's when those were kept); whether they were few enough. A child asks for the
   // surface within max(its beyond, delta) <= h/2 + delta of its centre, h/2 from this centre, and
   // keeps those within h + delta of its own, inside the 2 h + delta kept here.
-  bool keep_near(const Cube& q, const SplitCube& from, std::vector<std::int32_t>& out) const {
+  bool keep_near(const Cube& q, const SplitCube& from, std::vector<NearTriangle>& out) {
     if (field_.mesh == nullptr) return false;  // a box: its own distance is cheap
     const double reach = 2.0 * grown_radius(q.half_edge * std::sqrt(3.0)) + delta_;
     const std::size_t begin = out.size();
+    auto keep = [&](std::int32_t triangle) {
+      ++field_.stats->triangle_tests;
+      const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(triangle)];
+      const double d = (closest_point_on_triangle(q.center, t[0], t[1], t[2]) - q.center).norm();
+      if (d < reach) out.push_back({triangle, d});
+    };
     if (!from.kept) {
       ++field_.stats->distance_queries;
       QueryStats walk;
-      const bool few = triangles_near(*field_.mesh, q.center, reach, kMaxKept, out, &walk);
+      found_.clear();
+      const bool few = triangles_near(*field_.mesh, q.center, reach, kMaxKept, found_, &walk);
       field_.stats->bvh_volume_tests += walk.volume_tests;
-      if (!few) out.resize(begin);
-      return few;
+      if (!few) return false;
+      for (const std::int32_t t : found_) keep(t);
+    } else {
+      const double offset = grown_radius(q.half_edge * std::sqrt(3.0));  // from the parent's centre, at most
+      for (std::uint32_t k = from.near_begin; k < from.near_end && !beyond(near_[k], offset, reach); ++k) keep(near_[k].triangle);
     }
-    for (std::uint32_t k = from.near_begin; k < from.near_end; ++k) {
-      ++field_.stats->triangle_tests;
-      const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(near_[k])];
-      if ((closest_point_on_triangle(q.center, t[0], t[1], t[2]) - q.center).norm() < reach) out.push_back(near_[k]);
-    }
+    std::sort(out.begin() + static_cast<std::ptrdiff_t>(begin), out.end(),
+              [](const NearTriangle& a, const NearTriangle& b) { return a.distance < b.distance; });
     return true;
   }
   // Whether the centre of a cube that the surface does not reach (d > h) is in the solid. The
@@ -351,22 +416,44 @@ class PolyhedralCover {
   // two: that cube's answer, asked once for its eight (the first cube is its own parent).
   bool side_of(const Cube& q) {
     SplitCube& parent = split_[static_cast<std::size_t>(q.parent)];
-    if (parent.in < 0) parent.in = field_.inside(parent.center) ? 1 : 0;
+    if (parent.in >= 0) return parent.in == 1;
+    if (field_.mesh != nullptr) {
+      if (const std::optional<int> w = field_.winding(parent.center)) {
+        parent.wound = true, parent.winding = *w, parent.in = *w != 0 ? 1 : 0;
+        return parent.in == 1;
+      }
+    }
+    parent.in = field_.inside(parent.center) ? 1 : 0;
     return parent.in == 1;
+  }
+  // The winding number around a split cube's centre from its parent's, by the crossings of the
+  // segment between them (a corner of the cube to its centre): every triangle it can cross is
+  // among the parent's kept ones. A segment that grazes an edge or ends on the surface leaves it
+  // unknown (a ray cast asks, if a cube needs it).
+  void carry_winding(const Cube& q, const SplitCube& from, SplitCube& out) const {
+    if (field_.mesh == nullptr || !from.wound || !from.kept) return;
+    std::int32_t w = from.winding;
+    for (std::uint32_t k = from.near_begin; k < from.near_end; ++k) {
+      const std::optional<int> crossing =
+          signed_crossing(from.center, q.center, field_.mesh->triangles()[static_cast<std::size_t>(near_[k].triangle)]);
+      if (!crossing) return;
+      w -= *crossing;
+    }
+    out.wound = true, out.winding = w, out.in = w != 0 ? 1 : 0;
   }
 
   const ShapeField& field_;
   double half_level_, delta_;
   std::vector<Chosen> chosen_;
   SeedBuilder builder_;
-  static constexpr std::size_t kSurface = ~std::size_t{0};
-  SphereGrid index_;  // chosen_ by position
-  SphereGrid added_;  // those added to the volume, by position
-  std::size_t start_ = kSurface;  // spheres when the volume began (kSurface: still on the surface)
+  SphereGrid added_;  // those added since the lists in use were made (the seed's, the volume's), by position
+  std::vector<std::uint32_t> piece_lists_;  // the surface pieces' candidate spheres, a stack of ranges
+  std::size_t start_ = 0;  // spheres when the volume began
   std::size_t last_ = 0, last_cube_ = 0;
   std::vector<SplitCube> split_;         // the cubes split into this level's, by Cube::parent
   std::vector<std::uint32_t> lists_;     // their spheres, by SplitCube::begin/end
-  std::vector<std::int32_t> near_;       // their kept triangles, by SplitCube::near_begin/near_end
+  std::vector<NearTriangle> near_;       // their kept triangles, by SplitCube::near_begin/near_end
+  std::vector<std::int32_t> found_;      // a BVH query's triangles (scratch)
   std::int8_t cube_in_ = -1;
 };
 

@@ -69,54 +69,33 @@ std::vector<Vec3> interior_points(const ShapeField& field, double spacing) {
 }
 
 
-// Which targets each candidate covers, flat by candidate (first[c] .. first[c + 1]), and which
-// candidates cover each target, flat by target (by_target_first[t] .. by_target_first[t + 1]).
-struct CoverSets {
-  std::vector<std::uint32_t> covers, first, by_target, by_target_first;
-
-  CoverSets(const std::vector<Vec3>& targets, const std::vector<Chosen>& candidates, double margin)
-      : first(candidates.size() + 1, 0), by_target_first(targets.size() + 1, 0) {
-    const PointTree tree(targets);
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      tree.in_ball(candidates[c].center, std::max(0.0, candidates[c].radius - margin), [&](std::uint32_t t) {
-        covers.push_back(t);
-        ++by_target_first[t + 1];
-      });
-      first[c + 1] = static_cast<std::uint32_t>(covers.size());
-    }
-    std::partial_sum(by_target_first.begin(), by_target_first.end(), by_target_first.begin());
-    std::vector<std::uint32_t> fill(by_target_first.begin(), by_target_first.end() - 1);
-    by_target.resize(covers.size());
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      for (std::uint32_t k = first[c]; k < first[c + 1]; ++k) by_target[fill[covers[k]]++] = static_cast<std::uint32_t>(c);
-    }
-  }
-};
-
 // The greedy set cover: the candidate covering the most targets not yet covered, until none
-// covers one more. As a target is covered the gains of its candidates fall, so no gain is counted
-// twice; the one chosen is always the one of largest (gain, index), as a lazy recount would choose.
+// covers one more; of equal gains, the later candidate. Lazily: a candidate's gain only falls as
+// targets are covered, so a gain counted earlier bounds the true one, and the candidate on top of
+// the queue whose recount equals its entry has the largest true gain of all. The targets each
+// candidate covers are kept flat (first[c] .. first[c + 1] in covers), and a recount reads them.
 std::vector<Chosen> choose_cover(const std::vector<Vec3>& targets, const std::vector<Chosen>& candidates, double margin) {
-  const CoverSets sets(targets, candidates, margin);
-  std::vector<std::size_t> gain(candidates.size());
-  std::priority_queue<std::pair<std::size_t, std::size_t>> queue;  // (gain, candidate); stale entries are skipped
-  for (std::size_t c = 0; c < candidates.size(); ++c) queue.emplace(gain[c] = sets.first[c + 1] - sets.first[c], c);
+  const PointTree tree(targets);
+  std::vector<std::uint32_t> covers, first(candidates.size() + 1, 0);
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    tree.in_ball(candidates[c].center, std::max(0.0, candidates[c].radius - margin), [&](std::uint32_t t) { covers.push_back(t); });
+    first[c + 1] = static_cast<std::uint32_t>(covers.size());
+  }
+  std::priority_queue<std::pair<std::size_t, std::size_t>> queue;  // (gain when counted, candidate)
+  for (std::size_t c = 0; c < candidates.size(); ++c) queue.emplace(first[c + 1] - first[c], c);
   std::vector<char> covered(targets.size(), 0);
   std::vector<Chosen> chosen;
   while (!queue.empty()) {
-    const auto [g, c] = queue.top();
+    const auto [gain, c] = queue.top();
     queue.pop();
-    if (g != gain[c]) {
-      if (gain[c] > 0) queue.emplace(gain[c], c);
+    std::size_t now = 0;
+    for (std::uint32_t k = first[c]; k < first[c + 1]; ++k) now += covered[covers[k]] == 0;
+    if (now == 0) continue;
+    if (now < gain) {
+      queue.emplace(now, c);
       continue;
     }
-    if (g == 0) continue;
-    for (std::uint32_t k = sets.first[c]; k < sets.first[c + 1]; ++k) {
-      const std::uint32_t t = sets.covers[k];
-      if (covered[t]) continue;
-      covered[t] = 1;
-      for (std::uint32_t j = sets.by_target_first[t]; j < sets.by_target_first[t + 1]; ++j) --gain[sets.by_target[j]];
-    }
+    for (std::uint32_t k = first[c]; k < first[c + 1]; ++k) covered[covers[k]] = 1;
     chosen.push_back(candidates[c]);
   }
   return chosen;

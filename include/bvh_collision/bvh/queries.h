@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "bvh_collision/bvh/bvh.h"
@@ -111,5 +112,16 @@ RayHit raycast(const Bvh<BV>& bvh, const Transform& pose, const Vec3& origin, co
 // answers whether the point lies on it.
 template <class BV>
 bool contains_point(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats = nullptr);
+
+// The winding number of the closed mesh around `point` (its own frame): 0 outside, 1 inside one
+// shell, 2 where two overlap, as contains_point counts it; nothing for a mesh that is not closed,
+// a point on the surface, or when no ray decides.
+template <class BV>
+std::optional<int> winding_number(const Bvh<BV>& bvh, const Vec3& point, QueryStats* stats = nullptr);
+
+// How the segment a -> b crosses triangle t, exactly: 0 not at all, +1 or -1 through its inside
+// (so that for a closed mesh winding_number(b) = winding_number(a) - the sum over its triangles),
+// nothing when it touches an edge or a vertex, or starts or ends on the triangle.
+std::optional<int> signed_crossing(const Vec3& a, const Vec3& b, const Triangle& t);
 
 }  // namespace bvh_collision
