@@ -233,7 +233,8 @@ TYPED_TEST(BvhOracle, WindingNumbersCarryAlongSegments) {
   }
   EXPECT_GT(carried, test::sized(1500));
   EXPECT_GT(inside, carried / 20);
-  EXPECT_GT(twice, 10) << "points in both overlapping boxes";
+  EXPECT_GE(twice, test::sized(20)) << "points in both overlapping boxes (a sanitized run samples a quarter)";
+  std::printf("%d segments carried, %d ending inside, %d in both boxes\n", carried, inside, twice);
 }
 
 TYPED_TEST(BvhOracle, ToleranceNeverGivesAFalseNegative) {
