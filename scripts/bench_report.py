@@ -131,6 +131,21 @@ def markdown(table):
 # ------------------------------------------------------------------------------ checks
 
 
+def check_tolerance_costs(tables):
+    """docs/design.md: a tolerance buys speed or costs nothing. Every row at a tolerance must be
+    no slower than the exact row of the same run, within the exact row's spread (its slowest run)."""
+    for robot in ROBOTS:
+        t = need(tables, f"self_tolerance_{robot}")
+        tol, median, slowest = (t["columns"].index(c) for c in ("tolerance mm", "ours us/config", "ours max"))
+        exact = [r for r in t["rows"] if r[tol] == 0]
+        if not exact:
+            raise ReportError(f"self_tolerance_{robot}: no exact row")
+        for r in t["rows"]:
+            if r[tol] > 0 and r[median] > exact[0][slowest]:
+                raise ReportError(f"self_tolerance_{robot}: the tolerance {fmt(r[tol])} mm cost time "
+                                  f"({fmt(r[median])} us against at most {fmt(exact[0][slowest])} us exact)")
+
+
 def check_promises(tables):
     """The figures that must hold whatever the machine: raise on the first broken one."""
     for robot in ROBOTS:
@@ -413,6 +428,8 @@ def build_report(tables, bench_dir, quick):
     plots_dir = os.path.join(bench_dir, "plots")
     os.makedirs(plots_dir, exist_ok=True)
     check_promises(tables)
+    if not quick:  # single runs on small inputs: no spread to judge a time by
+        check_tolerance_costs(tables)
     out = ["# bvh_collision: speed against error", ""]
     when = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     out += [f"Measured {when} by `make bench` on: {machine(tables)}.", ""]

@@ -142,7 +142,7 @@ ProxyBatch::ProxyBatch(const RobotCollisionModel& model, const PairClearance& cl
   }
 }
 
-pb::Plan ProxyBatch::plan(const PairClearance* clearance, double tolerance) const {
+pb::Plan ProxyBatch::plan(const PairClearance* clearance) const {
   pb::Plan p;
   p.steps = steps_.data();
   p.step_count = static_cast<std::int32_t>(steps_.size());
@@ -154,17 +154,16 @@ pb::Plan ProxyBatch::plan(const PairClearance* clearance, double tolerance) cons
   p.pair_count = static_cast<std::int32_t>(pairs_.size());
   p.stride = stride_;
   p.pose_margin = kPoseMargin;
-  p.tolerance = tolerance;
   p.clearance = clearance_bound;
   p.clearance_context = clearance;
   p.stack_capacity = stack_capacity_;
   return p;
 }
 
-void ProxyBatch::check(const PairClearance& clearance, const double* states, std::size_t count, double tolerance,
-                       char* out, SimdPath path) const {
+void ProxyBatch::check(const PairClearance& clearance, const double* states, std::size_t count, char* out,
+                       SimdPath path) const {
   const bool avx2 = use_avx2(path);
-  const pb::Plan p = plan(&clearance, tolerance);
+  const pb::Plan p = plan(&clearance);
   const pb::Scratch scratch = batch_scratch().get(p);
   for (std::size_t begin = 0; begin < count; begin += pb::kLanes) {
     const double* lanes[pb::kLanes];
@@ -179,7 +178,7 @@ void ProxyBatch::check(const PairClearance& clearance, const double* states, std
 
 std::vector<double> ProxyBatch::poses(const double* states, std::size_t count, SimdPath path) const {
   if (count == 0 || count > static_cast<std::size_t>(pb::kLanes)) throw std::invalid_argument("poses: 1 to 4 states");
-  const pb::Plan p = plan(nullptr, 0.0);  // kinematics only: no pair is looked up
+  const pb::Plan p = plan(nullptr);  // kinematics only: no pair is looked up
   const pb::Scratch scratch = batch_scratch().get(p);
   const double* lanes[pb::kLanes];
   for (std::size_t l = 0; l < pb::kLanes; ++l) lanes[l] = states + std::min(l, count - 1) * stride_;

@@ -264,11 +264,11 @@ unsigned traverse_pair(const Plan& plan, const Pair& pair, const Pose& pa, const
 
 // The lanes where pair's bounding spheres come within reach, and the smallest (distance /
 // reach)^2 among them: check_self's broad phase.
-unsigned broad_phase(const Plan& plan, const Pair& pair, const double* centers, unsigned live, double& key) {
+unsigned broad_phase(const Pair& pair, const double* centers, unsigned live, double& key) {
   const double* ca = centers + 3 * W * pair.a;
   const double* cb = centers + 3 * W * pair.b;
   const V dx = load(ca) - load(cb), dy = load(ca + W) - load(cb + W), dz = load(ca + 2 * W) - load(cb + 2 * W);
-  const double reach = pair.reach + plan.tolerance;
+  const double reach = pair.reach;  // not grown by the tolerance: narrowphase/tolerance_policy.h
   const V d2 = dx * dx + dy * dy + dz * dz;
   const unsigned near = live & lane_bits(d2 <= splat(reach * reach));
   if (near == 0) return 0;
@@ -298,7 +298,7 @@ int pairs_in_reach(const Plan& plan, const double* centers, Candidate* out) {
     const Pair& pair = plan.pairs[k];
     if (plan.links[pair.a].count == 0 || plan.links[pair.b].count == 0) continue;
     double key;
-    const unsigned near = broad_phase(plan, pair, centers, kAllLanes, key);
+    const unsigned near = broad_phase(pair, centers, kAllLanes, key);
     if (near == 0) continue;
     int at = count++;
     for (; at > 0 && out[at - 1].key > key; --at) out[at] = out[at - 1];  // insertion: tens of pairs

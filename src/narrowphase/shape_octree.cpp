@@ -280,7 +280,7 @@ double triangle_box_distance(const Triangle& t, const Vec3& lo, const Vec3& hi, 
 bool mesh_meets_octree(const Bvh<Obb>& mesh, const Transform& pose, const Octree& tree, double padding,
                        double tolerance, bool solids, OctreeContact* contact, QueryStats* stats) {
   if (mesh.empty()) return false;
-  const auto [reach_lo, reach_hi] = world_bounds(mesh, pose, padding + tolerance);
+  const auto [reach_lo, reach_hi] = world_bounds(mesh, pose, padding);  // a tolerance only settles sooner
   const auto root = start_cube(tree, reach_lo, reach_hi);
   if (!root) return false;
   QueryStats local;

@@ -123,12 +123,12 @@ CollisionRequest collision_request(const PairRequest& request, bool want_contact
 }
 
 // A mesh (its solid too) lies in its convex hull: a hull proven farther from the other set than
-// the padding and the tolerance settles a boolean with no BVH walk (the walk could only count a
-// hit within them: the same answer). Near contact the walk goes down to triangles, where the
-// hulls' GJK takes a few of its steps (docs/performance.md). Contacts asked for need the walk.
+// the padding settles a boolean as free with no BVH walk, at every tolerance (free is an answer
+// the contract allows beyond the padding; the walk could only add a hit within the tolerance,
+// which it may also leave out). Near contact the walk goes down to triangles, where the hulls'
+// GJK takes a few of its steps (docs/performance.md). Contacts asked for need the walk.
 bool hulls_apart(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, const PairRequest& request) {
-  const double beyond = request.padding + request.tolerance;
-  return convex_distance(a, b, b_in_a, beyond).lower_bound > beyond;
+  return convex_distance(a, b, b_in_a, request.padding).lower_bound > request.padding;
 }
 
 // The BVH query's contacts already point from b (the primitive) towards a (the mesh).

@@ -136,7 +136,9 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
     // the reach) first, because those collide most often and a boolean query stops at the first.
     for (const std::size_t p : PairIndices(request.only_pairs, m_->checked_pairs().size())) {
       const auto [a, b] = m_->checked_pairs()[p];
-      const double reach = m_->bounds()[a].radius + m_->bounds()[b].radius + m_->paddings()[a] + m_->paddings()[b] + request.tolerance;
+      // Not grown by the tolerance: a pair farther apart than its padding may be answered free at
+      // every tolerance (narrowphase/tolerance_policy.h), so a tolerance adds no pair.
+      const double reach = m_->bounds()[a].radius + m_->bounds()[b].radius + m_->paddings()[a] + m_->paddings()[b];
       const double d2 = (centers[a] - centers[b]).squaredNorm();
       if (d2 <= reach * reach) order.emplace_back(d2 / (reach * reach), p);
     }
@@ -152,6 +154,7 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       // A pair whose proven clearance in this state exceeds its padding cannot collide and has
       // no contact (model/pair_clearance.h).
       if (a_->pair_clearance().lower_bound(p, state) > m_->paddings()[a] + m_->paddings()[b]) continue;
+      ++result.stats.pair_tests;
       const bool hit = proxies ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
                                                  m_->paddings()[a] + m_->paddings()[b])
                                : pair_collides(a, b, poses, request, result);
@@ -172,8 +175,8 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
   double best = std::numeric_limits<double>::infinity();
   for (const auto& [gap, p] : order) {
     const auto [a, b] = m_->checked_pairs()[p];
-    const bool may_collide = gap <= m_->paddings()[a] + m_->paddings()[b] + request.tolerance;
-    if (may_collide && (request.all_pairs || !result.collision) && pair_collides(a, b, poses, request, result)) {
+    const bool may_collide = gap <= m_->paddings()[a] + m_->paddings()[b];
+    if (may_collide && (request.all_pairs || !result.collision) && (++result.stats.pair_tests, pair_collides(a, b, poses, request, result))) {
       result.collision = true;
       result.colliding_pairs.emplace_back(a, b);
     }
@@ -257,7 +260,7 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
     constexpr std::size_t kBlock = 16;
     ThreadPool::shared().for_each((count + kBlock - 1) / kBlock, 1, [&](std::size_t block) {
       const std::size_t begin = block * kBlock, n = std::min(kBlock, count - begin);
-      proxies->batch.check(a_->pair_clearance(), states + begin * stride, n, request.tolerance, out.data() + begin, request.simd);
+      proxies->batch.check(a_->pair_clearance(), states + begin * stride, n, out.data() + begin, request.simd);
       if (!request.environment) return;
       for (std::size_t i = begin; i < begin + n; ++i) {
         if (!out[i]) out[i] = environment_check(states + i * stride, *env, environment, field.get()).collision;

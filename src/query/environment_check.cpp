@@ -42,9 +42,10 @@ void objects_near(const ObjectList& objects, const std::vector<ObjectBoxTree::En
 
 }  // namespace
 
-// The objects whose boxes meet the box of every link's ball (grown by its padding and the
-// tolerance): one walk of the object list's tree a state, each link then filters these.
-void CollisionChecker::objects_near_robot(const std::vector<Transform>& poses, const ObjectList& objects, double tolerance,
+// The objects whose boxes meet the box of every link's ball (grown by its padding; not by the
+// tolerance, which adds no obstacle: narrowphase/tolerance_policy.h): one walk of the object
+// list's tree a state, each link then filters these.
+void CollisionChecker::objects_near_robot(const std::vector<Transform>& poses, const ObjectList& objects,
                                           const std::vector<char>* only, std::vector<ObjectBoxTree::Entry>& out) const {
   out.clear();
   if (objects.size() <= kObjectsWalkedInTurn) return;
@@ -52,7 +53,7 @@ void CollisionChecker::objects_near_robot(const std::vector<Transform>& poses, c
   for (std::size_t l = 0; l < m_->shapes().size(); ++l) {
     if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     Vec3 a, b;
-    ball_box(poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius + m_->paddings()[l] + tolerance, a, b);
+    ball_box(poses[l] * m_->bounds()[l].center, m_->bounds()[l].radius + m_->paddings()[l], a, b);
     lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
   }
   if (!(lo.array() <= hi.array()).all()) return;
@@ -66,6 +67,7 @@ bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const 
   r.tolerance = request.tolerance;
   r.solids = request.solids;
   OctreeContact contact;
+  ++result.stats.pair_tests;
   if (!compound_meets_octree(m_->compound(link), pose, tree, r, &contact, result.stats)) return false;
   result.contacts.push_back({link, std::string(), contact.voxel, contact.position});
   return true;
@@ -74,8 +76,9 @@ bool CollisionChecker::link_meets_octree(int link, const Transform& pose, const 
 bool CollisionChecker::link_meets_object(int link, const Transform& pose, const CollisionObject& object,
                                          const EnvironmentRequest& request, EnvironmentResult& result) const {
   const double padding = m_->paddings()[link];
-  const double reach = m_->bounds()[link].radius + object.bound_radius + padding + request.tolerance;
+  const double reach = m_->bounds()[link].radius + object.bound_radius + padding;
   if ((pose * m_->bounds()[link].center - object.pose * object.bound_center).squaredNorm() > reach * reach) return false;
+  ++result.stats.pair_tests;
   const ShapeRef obstacle = shape_of(object);
   PairRequest r;
   r.padding = padding;
@@ -171,7 +174,7 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
   question.octree_field = field != nullptr;
   const ProxyLevel* proxies = a_->proxies_for(proxy_use(question).decide_up_to);
   std::vector<ObjectBoxTree::Entry>& near_robot = tl_robot_objects;
-  if (request.objects) objects_near_robot(poses, env.objects(), request.tolerance, only, near_robot);
+  if (request.objects) objects_near_robot(poses, env.objects(), only, near_robot);
   for (std::size_t l = 0; l < m_->shapes().size() && !(stop_early && result.collision); ++l) {
     if (m_->shapes()[l].empty() || (only != nullptr && !(*only)[l])) continue;
     const int link = static_cast<int>(l);
@@ -187,7 +190,7 @@ EnvironmentResult CollisionChecker::environment_check(const double* state, const
     std::vector<std::uint32_t>& near = tl_near_objects;
     if (request.objects) {
       Vec3 lo, hi;
-      ball_box(poses[l] * bound.center, bound.radius + m_->paddings()[l] + request.tolerance, lo, hi);
+      ball_box(poses[l] * bound.center, bound.radius + m_->paddings()[l], lo, hi);
       objects_near(env.objects(), near_robot, lo, hi, near);
     }
     for (std::size_t k = 0; request.objects && k < near.size() && !(hit && !request.all_links); ++k) {

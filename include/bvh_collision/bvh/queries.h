@@ -20,10 +20,12 @@ struct QueryStats {
   std::uint64_t volume_updates = 0;   // Nu: volumes carried into another frame
   std::uint64_t volume_tests = 0;     // Nv: volume overlap / distance-bound tests
   std::uint64_t primitive_tests = 0;  // Np: triangle pair tests
+  std::uint64_t pair_tests = 0;       // Nq: shape pairs a query took past its broad phase (set above the BVH)
   QueryStats& operator+=(const QueryStats& o) {
     volume_updates += o.volume_updates;
     volume_tests += o.volume_tests;
     primitive_tests += o.primitive_tests;
+    pair_tests += o.pair_tests;
     return *this;
   }
 };

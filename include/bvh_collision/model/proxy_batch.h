@@ -38,11 +38,11 @@ class ProxyBatch {
 
   bool empty() const { return steps_.empty() && pairs_.empty(); }
   // out[i] = 1 when state i (states row-major, `count` of them) has proxies within padding in
-  // some checked pair, at a query tolerance (at least this level; the broad phase reaches as
-  // far as check_self's). Runs on the calling thread. kAvx2 on a CPU without it throws
-  // std::runtime_error.
+  // some checked pair: check_self's answer at a tolerance this level fits (the broad phase
+  // reaches as far as check_self's, which no tolerance grows). Runs on the calling thread. kAvx2
+  // on a CPU without it throws std::runtime_error.
   // `clearance`: the grids the batch was built with.
-  void check(const PairClearance& clearance, const double* states, std::size_t count, double tolerance, char* out,
+  void check(const PairClearance& clearance, const double* states, std::size_t count, char* out,
              SimdPath path = SimdPath::kAuto) const;
   // The kernel's link poses for up to four states (tests): per link 12 values (rotation
   // row-major, translation) per state, as poses[((link * 12) + e) * 4 + lane]; zero for the links
@@ -52,7 +52,7 @@ class ProxyBatch {
   static void sincos(const double* x, double* s, double* c, SimdPath path = SimdPath::kAuto);
 
  private:
-  proxy_batch::Plan plan(const PairClearance* clearance, double tolerance) const;
+  proxy_batch::Plan plan(const PairClearance* clearance) const;
 
   std::vector<proxy_batch::Step> steps_;
   std::vector<proxy_batch::Link> links_;

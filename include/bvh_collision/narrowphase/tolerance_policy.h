@@ -6,7 +6,11 @@
 //
 // The methods and their error:
 // - exact (shape_pairs.h, shape_octree.h): none; a distance query at eps may stop within eps
-//   above the true distance, a BVH x octree walk may settle a cube within eps (its slack).
+//   above the true distance, a BVH x octree walk may settle a cube within eps (its slack). The
+//   tolerance never widens a reach (a broad phase, a hull test, an octree region): a pair farther
+//   apart than its padding may be answered free at every eps, so at eps > 0 the exact path takes
+//   the pairs eps = 0 takes and may only stop sooner. A tolerance never costs more than the exact
+//   answer (test_tolerance_policy counts the work).
 // - clearance grids (model/pair_clearance.h) and the octree's distance field
 //   (octree/distance_field.h): proven lower bounds, so they only ever prove "free": used at every
 //   tolerance, eps = 0 included.

@@ -190,7 +190,7 @@ class CollisionChecker {
                                const OctreeDistanceField& field, bool contacts, EnvironmentResult& result) const;
   bool link_meets_octree(int link, const Transform& pose, const Octree& tree, const EnvironmentRequest& request,
                          EnvironmentResult& result) const;
-  void objects_near_robot(const std::vector<Transform>& poses, const ObjectList& objects, double tolerance,
+  void objects_near_robot(const std::vector<Transform>& poses, const ObjectList& objects,
                           const std::vector<char>* only, std::vector<ObjectBoxTree::Entry>& out) const;
   bool link_meets_object(int link, const Transform& pose, const CollisionObject& object,
                          const EnvironmentRequest& request, EnvironmentResult& result) const;

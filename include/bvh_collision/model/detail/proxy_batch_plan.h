@@ -44,7 +44,7 @@ struct Pair {
   std::int32_t index;     // checked pair index (RobotCollisionModel::checked_pairs)
   std::int32_t graded;    // the pair has a clearance grid
   double padding;         // padding of a + padding of b
-  double reach;           // bounding radii + paddings; + Plan::tolerance: the broad phase's reach
+  double reach;           // bounding radii + paddings: the broad phase's reach (at every tolerance)
 };
 
 struct Plan {
@@ -57,7 +57,6 @@ struct Plan {
   std::int32_t pair_count = 0;
   std::int32_t stride = 0;          // doubles per state
   double pose_margin = 0.0;         // kPoseMargin (geometry/safety_margin.h)
-  double tolerance = 0.0;           // the query's (docs/design.md), at least the level
   // A proven lower bound on pair `index`'s distance in `state` (model/pair_clearance.h).
   double (*clearance)(const void* context, std::int32_t index, const double* state) = nullptr;
   const void* clearance_context = nullptr;
