@@ -237,6 +237,9 @@ class PolyhedralCover {
     return r > 0.0 && (p - centre).squaredNorm() <= r * r;
   }
   static bool holds(const Chosen& s, const Vec3& p, double margin) { return holds(s.center, s.radius, p, margin); }
+  // Candidate lists this short are not filtered for a piece's parts: filtering costs more than the
+  // tests it saves.
+  static constexpr std::size_t kShortList = 8;
   // A surface piece's bounding ball (centroid, farthest corner).
   struct Piece {
     Vec3 centre;
@@ -285,6 +288,10 @@ class PolyhedralCover {
       const std::array<std::array<Vec3, 3>, 4> parts{{{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}}};
       const std::size_t end = piece_lists_.size();
       for (const auto& [p, q, r] : parts) {
+        if (end - begin <= kShortList) {  // a short list serves the parts as it is (any superset does)
+          surface(p, q, r, depth + 1, begin);
+          continue;
+        }
         const Piece part = piece(p, q, r);
         for (std::size_t k = begin; k < end; ++k) {
           if (may_hold(chosen_[piece_lists_[k]], part)) piece_lists_.push_back(piece_lists_[k]);
