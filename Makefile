@@ -66,7 +66,7 @@ demo: build-node
 bench: deps build
 	$(MAKE) -C $(BUILD) -j$(JOBS) benchmarks
 	@rm -rf $(BUILD)/bench && mkdir -p $(BUILD)/bench
-	@for b in self_collision mesh_pair environment scene_scale stability planning; do \
+	@for b in self_collision proxy_build mesh_pair environment scene_scale stability planning; do \
 	  echo "== bench_$$b"; \
 	  devel/lib/bvh_collision/bench_$$b $(BUILD)/bench | tee $(BUILD)/bench/bench_$$b.md; \
 	  [[ $${PIPESTATUS[0]} == 0 ]] || exit 1; \

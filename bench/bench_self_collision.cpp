@@ -19,7 +19,6 @@
 #include "bvh_collision/query/acm_sampling.h"
 #include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/geometry/thread_pool.h"
-#include "proxy_build_bench.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "robot_data.h"
 
@@ -568,7 +567,6 @@ int main(int argc, char** argv) {
   for (const char* robot : {"panda", "ur5e", "pr2", "demo"}) {
     run_robot(robot, sizes, bench::output_dir(argc, argv), quick, speed_error, proof);
   }
-  bench::proxy_build_section(bench::output_dir(argc, argv), quick);
   proof.note("Uniform random states and states from centimetres down to micrometres of a self contact on both sides (bisection between a "
              "free and a colliding state), SRDF matrix, padding 0. A false negative (a colliding state answered free) "
              "or a reported collision farther than the tolerance would break docs/design.md; both must be 0.");

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bvh_collision/model/proxy_batch.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -50,17 +52,21 @@ double time_us(F&& f) {
   return std::chrono::duration<double, std::micro>(end - start).count();
 }
 
+// The CPU, its cores, the compiler and the SIMD path each run-time-dispatched kernel takes here
+// (docs/performance.md: a kernel slower on one CPU family is a finding, not a surprise).
 inline std::string machine_description() {
   std::ifstream cpu("/proc/cpuinfo");
-  std::string line, model = "unknown CPU";
+  std::string line, model = "unknown CPU", flags;
   while (std::getline(cpu, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      model = line.substr(line.find(':') + 2);
-      break;
-    }
+    if (line.rfind("model name", 0) == 0 && model == "unknown CPU") model = line.substr(line.find(':') + 2);
+    if (line.rfind("flags", 0) == 0 && flags.empty()) flags = " " + line.substr(line.find(':') + 1) + " ";
+    if (model != "unknown CPU" && !flags.empty()) break;
   }
+  auto has = [&](const char* flag) { return flags.find(std::string(" ") + flag + " ") != std::string::npos; };
+  std::string simd = has("avx512f") ? "AVX-512F" : has("avx2") ? "AVX2" : has("sse4_2") ? "SSE4.2" : "SSE2";
   std::ostringstream out;
-  out << model << ", " << std::thread::hardware_concurrency() << " cores, g++ " << __VERSION__;
+  out << model << " (widest SIMD: " << simd << "), " << std::thread::hardware_concurrency() << " cores, g++ " << __VERSION__
+      << "; proxy batch kernel: " << (avx2_available() ? "AVX2, 4 lanes" : "SSE2, 2 lanes") << " (chosen at run time)";
   return out.str();
 }
 

@@ -46,7 +46,8 @@ class BenchReport : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("bvh_collision_report_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY, BENCH_PLANNING, BENCH_SCENE_SCALE}) {
+    for (const char* bench : {BENCH_SELF_COLLISION, BENCH_MESH_PAIR, BENCH_ENVIRONMENT, BENCH_STABILITY, BENCH_PLANNING, BENCH_SCENE_SCALE,
+                              BENCH_PROXY_BUILD}) {
       const std::string log = (dir_ / (fs::path(bench).filename().string() + ".md")).string();
       statuses_.push_back(run(std::string(bench) + " " + dir_.string() + " --quick > " + log + " 2>&1"));
     }
@@ -68,8 +69,8 @@ int BenchReport::report_status_ = -1;
 
 TEST_F(BenchReport, EveryBenchmarkRunsOnSmallInputs) {
   BVH_REQUIRE_ROBOTS();
-  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "scene_scale", "node"};
-  ASSERT_EQ(statuses_.size(), 7u);
+  const char* names[] = {"self_collision", "mesh_pair", "environment", "stability", "planning", "scene_scale", "proxy_build", "node"};
+  ASSERT_EQ(statuses_.size(), 8u);
   for (std::size_t i = 0; i < statuses_.size(); ++i) {
     EXPECT_EQ(statuses_[i], 0) << names[i] << ": see " << dir_;
   }
@@ -81,6 +82,8 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
   const std::string report = read(dir_ / "report.md");
   EXPECT_NE(report.find("Measured "), std::string::npos);
   EXPECT_LT(report.find(" cores, g++ "), report.find("## 1.")) << "the machine's description is on top";
+  EXPECT_LT(report.find("widest SIMD: "), report.find("## 1.")) << "the CPU's SIMD, named on top";
+  EXPECT_LT(report.find("proxy batch kernel: "), report.find("## 1.")) << "the path the SIMD kernel took, named on top";
   for (const char* section : {"## 1. Self-collision", "## 2. Distance", "## 3. Volume types", "## 4. Environment",
                               "## 5. Model only what the scene needs", "## 6. Service", "## 7. Planning",
                               "## 8. Numerical stability"}) {

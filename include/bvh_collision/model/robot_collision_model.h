@@ -32,8 +32,8 @@ struct CheckerOptions {
   // The accelerators built beside the model (model/robot_accelerators.h) read the next three.
   // Proxy levels e (m) for bounded-error sphere proxies (narrowphase/link_proxy.h), built at
   // construction. A boolean self check at tolerance t >= e answers from the coarsest such level.
-  // Empty by default: their build delays the start (one core: panda 0.65 s at 10 mm, 2.9 s at
-  // 2 mm; pr2 2.8 s at 10 mm; docs/performance.md); with_proxy_level adds one later (the node
+  // Empty by default: their build delays the start (one core: panda 0.61 s at 10 mm, 2.9 s at
+  // 2 mm; pr2 2.6 s at 10 mm; docs/performance.md); with_proxy_level adds one later (the node
   // builds 5, 10 and 20 mm so, after start-up). Levels of 5 mm and up pay; 2 mm was slower than
   // the exact check on panda.
   std::vector<double> proxy_levels;
