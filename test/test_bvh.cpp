@@ -63,6 +63,24 @@ const std::vector<MeshPair>& mesh_pairs() {
   return pairs;
 }
 
+// A box of `size` centred at `at`, its triangles facing out (or in: a cavity's shell).
+TriangleMesh shell(const Vec3& size, const Vec3& at, bool inward) {
+  TriangleMesh m = box_mesh(size);
+  for (Vec3& v : m.vertices) v += at;
+  if (inward) {
+    for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  }
+  return m;
+}
+
+// Two meshes as one.
+TriangleMesh join(TriangleMesh a, const TriangleMesh& b) {
+  const auto offset = static_cast<std::int32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return a;
+}
+
 template <class BV>
 class BvhOracle : public ::testing::Test {
  protected:
@@ -170,6 +188,23 @@ TYPED_TEST(BvhOracle, PointDistanceAndWithinEqualBruteForce) {
       within += expected;
       QueryStats stats;
       ASSERT_EQ(point_within(bvh, pose, p, r, &stats), expected) << "point " << i << ", radius " << r << ", nearest " << brute;
+      // Every triangle closer than a radius a few times the nearest (the mesh's own frame), and
+      // the overflow once there are more than asked for.
+      const double wide = 3.0 * brute + 0.01 * size;
+      std::vector<int> near_brute;
+      for (std::size_t t = 0; t < bvh.triangles().size(); ++t) {
+        const Triangle& tri = bvh.triangles()[t];
+        if ((closest_point_on_triangle(local, tri[0], tri[1], tri[2]) - local).norm() < wide) near_brute.push_back(static_cast<int>(t));
+      }
+      std::vector<std::int32_t> near;
+      ASSERT_TRUE(triangles_near(bvh, local, wide, near_brute.size(), near));
+      std::sort(near.begin(), near.end());
+      ASSERT_EQ(std::vector<int>(near.begin(), near.end()), near_brute) << "point " << i;
+      if (near_brute.size() > 1) {
+        near.clear();
+        EXPECT_FALSE(triangles_near(bvh, local, wide, near_brute.size() - 1, near));
+        EXPECT_EQ(near.size(), near_brute.size()) << "it stops at the first triangle past the count";
+      }
       ASSERT_EQ(point_distance(bvh, pose, p, r).distance < r, expected);
       EXPECT_LE(stats.primitive_tests, mesh.triangles.size());
     }
@@ -185,20 +220,6 @@ TYPED_TEST(BvhOracle, PointDistanceAndWithinEqualBruteForce) {
 // the boxes' face planes (the cases a carried count could get wrong), against the boxes themselves.
 TYPED_TEST(BvhOracle, WindingNumbersCarryAlongSegments) {
   std::mt19937_64 random(13);
-  auto shell = [](const Vec3& size, const Vec3& at, bool inward) {
-    TriangleMesh m = box_mesh(size);
-    for (Vec3& v : m.vertices) v += at;
-    if (inward) {
-      for (auto& t : m.triangles) std::swap(t[1], t[2]);
-    }
-    return m;
-  };
-  auto join = [](TriangleMesh a, const TriangleMesh& b) {
-    const auto offset = static_cast<std::int32_t>(a.vertices.size());
-    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
-    for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    return a;
-  };
   const std::vector<TriangleMesh> meshes{test::bumpy_sphere(random, 0.5, 12, 16, 0.2),
                                          join(shell(Vec3(1, 0.6, 0.6), Vec3::Zero(), false), shell(Vec3(1, 0.6, 0.6), Vec3(0.5, 0.1, 0.05), false)),
                                          join(shell(Vec3(1, 1, 1), Vec3::Zero(), false), shell(Vec3(0.4, 0.4, 0.4), Vec3::Zero(), true))};
@@ -357,20 +378,6 @@ TYPED_TEST(BvhOracle, SolidsContainment) {
 // the overlap too, and a cavity (an inward-facing inner shell) is not solid: containment is the
 // winding number, checked against the boxes themselves. Ray parity called the overlap outside.
 TYPED_TEST(BvhOracle, ContainmentIsTheWindingNumber) {
-  auto shell = [](const Vec3& size, const Vec3& at, bool inward) {
-    TriangleMesh m = box_mesh(size);
-    for (Vec3& v : m.vertices) v += at;
-    if (inward) {
-      for (auto& t : m.triangles) std::swap(t[1], t[2]);
-    }
-    return m;
-  };
-  auto join = [](TriangleMesh a, const TriangleMesh& b) {
-    const auto offset = static_cast<std::int32_t>(a.vertices.size());
-    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
-    for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    return a;
-  };
   const Vec3 size(1.0, 0.6, 0.6), at_a(0, 0, 0), at_b(0.5, 0.1, 0.05);
   const auto two = Bvh<TypeParam>::build(join(shell(size, at_a, false), shell(size, at_b, false)));
   const auto hollow = Bvh<TypeParam>::build(join(shell(Vec3(1, 1, 1), at_a, false), shell(Vec3(0.4, 0.4, 0.4), at_a, true)));

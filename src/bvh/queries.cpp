@@ -466,29 +466,35 @@ DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const V
   return result;
 }
 
-template <class BV>
-bool point_within(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p, double radius, QueryStats* stats) {
-  if (bvh.empty() || !(radius > 0.0)) return false;
-  QueryStats local;
-  QueryStats& s = stats ? *stats : local;
-  const Vec3 q = pose.R.transpose() * (p - pose.t);
-  bool found = false;
-  // (reach: the radius with room for the rounding of a squared norm against a norm.)
+// Calls found(i) for triangles i (in bvh.triangles()) closer than `radius` to q (the mesh's frame),
+// nearest subtrees first, until it returns true. (reach: the radius with room for the rounding of
+// a squared norm against a norm.)
+template <class BV, class Found>
+void walk_within(const Bvh<BV>& bvh, const Vec3& q, double radius, QueryStats& s, Found&& found) {
   const double reach = radius * (1.0 + 1e-9) + kVolumeMargin, cutoff = radius * radius;
   auto bound = [&](std::int32_t n) {
     ++s.volume_tests;
     return point_node_bound_squared(bvh.nodes()[n], q, reach);
   };
   auto leaf = [&](const BvhNode<BV>& n) {
-    for (std::int32_t i = n.first; i < n.first + n.count && !found; ++i) {
+    for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++s.primitive_tests;
       const Triangle& t = bvh.triangles()[i];
-      found = (closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm() < radius;
+      if ((closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm() < radius && found(i)) return true;
     }
-    return found;
+    return false;
   };
   nearest_first(bvh, bound, leaf, [&] { return cutoff; });
-  return found;
+}
+
+template <class BV>
+bool point_within(const Bvh<BV>& bvh, const Transform& pose, const Vec3& p, double radius, QueryStats* stats) {
+  if (bvh.empty() || !(radius > 0.0)) return false;
+  QueryStats local;
+  bool near = false;
+  walk_within(bvh, Vec3(pose.R.transpose() * (p - pose.t)), radius, stats ? *stats : local,
+              [&](std::int32_t) { return near = true; });
+  return near;
 }
 
 template <class BV>
@@ -496,22 +502,11 @@ bool triangles_near(const Bvh<BV>& bvh, const Vec3& p, double radius, std::size_
                     std::vector<std::int32_t>& out, QueryStats* stats) {
   if (bvh.empty() || !(radius > 0.0)) return true;
   QueryStats local;
-  QueryStats& s = stats ? *stats : local;
-  const double reach = radius * (1.0 + 1e-9) + kVolumeMargin, cutoff = radius * radius;
   std::size_t found = 0;
-  auto bound = [&](std::int32_t n) {
-    ++s.volume_tests;
-    return point_node_bound_squared(bvh.nodes()[n], p, reach);
-  };
-  auto leaf = [&](const BvhNode<BV>& n) {
-    for (std::int32_t i = n.first; i < n.first + n.count && found <= max_count; ++i) {
-      ++s.primitive_tests;
-      const Triangle& t = bvh.triangles()[i];
-      if ((closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm() < radius) out.push_back(i), ++found;
-    }
-    return found > max_count;
-  };
-  nearest_first(bvh, bound, leaf, [&] { return cutoff; });
+  walk_within(bvh, p, radius, stats ? *stats : local, [&](std::int32_t i) {
+    out.push_back(i);
+    return ++found > max_count;
+  });
   return found <= max_count;
 }
 

@@ -79,7 +79,6 @@ class ShapeCover {
     }
   }
   const std::vector<Chosen>& chosen() const { return chosen_; }
-  double worst() const { return worst_; }
 
  private:
   // Settles the cube (true) or asks for it to be split (false).
@@ -97,8 +96,8 @@ class ShapeCover {
     const double d = field_.surface_distance(c, in, limit, &nearest);
     if (!in && low(d) > h) return true;  // no point of the link in this cube
     if (field_.solid() && d < limit && try_interior(c, h, in, d, nearest)) return true;
-    if (high(d) + h <= half_level_) return choose(c, h, high(d) + h);
-    if (in && h <= low(d) + half_level_) return choose(c, low(d) + half_level_, half_level_);
+    if (high(d) + h <= half_level_) return choose(c, h);  // every point within d + h <= e/2 of the link
+    if (in && h <= low(d) + half_level_) return choose(c, low(d) + half_level_);
     return false;
   }
   // The interior spheres on the normal through the nearest surface point, largest first.
@@ -112,16 +111,15 @@ class ShapeCover {
       if (!field_.inside(center)) continue;
       const double depth = low(field_.surface_distance(center, true, 2.0 * t + h, nullptr));
       const double radius = depth + half_level_;
-      if ((center - c).norm() + h <= radius * (1.0 - kVolumeMargin)) return choose(center, radius, half_level_);
+      if ((center - c).norm() + h <= radius * (1.0 - kVolumeMargin)) return choose(center, radius);
     }
     return false;
   }
   double low(double d) const { return d * (1.0 - kVolumeMargin) - kVolumeMargin; }
   double high(double d) const { return grown_radius(d) + kVolumeMargin; }
-  bool choose(const Vec3& c, double radius, double bound) {
+  bool choose(const Vec3& c, double radius) {
     index_.insert(static_cast<std::uint32_t>(chosen_.size()), c, radius);
     chosen_.push_back({c, radius});
-    worst_ = std::max(worst_, bound);
     return true;
   }
 
@@ -129,7 +127,6 @@ class ShapeCover {
   double half_level_;
   std::vector<Chosen> chosen_;
   SphereGrid index_;  // chosen_ by position
-  double worst_ = 0.0;
 };
 
 // The cover of a shape whose boundary is triangles (a mesh, a box), proven on its surface and,
