@@ -276,7 +276,7 @@ void resolution_table(const std::vector<ScanPoint>& scan, const Vec3& camera, co
 void speed_error_octree_table(const std::vector<ScanPoint>& scan, const Vec3& camera, const CollisionChecker& checker,
                               const std::vector<std::vector<double>>& states, const Sizes& sizes, const std::string& dir) {
   Table table("speed_error_octree", "Panda against the table-scene octree (2 cm): time per state against tolerance",
-              {"robot", "scene", "tolerance_mm", "mode", "us_per_state", "false_positive_pct", "false_negatives",
+              {"robot", "scene", "tolerance_mm", "mode", "us_per_state", "us_per_state min", "us_per_state max", "false_positive_pct", "false_negatives",
                "farthest_false_positive_mm", "fcl_exact_us_per_state", "proxy_level_mm", "proxy_leaves",
                "proxy_build_s"});
   Environment env(0.02);
@@ -312,7 +312,8 @@ void speed_error_octree_table(const std::vector<ScanPoint>& scan, const Vec3& ca
       const bench::AnswerErrors e = bench::answer_errors(*hits, distance);
       // The level an environment check at this tolerance answers from (up to twice it).
       const ProxyLevel* level = checker.accelerators().proxies_for(2.0 * one.tolerance);
-      table.row({"panda", "octree", mm, mode, bench::spread(*times).median, 100.0 * e.false_positives / n,
+      const Spread time = bench::spread(*times);
+      table.row({"panda", "octree", mm, mode, time.median, time.low, time.high, 100.0 * e.false_positives / n,
                  static_cast<double>(e.false_negatives), e.farthest_false_positive * 1000, exact.fcl.median,
                  level ? level->level * 1000 : 0.0, level ? double(level->leaves) : 0.0, level ? level->build_seconds : 0.0});
     }

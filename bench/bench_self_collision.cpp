@@ -520,7 +520,7 @@ void speed_error_rows(const Robot& robot, FclPipeline& fcl_pipeline, const std::
     const ProxyLevel* level = checker.accelerators().proxies_for(tolerances_mm[t] * 1e-3);
     for (const auto& [mode, hits, time] : {std::tuple{"single", &single[t], times[t]}, std::tuple{"batch", &batch[t], batch_time}}) {
       const bench::AnswerErrors e = bench::answer_errors(*hits, truth);
-      table.row({robot.name, "self", tolerances_mm[t], mode, time.median, 100.0 * e.false_positives / n,
+      table.row({robot.name, "self", tolerances_mm[t], mode, time.median, time.low, time.high, 100.0 * e.false_positives / n,
                  static_cast<double>(e.false_negatives), e.farthest_false_positive * 1000, times.back().median, level ? level->level * 1000 : 0.0,
                  level ? static_cast<double>(level->leaves) : 0.0, level ? level->build_seconds : 0.0});
     }
@@ -558,7 +558,7 @@ int main(int argc, char** argv) {
   std::cout << "# Self-collision per configuration, against FCL as MoveIt uses it\n# Machine: "
             << bench::machine_description() << "\n";
   Table speed_error("speed_error", "Boolean self-collision (solids): time per state against tolerance, with the link proxies",
-                    {"robot", "scene", "tolerance_mm", "mode", "us_per_state", "false_positive_pct", "false_negatives",
+                    {"robot", "scene", "tolerance_mm", "mode", "us_per_state", "us_per_state min", "us_per_state max", "false_positive_pct", "false_negatives",
                      "farthest_false_positive_mm", "fcl_exact_us_per_state", "proxy_level_mm", "proxy_leaves",
                      "proxy_build_s"});
   Table proof("proxy_proof", "The proxies' contract on many states: each level at tolerance = level against exact solid distances",
@@ -573,7 +573,8 @@ int main(int argc, char** argv) {
   proof.write(bench::output_dir(argc, argv));
   speed_error.note("Uniform random states (the same as section 1), SRDF matrix, solids; the truth is our exact solid "
                    "distance. Tolerance 0 is the exact check; at tolerance t the coarsest proxy level e <= t answers "
-                   "(narrowphase/link_proxy.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
+                   "the pairs its build measured it not slower on, the exact test the others (narrowphase/link_proxy.h, "
+                   "model/proxy_calibration.h; proxy_level_mm 0: none, exact). Both modes skip the self pairs whose proven "
                    "clearance grid clears the padding (model/pair_clearance.h). batch: check_batch over all states on "
                    "the shared thread pool (" + std::to_string(ThreadPool::shared().capacity()) +
                    " threads); at a tolerance a proxy level fits, four states at a time in SIMD lanes (model/proxy_batch.h, " +

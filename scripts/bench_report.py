@@ -146,6 +146,19 @@ def check_tolerance_costs(tables):
                                   f"({fmt(r[median])} us against at most {fmt(exact[0][slowest])} us exact)")
 
 
+def check_speed_error_costs(tables):
+    """The same promise in the speed_error table (proxy levels built): per robot, scene and mode, no
+    row at a tolerance slower than that exact row's slowest run."""
+    t = need(tables, "speed_error")
+    col = {c: t["columns"].index(c) for c in ("robot", "scene", "tolerance_mm", "mode", "us_per_state", "us_per_state max")}
+    exact = {(r[col["robot"]], r[col["scene"]], r[col["mode"]]): r for r in t["rows"] if r[col["tolerance_mm"]] == 0}
+    for r in t["rows"]:
+        key = (r[col["robot"]], r[col["scene"]], r[col["mode"]])
+        if r[col["tolerance_mm"]] > 0 and key in exact and r[col["us_per_state"]] > exact[key][col["us_per_state max"]]:
+            raise ReportError(f"speed_error: {' '.join(map(str, key))} at {fmt(r[col['tolerance_mm']])} mm cost time "
+                              f"({fmt(r[col['us_per_state']])} us against at most {fmt(exact[key][col['us_per_state max']])} us exact)")
+
+
 def check_promises(tables):
     """The figures that must hold whatever the machine: raise on the first broken one."""
     for robot in ROBOTS:
@@ -192,7 +205,8 @@ def check_promises(tables):
         raise ReportError("a wrong answer on a cylinder case")
     planning = need(tables, "planning")
     for name in ["paths colliding (our exact certified re-check)", "paths colliding (FCL every 1e-3 rad)"]:
-        ours = [r[planning["columns"].index(name)] for r in planning["rows"] if r[0].startswith("ours")]
+        checker = planning["columns"].index("checker")
+        ours = [r[planning["columns"].index(name)] for r in planning["rows"] if r[checker].startswith("ours")]
         if any(v and v > 0 for v in ours):
             raise ReportError("planning: a path planned through our checker collides")
 
@@ -430,6 +444,7 @@ def build_report(tables, bench_dir, quick):
     check_promises(tables)
     if not quick:  # single runs on small inputs: no spread to judge a time by
         check_tolerance_costs(tables)
+        check_speed_error_costs(tables)
     out = ["# bvh_collision: speed against error", ""]
     when = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     out += [f"Measured {when} by `make bench` on: {machine(tables)}.", ""]

@@ -248,6 +248,7 @@ TEST(LinkProxy, SelfCheckAtToleranceKeepsTheContract) {
     CheckerOptions exact_options, proxy_options;
     exact_options.padding = proxy_options.padding = padding;
     proxy_options.proxy_levels = kLevels;
+    proxy_options.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
     const CollisionChecker exact = test::load_checker("panda", exact_options);
     const CollisionChecker proxied = test::load_checker("panda", proxy_options);
     ASSERT_EQ(proxied.accelerators().proxy_levels().size(), kLevels.size());

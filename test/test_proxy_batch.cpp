@@ -205,6 +205,7 @@ TEST(ProxyBatch, DemoArmBatchKeepsTheContract) {
     CheckerOptions e, p;
     e.padding = p.padding = padding;
     p.proxy_levels = {0.02};
+    p.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
     // At a tolerance above the level too: the broad phase then reaches farther, as check_self's.
     for (const double tolerance : {0.02, 0.05}) {
       expect_batch_keeps_the_contract(demo_checker(e), demo_checker(p), tolerance, test::sized(2000), 21);
@@ -223,6 +224,7 @@ TEST(ProxyBatch, PandaAndUr5eBatchesKeepTheContract) {
     CheckerOptions e, p;
     e.padding = p.padding = 0.002;
     p.proxy_levels = {0.01};
+    p.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
     expect_batch_keeps_the_contract(test::load_checker(robot, e), test::load_checker(robot, p), 0.01, 3000, 22);
   }
 }
@@ -232,6 +234,7 @@ TEST(ProxyBatch, PandaAndUr5eBatchesKeepTheContract) {
 TEST(ProxyBatch, EveryBatchLengthAndTheExactPath) {
   CheckerOptions p;
   p.proxy_levels = {0.02};
+  p.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
   const CollisionChecker c = demo_checker(p);
   std::mt19937_64 rng(9);
   std::vector<double> flat;
@@ -261,6 +264,7 @@ TEST(ProxyBatch, EveryBatchLengthAndTheExactPath) {
 TEST(ProxyBatch, FixedStepMotionsAnswerAsStateByState) {
   CheckerOptions p;
   p.proxy_levels = {0.02};
+  p.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
   const CollisionChecker c = demo_checker(p);
   const Environment empty(0.02);
   std::mt19937_64 rng(13);

@@ -4,6 +4,7 @@
 // for every kind pair: link x link, link x object, link x octree.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <random>
@@ -158,6 +159,7 @@ double exact_distance(const CollisionChecker& checker, const double* q, const En
 TEST(TolerancePolicy, EachToleranceClassKeepsTheContractOnEveryKindPair) {
   CheckerOptions options;
   options.proxy_levels = {0.005, 0.01, 0.02};
+  options.calibrate_proxies = false;  // the proxies answer every pair: their contract is tested
   const CollisionChecker checker = test::demo_arm_checker(options);
   const Environment voxels = demo_environment(true);
   ASSERT_NE(checker.prepare_distance_field(voxels), nullptr);
@@ -257,6 +259,72 @@ TEST(TolerancePolicy, ATolerancesWorkIsNeverMoreThanTheExactOnes) {
               static_cast<double>(tolerant_work) / static_cast<double>(exact_work), hits);
   EXPECT_GT(hits, states / 20);
   EXPECT_GT(exact_work, 0u);
+}
+
+// A level answers a self pair only where the build measured it not slower than the exact test
+// (model/proxy_calibration.h): a tolerance never costs. Whatever the timing decided, the answers
+// follow the decision exactly: every pair the level leaves to the exact test is answered as the
+// exact path answers it at that tolerance, every other as the proxies alone answer it, one state at
+// a time and in the SIMD batch (which then runs the left pairs exactly for the states its lanes
+// found free). Which pairs pay is a timing and not asserted; that a tolerance row is not slower
+// than the exact one is the report's check (make bench).
+TEST(TolerancePolicy, ALevelAnswersOnlyThePairsItWasMeasuredToPay) {
+  using Make = CollisionChecker (*)(const CheckerOptions&);
+  std::vector<std::pair<const char*, Make>> robots = {{"demo arm", test::demo_arm_checker}};
+  if (std::filesystem::is_directory(test::robots_dir())) robots.emplace_back("panda", test::panda_as_moveit);
+  std::mt19937_64 rng(44);
+  for (const auto& [name, make] : robots) {
+    for (const double level : {0.005, 0.02}) {
+      CheckerOptions calibrated;
+      calibrated.proxy_levels = {level};
+      CheckerOptions forced = calibrated;
+      forced.calibrate_proxies = false;
+      const CollisionChecker mixed = make(calibrated), proxies = make(forced), exact = make(CheckerOptions{});
+      const ProxyLevel& built = mixed.accelerators().proxy_levels().front();
+      const std::size_t pairs = mixed.checked_pairs().size();
+      ASSERT_EQ(built.pair_costs.size(), pairs);
+      ASSERT_EQ(built.pair_exact.size(), pairs);
+      std::size_t sampled = 0;
+      std::vector<std::size_t> left;
+      for (std::size_t p = 0; p < pairs; ++p) {
+        const PairCost& c = built.pair_costs[p];
+        if (c.samples > 0) {
+          ++sampled;
+          EXPECT_GT(c.exact_seconds, 0.0) << name << " pair " << p;
+          EXPECT_GT(c.proxy_seconds, 0.0) << name << " pair " << p;
+        }
+        EXPECT_EQ(built.pair_exact[p] != 0, !c.proxies_pay()) << name << " pair " << p;
+        if (built.pair_exact[p]) left.push_back(p);
+      }
+      EXPECT_EQ(built.exact_pairs, left);
+      EXPECT_GT(sampled, 0u) << name;
+      EXPECT_TRUE(proxies.accelerators().proxy_levels().front().exact_pairs.empty());
+      std::printf("%s at %g mm: %zu of %zu pairs timed, %zu left to the exact test\n", name, level * 1e3, sampled, pairs,
+                  left.size());
+      const int n = test::sized(200);
+      std::vector<double> flat;
+      std::vector<char> single;
+      SelfCollisionRequest all{level};
+      all.all_pairs = true;
+      for (int i = 0; i < n; ++i) {
+        const std::vector<double> q = random_configuration(mixed.model(), rng);
+        flat.insert(flat.end(), q.begin(), q.end());
+        const SelfCollisionResult m = mixed.check_self(q.data(), all);
+        const SelfCollisionResult x = exact.check_self(q.data(), all), y = proxies.check_self(q.data(), all);
+        for (std::size_t p = 0; p < pairs; ++p) {
+          const auto named = [&](const SelfCollisionResult& r) {
+            return std::find(r.colliding_pairs.begin(), r.colliding_pairs.end(), mixed.checked_pairs()[p]) != r.colliding_pairs.end();
+          };
+          ASSERT_EQ(named(m), named(built.pair_exact[p] ? x : y)) << name << " state " << i << " pair " << p;
+        }
+        single.push_back(mixed.check_self(q.data(), SelfCollisionRequest{level}).collision);
+      }
+      BatchRequest batch;
+      batch.environment = false;
+      batch.tolerance = level;
+      EXPECT_EQ(mixed.check_batch(flat.data(), static_cast<std::size_t>(n), nullptr, batch), single) << name;
+    }
+  }
 }
 
 }  // namespace

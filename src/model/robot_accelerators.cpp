@@ -11,7 +11,7 @@
 namespace bvh_collision {
 
 RobotAccelerators::RobotAccelerators(const RobotCollisionModel& model, const CheckerOptions& options)
-    : proxy_cache_(options.proxy_cache) {
+    : proxy_cache_(options.proxy_cache), calibrate_(options.calibrate_proxies) {
   if (options.pair_clearance_cells > 0) pair_clearance_ = PairClearance::build(model, options.pair_clearance_cells);
   // After the grids: the batch plans note which pairs have one.
   std::vector<double> levels = options.proxy_levels;
@@ -36,9 +36,27 @@ ProxyLevel RobotAccelerators::build_proxy_level(const RobotCollisionModel& model
     out.leaves += out.links[l].leaf_count();
     out.memory_bytes += out.links[l].memory_bytes();
   }
+  calibrate(model, out, 0);
   out.batch = ProxyBatch(model, pair_clearance_, out);
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
+}
+
+// The pairs from `first_pair` on timed both ways (model/proxy_calibration.h); where the exact
+// test was faster, the level leaves the pair to it.
+void RobotAccelerators::calibrate(const RobotCollisionModel& model, ProxyLevel& level, std::size_t first_pair) const {
+  const std::size_t pairs = model.checked_pairs().size();
+  level.pair_costs.resize(std::min(first_pair, level.pair_costs.size()));
+  level.pair_exact.resize(pairs, 0);
+  if (calibrate_) {
+    const std::vector<PairCost> costs = measure_pair_costs(model, pair_clearance_, level.links, level.level, first_pair);
+    level.pair_costs.insert(level.pair_costs.end(), costs.begin(), costs.end());
+    for (std::size_t p = first_pair; p < pairs; ++p) level.pair_exact[p] = costs[p - first_pair].proxies_pay() ? 0 : 1;
+  }
+  level.exact_pairs.clear();
+  for (std::size_t p = 0; p < pairs; ++p) {
+    if (level.pair_exact[p]) level.exact_pairs.push_back(p);
+  }
 }
 
 // From the cache when it holds this link's proxy at this level (its key covers every number of
@@ -84,6 +102,7 @@ RobotAccelerators RobotAccelerators::carrying(const RobotCollisionModel& carried
       level.leaves += level.links[l].leaf_count();
       level.memory_bytes += level.links[l].memory_bytes();
     }
+    copy.calibrate(carried, level, level.pair_exact.size());  // the carried bodies' new pairs
     level.batch = ProxyBatch(carried, copy.pair_clearance_, level);
   }
   return copy;

@@ -155,7 +155,7 @@ SelfCollisionResult CollisionChecker::check_self(const double* state, const Self
       // no contact (model/pair_clearance.h).
       if (a_->pair_clearance().lower_bound(p, state) > m_->paddings()[a] + m_->paddings()[b]) continue;
       ++result.stats.pair_tests;
-      const bool hit = proxies ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
+      const bool hit = proxies && proxies->answers(p) ? proxies_overlap(proxies->links[a], poses[a], proxies->links[b], poses[b],
                                                  m_->paddings()[a] + m_->paddings()[b])
                                : pair_collides(a, b, poses, request, result);
       if (hit) {
@@ -192,6 +192,18 @@ std::vector<bool> CollisionChecker::check_self_batch(const double* states, std::
   request.tolerance = tolerance;
   const std::vector<char> out = check_batch(states, count, nullptr, request);
   return std::vector<bool>(out.begin(), out.end());
+}
+
+void CollisionChecker::check_self_in_lanes(const ProxyLevel& proxies, const double* states, std::size_t count, double tolerance,
+                                           char* out, SimdPath path) const {
+  proxies.batch.check(a_->pair_clearance(), states, count, out, path);
+  if (proxies.exact_pairs.empty()) return;
+  SelfCollisionRequest exact{tolerance};
+  exact.only_pairs = &proxies.exact_pairs;
+  const std::size_t stride = m_->robot().variable_count();
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!out[i]) out[i] = check_self(states + i * stride, exact).collision;
+  }
 }
 
 namespace {
@@ -260,7 +272,7 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
     constexpr std::size_t kBlock = 16;
     ThreadPool::shared().for_each((count + kBlock - 1) / kBlock, 1, [&](std::size_t block) {
       const std::size_t begin = block * kBlock, n = std::min(kBlock, count - begin);
-      proxies->batch.check(a_->pair_clearance(), states + begin * stride, n, out.data() + begin, request.simd);
+      check_self_in_lanes(*proxies, states + begin * stride, n, request.tolerance, out.data() + begin, request.simd);
       if (!request.environment) return;
       for (std::size_t i = begin; i < begin + n; ++i) {
         if (!out[i]) out[i] = environment_check(states + i * stride, *env, environment, field.get()).collision;

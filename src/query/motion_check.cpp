@@ -98,7 +98,7 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
         const double* q = segment.at(static_cast<double>(first + k) / static_cast<double>(steps));
         std::copy(q, q + n, block.begin() + static_cast<std::ptrdiff_t>(k * n));
       }
-      proxies->batch.check(checker.accelerators().pair_clearance(), block.data(), count, self_hit);
+      checker.check_self_in_lanes(*proxies, block.data(), count, request.tolerance, self_hit);
     }
     for (std::size_t k = 0; k < count; ++k) {
       const double s = static_cast<double>(first + k) / static_cast<double>(steps);

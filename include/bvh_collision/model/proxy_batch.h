@@ -36,7 +36,9 @@ class ProxyBatch {
   // the kernel does not compute.
   ProxyBatch(const RobotCollisionModel& model, const PairClearance& clearance, const ProxyLevel& level);
 
-  bool empty() const { return steps_.empty() && pairs_.empty(); }
+  // No pair for the lanes (none checked, or the level leaves every pair to the exact test:
+  // ProxyLevel::exact_pairs): nothing to gain from the kernel.
+  bool empty() const { return pairs_.empty(); }
   // out[i] = 1 when state i (states row-major, `count` of them) has proxies within padding in
   // some checked pair: check_self's answer at a tolerance this level fits (the broad phase
   // reaches as far as check_self's, which no tolerance grows). Runs on the calling thread. kAvx2

@@ -12,6 +12,7 @@
 
 #include "bvh_collision/model/pair_clearance.h"
 #include "bvh_collision/model/proxy_batch.h"
+#include "bvh_collision/model/proxy_calibration.h"
 #include "bvh_collision/model/robot_collision_model.h"
 #include "bvh_collision/narrowphase/link_proxy.h"
 
@@ -23,8 +24,15 @@ struct ProxyLevel {
   std::vector<LinkProxy> links;  // per link (empty for links without geometry)
   std::size_t leaves = 0, memory_bytes = 0;
   std::size_t links_from_cache = 0;  // read from CheckerOptions::proxy_cache, not built
-  double build_seconds = 0.0;
-  ProxyBatch batch;  // the same proxies, flat, for the vectorised batch kernel
+  double build_seconds = 0.0;  // the calibration included
+  // Per checked pair, what the calibration measured (model/proxy_calibration.h; empty when
+  // CheckerOptions::calibrate_proxies is off), and the pairs where the exact test was faster:
+  // at a tolerance this level fits, those take the exact path, the others the proxies.
+  std::vector<PairCost> pair_costs;
+  std::vector<char> pair_exact;           // per checked pair
+  std::vector<std::size_t> exact_pairs;   // the same, as indices
+  bool answers(std::size_t pair) const { return pair >= pair_exact.size() || pair_exact[pair] == 0; }
+  ProxyBatch batch;  // the pairs the proxies answer, flat, for the vectorised batch kernel
 };
 
 // RobotAccelerators::with_proxy_level stopped by its cancel flag.
@@ -61,9 +69,11 @@ class RobotAccelerators {
 
  private:
   ProxyLevel build_proxy_level(const RobotCollisionModel& model, double level, const std::atomic<bool>* cancel) const;
+  void calibrate(const RobotCollisionModel& model, ProxyLevel& level, std::size_t first_pair) const;
   LinkProxy cached_or_built_proxy(const RobotCollisionModel& model, int link, double level, std::size_t& from_cache) const;
 
   std::string proxy_cache_;  // CheckerOptions::proxy_cache
+  bool calibrate_ = true;    // CheckerOptions::calibrate_proxies
   std::vector<ProxyLevel> proxy_levels_;
   PairClearance pair_clearance_;
 };

@@ -40,6 +40,11 @@ struct CheckerOptions {
   // A folder where link proxies are kept by content (narrowphase/link_proxy_cache.h): a level whose
   // links are there is read instead of built. Empty: none (the node's ~proxy_cache has one).
   std::string proxy_cache;
+  // Time each self pair both ways on a fixed sample of states when a level is built
+  // (model/proxy_calibration.h) and let the proxies answer only the pairs where they were not
+  // slower (panda: a few ms a level). Off: the proxies answer every pair at a tolerance that
+  // fits them (tests of the proxies' contract, benchmarks of the proxies alone).
+  bool calibrate_proxies = true;
   // Grids of proven clearance for the self pairs one or two variables move
   // (model/pair_clearance.h): a boolean self check skips such a pair with one lookup when its
   // bound clears the padding. 0 cells: none built.

@@ -97,6 +97,12 @@ class CollisionChecker {
 
   // Boolean self-collision for `count` states stored row by row; uses every core.
   std::vector<bool> check_self_batch(const double* states, std::size_t count, double tolerance = 0.0) const;
+  // Boolean self checks of up to a few dozen states on the calling thread at a tolerance that
+  // `proxies` (one of accelerators().proxy_levels(), with a batch) fits: the SIMD lanes for the
+  // pairs the level answers, then the exact test for the pairs it leaves to it
+  // (ProxyLevel::exact_pairs) in the states the lanes found free. out[i] = 1: state i collides.
+  void check_self_in_lanes(const ProxyLevel& proxies, const double* states, std::size_t count, double tolerance, char* out,
+                           SimdPath path = SimdPath::kAuto) const;
 
   // Boolean self and/or environment collision for `count` states stored row by row (1 = in
   // collision); uses every core when there is more than one state. `env` may be null when
