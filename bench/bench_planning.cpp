@@ -1,16 +1,25 @@
-// Planning at planner rates (report table `planning`): OMPL's RRTConnect on panda among generated
-// MoveIt-style scenes (test/planning_scenes.h: tables, shelves, open boxes, cages, clutter; 20-60
-// primitives each), start and goal free on the exact geometry, a third of the goals within 5 mm
-// of an obstacle. Three checkers plan the same problems in the same run:
-//   - ours exact (tolerance 0) and ours at 10 mm (proxy levels 5/10/20 mm), through
+// Planning at planner rates (report table `planning`): OMPL's RRTConnect on several robots among
+// generated MoveIt-style scenes, start and goal free on the exact geometry, a third of the goals
+// within 5 mm of an obstacle, goals drawn towards a point inside a fixture where the scene has one:
+//   - panda (7 joints): tables, shelves, open boxes, cages, clutter (test/planning_scenes.h
+//     generate_scene) and, every other problem, a harder fixture to reach into (hard_scene: a shelf
+//     of thin boards, a dense cage of thin bars, a drawer);
+//   - ur5e (6 joints): the first kind of scene;
+//   - pr2 with both arms at once (14 joints) and pr2's torso lift with its right arm (8 joints, the
+//     left arm tucked): a table with a cabinet between the arms, shelves on each side (pr2_scene).
+// Three checkers plan the same problems in the same run:
+//   - ours exact (tolerance 0) and ours at 10 mm (the node's proxy levels), through
 //     planning/ompl_validity.h (certified motions);
 //   - FCL as MoveIt sets it up: BVHModel<OBBRSS> per link mesh, primitive shapes for the objects
 //     in a dynamic AABB tree, the SRDF's allowed pairs; OMPL's DiscreteMotionValidator at 1 % of
 //     the space's extent.
-// Every returned path is re-checked, segment by segment, by our general certified check_motion
-// at tolerance 0 (not the planning path: another code path) and by FCL at every 1e-3 rad along
+// Every returned path is re-checked, segment by segment, by conservative advancement with exact
+// distances (test/advancement_oracle.h: not the planning path) and by FCL at every 1e-3 rad along
 // it; a path either finds colliding counts against its checker. The scenes are written as
 // MoveIt `.scene` text (build/bench/scenes) with the problems (problems.json).
+// BENCH_PLANNING_ROBOTS=panda,pr2_both_arms (say) plans only those robots; BENCH_PLANNING_PROBLEMS=N sets
+// the problems per robot; BENCH_PLANNING_CHECKERS=01 only those rows (0 ours exact, 1 ours 10 mm,
+// 2 FCL), to profile one.
 #include <fcl/fcl.h>
 
 #include <ompl/base/DiscreteMotionValidator.h>
@@ -21,7 +30,11 @@
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
 
+#include <cctype>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
 #include <random>
 
 #include "bench_util.h"
@@ -30,6 +43,7 @@
 #include "bvh_collision/planning/ompl_validity.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "fcl_oracle.h"
+#include "fcl_planning_robot.h"
 #include "planning_scenes.h"
 #include "advancement_oracle.h"
 
@@ -40,102 +54,80 @@ namespace ob = ompl::base;
 namespace og = ompl::geometric;
 using bench::Table;
 
-const std::vector<std::string> kArm = {"panda_joint1", "panda_joint2", "panda_joint3", "panda_joint4",
-                                       "panda_joint5", "panda_joint6", "panda_joint7"};
+// A robot of the benchmark: its planning group, where the other joints stand, its scenes.
+struct PlanningRobot {
+  std::string name;                        // the table's robot column
+  std::string folder;                      // ../shared/robots/<folder>, loaded as MoveIt does
+  std::vector<std::string> group;          // the planned joints
+  std::map<std::string, double> base;      // the other joints' values (0 when not named)
+  std::vector<double> proxy_levels;        // what the node builds within its sphere budget
+  std::string tip;                         // the link a goal is drawn towards the scene's target
+  // Scene `index`; sets `target` (world) when goals should be drawn towards it.
+  std::function<test::PlanningScene(std::uint64_t, int, std::optional<Vec3>&)> scene;
+};
 
-CollisionChecker load_panda(const std::string& cache, double& build_seconds) {
-  CheckerOptions options;
-  options.proxy_levels = {0.005, 0.01, 0.02};
-  options.proxy_cache = cache;
-  const auto start = std::chrono::steady_clock::now();
-  CollisionChecker checker = test::panda_as_moveit(options);
-  build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return checker;
-}
-
-// ---- FCL as MoveIt uses it -------------------------------------------------------------------
-
-// The links' OBBRSS models, built once for every scene.
-using FclLinkModels = std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>>;
-FclLinkModels fcl_link_models(const RobotModel& model) {
-  FclLinkModels out;
-  for (const RobotLink& link : model.links()) {
-    for (const CollisionElement& e : link.collision) out.push_back(test::fcl_model<fcl::OBBRSSd>(*e.mesh));
+std::vector<std::string> arm(const std::string& prefix) {
+  std::vector<std::string> out;
+  for (const char* j : {"shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex", "wrist_roll"}) {
+    out.push_back(prefix + j + "_joint");
   }
   return out;
 }
 
-class FclPanda {
- public:
-  FclPanda(const CollisionChecker& checker, const FclLinkModels& models, const test::PlanningScene& scene) : checker_(checker) {
-    const RobotModel& model = checker.model();
-    std::size_t k = 0;
-    for (std::size_t l = 0; l < model.links().size(); ++l) {
-      for (const CollisionElement& e : model.links()[l].collision) {
-        links_.push_back({static_cast<int>(l), e.origin, std::make_unique<fcl::CollisionObjectd>(models[k++])});
-      }
-    }
-    for (const SceneObject& o : scene.objects) {
-      for (const SceneShape& s : o.shapes) world_.push_back(std::make_unique<fcl::CollisionObjectd>(geometry(s.shape), test::fcl_transform(o.pose * s.pose)));
-    }
-    for (auto& w : world_) {
-      w->computeAABB();
-      manager_.registerObject(w.get());
-    }
-    manager_.setup();
-  }
-
-  bool collides(const double* state) {
-    forward_kinematics(checker_.model(), state, poses_);
-    for (LinkObject& l : links_) {
-      l.object->setTransform(test::fcl_transform(poses_[l.link] * l.origin));
-      l.object->computeAABB();
-    }
-    for (const auto& [a, b] : checker_.checked_pairs()) {
-      for (const LinkObject& la : links_) {
-        if (la.link != a) continue;
-        for (const LinkObject& lb : links_) {
-          if (lb.link != b) continue;
-          fcl::CollisionRequestd request;
-          fcl::CollisionResultd result;
-          if (fcl::collide(la.object.get(), lb.object.get(), request, result) > 0) return true;
-        }
-      }
-    }
-    for (LinkObject& l : links_) {
-      fcl::DefaultCollisionData<double> data;
-      manager_.collide(l.object.get(), &data, fcl::DefaultCollisionFunction<double>);
-      if (data.result.isCollision()) return true;
-    }
-    return false;
-  }
-
- private:
-  static std::shared_ptr<fcl::CollisionGeometryd> geometry(const ObjectShape& s) {
-    switch (s.kind) {
-      case ObjectShape::Kind::kBox: return std::make_shared<fcl::Boxd>(s.size.x(), s.size.y(), s.size.z());
-      case ObjectShape::Kind::kSphere: return std::make_shared<fcl::Sphered>(s.radius);
-      case ObjectShape::Kind::kCylinder: return std::make_shared<fcl::Cylinderd>(s.radius, s.length);
-      default: throw std::logic_error("the scene generator makes boxes, spheres and cylinders only");
-    }
-  }
-  struct LinkObject {
-    int link;
-    Transform origin;
-    std::unique_ptr<fcl::CollisionObjectd> object;
+std::vector<PlanningRobot> planning_robots() {
+  auto pr2_scenes = [](std::uint64_t seed, int k, std::optional<Vec3>& target) {
+    Vec3 t;
+    test::PlanningScene s = test::pr2_scene(seed, k, &t);
+    target = t;
+    return s;
   };
-  const CollisionChecker& checker_;
-  std::vector<LinkObject> links_;
-  std::vector<std::unique_ptr<fcl::CollisionObjectd>> world_;
-  fcl::DynamicAABBTreeCollisionManagerd manager_;
-  std::vector<Transform> poses_;
-};
+  std::vector<PlanningRobot> out;
+  out.push_back({"panda", "panda", {}, {{"panda_finger_joint1", 0.02}}, {0.005, 0.01, 0.02},
+                 "panda_hand", [](std::uint64_t seed, int k, std::optional<Vec3>& target) {
+                   if (k % 2 == 0) return test::generate_scene(seed, k);
+                   Vec3 t;
+                   test::PlanningScene s = test::hard_scene(seed, k, &t);
+                   target = t;
+                   return s;
+                 }});
+  for (int j = 1; j <= 7; ++j) out.back().group.push_back("panda_joint" + std::to_string(j));
+  out.push_back({"ur5e", "ur5e", {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"},
+                 {}, {0.005, 0.01, 0.02}, "wrist_3_link",
+                 [](std::uint64_t seed, int k, std::optional<Vec3>&) { return test::generate_scene(seed, k); }});
+  // pr2: 28k spheres at 20 mm and 106k at 10 mm, so the node's budget stops before 5 mm.
+  std::vector<std::string> both = arm("r_");
+  for (const std::string& j : arm("l_")) both.push_back(j);
+  out.push_back({"pr2 both arms", "pr2", both, {{"torso_lift_joint", 0.15}}, {0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
+  std::vector<std::string> torso_arm = {"torso_lift_joint"};
+  for (const std::string& j : arm("r_")) torso_arm.push_back(j);
+  // The left arm tucked beside the body, as pr2's tuck_arms leaves it.
+  const std::map<std::string, double> tucked = {{"l_shoulder_pan_joint", 0.06}, {"l_shoulder_lift_joint", 1.25}, {"l_upper_arm_roll_joint", 1.79},
+                                                {"l_elbow_flex_joint", -1.68}, {"l_forearm_roll_joint", -1.73}, {"l_wrist_flex_joint", -0.1},
+                                                {"l_wrist_roll_joint", -0.09}};
+  out.push_back({"pr2 torso + right arm", "pr2", torso_arm, tucked, {0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
+  return out;
+}
+
+CollisionChecker load_robot(const PlanningRobot& robot, const std::string& cache, double& build_seconds) {
+  CheckerOptions options;
+  options.proxy_levels = robot.proxy_levels;
+  options.proxy_cache = cache;
+  const auto start = std::chrono::steady_clock::now();
+  CollisionChecker checker = test::load_as_moveit(robot.folder, options);
+  build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return checker;
+}
 
 // ---- Timing wrappers: every call timed on its own, for medians ------------------------------------
 
 struct CallTimes {
   std::vector<double> states, motions;  // microseconds per call
+  double outside_motions_us = 0.0;      // the state calls not made inside a motion call, summed
 };
+
+// Inside a motion call (FCL's discrete validator calls the state checker): its state calls are
+// the motion's time, not counted twice in the time shares.
+thread_local int motion_depth = 0;
 
 double now_us() {
   return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -148,7 +140,9 @@ class TimedValidity : public ob::StateValidityChecker {
   bool isValid(const ob::State* s) const override {
     const double t0 = now_us();
     const bool v = valid_(s);
-    times_->states.push_back(now_us() - t0);
+    const double us = now_us() - t0;
+    times_->states.push_back(us);
+    if (motion_depth == 0) times_->outside_motions_us += us;
     return v;
   }
 
@@ -163,13 +157,17 @@ class TimedMotions : public ob::MotionValidator {
       : ob::MotionValidator(si), inner_(std::move(inner)), times_(times) {}
   bool checkMotion(const ob::State* a, const ob::State* b) const override {
     const double t0 = now_us();
+    ++motion_depth;
     const bool v = inner_->checkMotion(a, b);
+    --motion_depth;
     times_->motions.push_back(now_us() - t0);
     return v;
   }
   bool checkMotion(const ob::State* a, const ob::State* b, std::pair<ob::State*, double>& last) const override {
     const double t0 = now_us();
+    ++motion_depth;
     const bool v = inner_->checkMotion(a, b, last);
+    --motion_depth;
     times_->motions.push_back(now_us() - t0);
     return v;
   }
@@ -218,25 +216,58 @@ bool near_goal(const SceneChecker& scene, std::vector<double>& goal, const std::
   return exact_clearance(scene.checker(), lo.data(), scene.environment()) < 0.005;
 }
 
-Problem make_problem(const SceneChecker& scene, int index, std::mt19937_64& rng, const planning::JointGroup& group,
-                     const std::vector<int>& arm, const std::vector<double>& base) {
+// Where a problem's states come from: the group's variables, the rest at `base`, and a point
+// goals are drawn towards (the tip link's origin nearest it) when the scene has one.
+struct ProblemSpace {
+  const planning::JointGroup& group;
+  std::vector<int> arm;      // the group's variables in the full state
+  std::vector<double> base;  // the full state's other values
+  std::optional<Vec3> target;
+  int tip = -1;              // link index
+};
+
+// A goal near the target when there is one (the nearest of 200 free draws, preferring those the
+// straight motion from the start cannot reach), else a free draw the straight motion cannot reach
+// when one is found.
+std::vector<double> pick_goal(const SceneChecker& scene, const ProblemSpace& space, const std::vector<double>& start,
+                              const std::function<std::vector<double>()>& free_state) {
+  std::vector<double> best;
+  double best_score = std::numeric_limits<double>::infinity();
+  std::vector<Transform> poses;
+  for (int tries = 0; tries < 200; ++tries) {
+    std::vector<double> q = free_state();
+    const bool needs_planning = !scene.check_motion(start.data(), q.data()).valid;
+    if (!space.target) {
+      if (needs_planning || tries == 199) return q;
+      continue;
+    }
+    forward_kinematics(scene.checker().model(), q.data(), poses);
+    const double score = (poses[space.tip].t - *space.target).norm() + (needs_planning ? 0.0 : 10.0);
+    if (score < best_score) best_score = score, best = std::move(q);
+  }
+  return best;
+}
+
+Problem make_problem(const SceneChecker& scene, int index, std::mt19937_64& rng, const ProblemSpace& space) {
   Problem p;
   p.scene = index;
   auto free_state = [&] {
-    for (;;) {
-      std::vector<double> q = with_arm(base, arm, rng, group);
+    for (int tries = 0; tries < 1000000; ++tries) {
+      std::vector<double> q = with_arm(space.base, space.arm, rng, space.group);
       if (!scene.collides(q.data())) return q;
     }
+    throw std::runtime_error("no free state in a million draws: the robot's base state collides");
   };
   p.start = free_state();
-  // A goal the straight motion cannot reach (planning is needed) when one is found.
-  for (int tries = 0; tries < 200; ++tries) {
-    p.goal = free_state();
-    if (!scene.check_motion(p.start.data(), p.goal.data()).valid) break;
-  }
+  p.goal = pick_goal(scene, space, p.start, free_state);
   if (index % 3 == 2) {
     for (int tries = 0; tries < 50 && !p.near; ++tries) {
-      std::vector<double> goal = p.goal, c = with_arm(base, arm, rng, group);
+      // A colliding state near the goal (within 0.4 rad a joint), the goal moved towards it.
+      std::vector<double> goal = p.goal, c = p.goal;
+      for (std::size_t i = 0; i < space.arm.size(); ++i) {
+        double& v = c[space.arm[i]];
+        v = std::clamp(v + std::uniform_real_distribution<double>(-0.4, 0.4)(rng), space.group.lower[i], space.group.upper[i]);
+      }
       if (!scene.collides(c.data())) continue;
       if (near_goal(scene, goal, c)) p.goal = goal, p.near = true;
     }
@@ -249,7 +280,7 @@ Problem make_problem(const SceneChecker& scene, int index, std::mt19937_64& rng,
 
 struct Run {
   bool solved = false;
-  double seconds = 0.0;
+  double seconds = 0.0, simplify_seconds = 0.0;
   std::vector<std::vector<double>> path;  // full states
 };
 
@@ -270,7 +301,11 @@ Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout,
   // that wakes every millisecond, and its join took 1.0 ms of the median plan (3.5 ms at 10 mm,
   // when 0.3 ms were checks), whatever the checker.
   run.solved = setup.solve(ob::timedPlannerTerminationCondition(limit)) == ob::PlannerStatus::EXACT_SOLUTION;
-  if (run.solved) setup.simplifySolution();
+  if (run.solved) {
+    const auto s0 = std::chrono::steady_clock::now();
+    setup.simplifySolution();
+    run.simplify_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
+  }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!run.solved) return run;
   const og::PathGeometric& path = setup.getSolutionPath();
@@ -280,7 +315,7 @@ Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout,
 
 // Does any segment collide: by conservative advancement with exact distances (test/advancement_oracle.h,
 // written apart from the engine that planned), and by FCL every 1e-3 rad?
-std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& checker, const Environment& env, FclPanda& fcl) {
+std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& checker, const Environment& env, FclRobot& fcl) {
   bool ours = false, theirs = false;
   for (std::size_t w = 0; w + 1 < run.path.size(); ++w) {
     const std::vector<double>& a = run.path[w];
@@ -305,12 +340,15 @@ struct Tally {
   int solved = 0, ours_colliding = 0, fcl_colliding = 0;
   std::vector<double> seconds;  // every problem (an unsolved one at the limit)
   CallTimes calls;
+  double planning_seconds = 0.0, simplify_seconds = 0.0;  // summed over every problem as run
 };
 
 // A run's figures into its checker's tally: its time (an unsolved one at the limit) and, solved,
 // whether its path collides by either re-check.
-void record(Tally& tally, const Run& run, double limit, const CollisionChecker& checker, const Environment& env, FclPanda& fcl) {
+void record(Tally& tally, const Run& run, double limit, const CollisionChecker& checker, const Environment& env, FclRobot& fcl) {
   tally.seconds.push_back(run.solved ? run.seconds : limit);
+  tally.planning_seconds += run.seconds;
+  tally.simplify_seconds += run.simplify_seconds;
   if (!run.solved) return;
   ++tally.solved;
   const auto [ours, theirs] = path_collides(run, checker, env, fcl);
@@ -320,7 +358,7 @@ void record(Tally& tally, const Run& run, double limit, const CollisionChecker& 
 
 // One problem planned by one of our configurations (tolerance 0 or 10 mm).
 void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
-               const planning::JointGroup& group, const Problem& p, double tolerance, double limit, FclPanda& fcl) {
+               const planning::JointGroup& group, const Problem& p, double tolerance, double limit, FclRobot& fcl) {
   auto context = std::make_shared<planning::CheckerPlanningContext>(checker, env, group, p.start);
   context->tolerance = tolerance;
   context->scene();  // the object grid: built before the clock starts, as FCL's tree is
@@ -347,7 +385,7 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
 }
 
 void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
-              const planning::JointGroup& group, const Problem& p, double limit, FclPanda& fcl) {
+              const planning::JointGroup& group, const Problem& p, double limit, FclRobot& fcl) {
   // The context only lays out states (group values into the full state); FCL answers.
   auto layout = std::make_shared<planning::CheckerPlanningContext>(checker, env, group, p.start);
   og::SimpleSetup setup(group.make_space());
@@ -365,38 +403,122 @@ void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_p
   record(tally, run, limit, checker, *env, fcl);
 }
 
-void write_problems(const std::string& dir, const std::vector<Problem>& problems, std::uint64_t seed) {
-  std::filesystem::create_directories(dir);
-  nlohmann::json out = nlohmann::json::array();
-  for (const Problem& p : problems) {
-    std::ofstream scene(dir + "/panda_scene_" + std::to_string(p.scene) + ".scene");
-    write_scene_text(test::generate_scene(seed, p.scene), scene);
-    out.push_back({{"scene", "panda_scene_" + std::to_string(p.scene) + ".scene"}, {"start", p.start}, {"goal", p.goal},
-                   {"goal_within_5mm", p.near}, {"goal_clearance", p.goal_clearance}});
-  }
-  std::ofstream(dir + "/problems.json") << out.dump(1) << "\n";
+// Where a checker's plan time went, over all its problems: inside its validity calls (our
+// checks with the adapter's state layout, or FCL's), in OMPL's simplifier, and the rest (OMPL's
+// own sampling, nearest neighbours and bookkeeping).
+struct TimeShares {
+  double checks = 0.0, simplifier = 0.0;  // fractions of the plan time
+};
+TimeShares time_shares(const Tally& t) {
+  double in_calls = t.calls.outside_motions_us;
+  for (const double us : t.calls.motions) in_calls += us;
+  if (!(t.planning_seconds > 0)) return {};
+  return {1e-6 * in_calls / t.planning_seconds, t.simplify_seconds / t.planning_seconds};
 }
 
-void report(const std::string& out_dir, const std::vector<Tally>& tallies, std::size_t problems, std::size_t near,
-            double limit, double build_seconds) {
-  Table table("planning", "Planning with RRTConnect on panda among generated MoveIt-style scenes",
-              {"checker", "solved", "median plan ms", "p95 plan ms", "per state check us (median)",
-               "per motion check us (median)", "paths colliding (our exact certified re-check)",
-               "paths colliding (FCL every 1e-3 rad)"});
-  for (const Tally& t : tallies) {
-    table.row({t.name, static_cast<double>(t.solved), 1e3 * bench::median(t.seconds), 1e3 * bench::percentile(t.seconds, 0.95),
-               bench::median(t.calls.states), bench::median(t.calls.motions), static_cast<double>(t.ours_colliding),
-               static_cast<double>(t.fcl_colliding)});
+struct RobotRun {
+  std::string robot;
+  std::size_t joints = 0, problems = 0, near = 0;
+  double build_seconds = 0.0;
+  std::vector<Tally> tallies;
+};
+
+void report(const std::string& out_dir, const std::vector<RobotRun>& runs, double limit) {
+  Table table("planning", "Planning with RRTConnect among generated MoveIt-style scenes, per robot",
+              {"robot", "checker", "problems", "solved", "median plan ms", "p95 plan ms", "median plan / FCL's",
+               "per state check us (median)", "per motion check us (median)", "paths colliding (our exact certified re-check)",
+               "paths colliding (FCL every 1e-3 rad)", "time in checks %", "time in simplifier %"});
+  std::string robots;
+  for (const RobotRun& r : runs) {
+    const double fcl_median = bench::median(r.tallies[2].seconds);
+    for (const Tally& t : r.tallies) {
+      if (t.seconds.empty()) continue;  // a row left out (BENCH_PLANNING_CHECKERS)
+      const TimeShares shares = time_shares(t);
+      table.row({r.robot, t.name, static_cast<double>(r.problems), static_cast<double>(t.solved), 1e3 * bench::median(t.seconds),
+                 1e3 * bench::percentile(t.seconds, 0.95), fcl_median > 0 ? bench::median(t.seconds) / fcl_median : 0.0,
+                 bench::median(t.calls.states), bench::median(t.calls.motions), static_cast<double>(t.ours_colliding),
+                 static_cast<double>(t.fcl_colliding), 100.0 * shares.checks, 100.0 * shares.simplifier});
+    }
+    robots += (robots.empty() ? "" : "; ") + r.robot + ": " + std::to_string(r.joints) + " joints, " + std::to_string(r.problems) +
+              " problems (" + std::to_string(r.near) + " goals within 5 mm of an obstacle), proxy levels built or read in " +
+              bench::format(r.build_seconds) + " s";
   }
-  table.note(std::to_string(problems) + " problems (" + std::to_string(near) + " goals within 5 mm of an obstacle), one scene each "
-             "(20-60 boxes, cylinders and spheres: tables, shelves, open boxes, cages, clutter), panda's 7 arm joints, the SRDF's "
-             "allowed pairs; " + bench::format(limit) + " s a problem, then OMPL's path simplifier on the same validators; "
-             "plan times count unsolved problems at the limit. Per-check figures are medians over every call the planners made "
-             "(each call timed on its own). Ours: planning/ompl_validity.h (SceneChecker, certified motions), proxy levels "
-             "5, 10 and 20 mm (" + bench::format(build_seconds) + " s to build or read from the cache). FCL: BVHModel<OBBRSS> "
-             "links, primitive objects in a dynamic AABB tree, OMPL's DiscreteMotionValidator at 1 %. Scenes and problems: "
-             "build/bench/scenes (MoveIt .scene text, problems.json).");
+  table.note(robots + ". One scene a problem: panda's and ur5e's 20-60 boxes, cylinders and spheres (tables, shelves, open "
+             "boxes, cages, clutter; every other panda scene a shelf of thin boards, a dense cage of thin bars or a drawer, "
+             "the goal drawn inside it), pr2's a table with a cabinet between the arms, shelves on each side and clutter (the "
+             "goal drawn into one). The SRDF's allowed pairs; " + bench::format(limit) + " s a problem, then OMPL's path "
+             "simplifier on the same validators; plan times count unsolved problems at the limit. Per-check figures are "
+             "medians over every call the planners made (each call timed on its own); time in checks: the sum of those "
+             "calls (for ours the adapter's state layout included) over the plan time, the rest is OMPL's own work. Ours: "
+             "planning/ompl_validity.h (SceneChecker, certified motions), the node's proxy levels (pr2: 10 and 20 mm, its "
+             "sphere budget stops there). FCL: BVHModel<OBBRSS> link meshes and primitive URDF shapes, each checked pair "
+             "behind an AABB test, primitive objects in a dynamic AABB tree, OMPL's DiscreteMotionValidator at 1 %. Scenes "
+             "and problems: build/bench/scenes (MoveIt .scene text, problems.json).");
   table.write(out_dir);
+}
+
+// "pr2 torso + right arm" -> "pr2_torso_right_arm": for file names and BENCH_PLANNING_ROBOTS.
+std::string file_name(const std::string& robot) {
+  std::string out;
+  for (const char c : robot) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      out += c;
+    } else if (!out.empty() && out.back() != '_') {
+      out += '_';
+    }
+  }
+  return out;
+}
+
+// One robot's problems, planned by the three checkers; the scenes and problems written to `dir`.
+RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int count, double limit, std::uint64_t seed,
+                   nlohmann::json& written) {
+  RobotRun out;
+  out.robot = robot.name;
+  const CollisionChecker checker = load_robot(robot, out_dir + "/../proxy_cache", out.build_seconds);
+  const planning::JointGroup group = planning::JointGroup::of(checker.model(), robot.group);
+  out.joints = robot.group.size();
+  const auto& all = checker.model().variable_names();
+  std::vector<double> base(checker.model().variable_count(), 0.0);
+  for (const auto& [name, value] : robot.base) {
+    const auto at = std::find(all.begin(), all.end(), name);
+    if (at == all.end()) throw std::runtime_error(robot.name + ": no variable " + name);
+    base[static_cast<std::size_t>(at - all.begin())] = value;
+  }
+  ProblemSpace space{group, {}, base, std::nullopt, checker.model().link_index(robot.tip)};
+  if (space.tip < 0) throw std::runtime_error(robot.name + ": no link " + robot.tip);
+  for (const std::string& name : robot.group) space.arm.push_back(static_cast<int>(std::find(all.begin(), all.end(), name) - all.begin()));
+  const FclLinkModels fcl_models = fcl_link_models(checker.model());
+  std::mt19937_64 rng(seed);
+  out.tallies.resize(3);
+  out.tallies[0].name = "ours, exact (tolerance 0)";
+  out.tallies[1].name = "ours, 10 mm";
+  out.tallies[2].name = "FCL + discrete motions at 1 %";
+  const char* only = std::getenv("BENCH_PLANNING_CHECKERS");
+  const auto runs = [&](char row) { return only == nullptr || std::string(only).find(row) != std::string::npos; };
+  std::filesystem::create_directories(out_dir + "/scenes");
+  for (int k = 0; k < count; ++k) {
+    const test::PlanningScene scene = robot.scene(seed, k, space.target);
+    const auto env = std::make_shared<const Environment>(scene.environment());
+    const SceneChecker exact(checker, env);
+    const Problem p = make_problem(exact, k, rng, space);
+    out.near += p.near;
+    ++out.problems;
+    const std::string scene_file = file_name(robot.name) + "_scene_" + std::to_string(k) + ".scene";
+    std::ofstream text(out_dir + "/scenes/" + scene_file);
+    write_scene_text(scene, text);
+    written.push_back({{"robot", robot.name}, {"group", robot.group}, {"scene", scene_file}, {"start", p.start}, {"goal", p.goal},
+                       {"goal_within_5mm", p.near}, {"goal_clearance", p.goal_clearance}});
+    FclRobot fcl(checker, fcl_models, scene);
+    auto& t = out.tallies;
+    if (runs('0')) plan_ours(t[0], checker, env, group, p, 0.0, limit, fcl);
+    if (runs('1')) plan_ours(t[1], checker, env, group, p, 0.01, limit, fcl);
+    if (runs('2')) plan_fcl(t[2], checker, env, group, p, limit, fcl);
+    std::printf("%s problem %d (%zu shapes%s): solved %d/%d/%d so far\n", robot.name.c_str(), k, scene.shape_count(),
+                p.near ? ", goal near" : "", t[0].solved, t[1].solved, t[2].solved);
+    std::fflush(stdout);
+  }
+  return out;
 }
 
 }  // namespace
@@ -406,47 +528,20 @@ int main(int argc, char** argv) {
   using namespace bvh_collision;
   const std::string out_dir = bench::output_dir(argc, argv);
   const bool quick = bench::quick_mode(argc, argv);
-  const int count = quick ? 3 : 100;
+  const char* problems = std::getenv("BENCH_PLANNING_PROBLEMS");
+  const int count = problems != nullptr ? std::atoi(problems) : quick ? 1 : 100;
   const double limit = quick ? 2.0 : 10.0;
   const std::uint64_t seed = 2026;
   ompl::msg::setLogLevel(ompl::msg::LOG_ERROR);
   ompl::RNG::setSeed(1);
-  double build_seconds = 0.0;
-  const CollisionChecker checker = load_panda(out_dir + "/../proxy_cache", build_seconds);
-  const planning::JointGroup group = planning::JointGroup::of(checker.model(), kArm);
-  std::vector<int> arm;
-  for (const std::string& name : kArm) {
-    const auto& all = checker.model().variable_names();
-    arm.push_back(static_cast<int>(std::find(all.begin(), all.end(), name) - all.begin()));
+  const char* only = std::getenv("BENCH_PLANNING_ROBOTS");
+  std::vector<RobotRun> runs;
+  nlohmann::json written = nlohmann::json::array();
+  for (const PlanningRobot& robot : planning_robots()) {
+    if (only != nullptr && ("," + std::string(only) + ",").find("," + file_name(robot.name) + ",") == std::string::npos) continue;
+    runs.push_back(run_robot(robot, out_dir, count, limit, seed, written));
   }
-  std::vector<double> base(checker.model().variable_count(), 0.02);  // the fingers half open
-  const FclLinkModels fcl_models = fcl_link_models(checker.model());
-  std::mt19937_64 rng(seed);
-  std::vector<Problem> problems;
-  std::vector<Tally> tallies(3);
-  tallies[0].name = "ours, exact (tolerance 0)";
-  tallies[1].name = "ours, 10 mm";
-  tallies[2].name = "FCL + discrete motions at 1 %";
-  std::size_t near = 0;
-  // BENCH_PLANNING_CHECKERS=01 (say): only those rows (0 ours exact, 1 ours 10 mm, 2 FCL), to profile one.
-  const char* only = std::getenv("BENCH_PLANNING_CHECKERS");
-  const auto runs = [&](char row) { return only == nullptr || std::string(only).find(row) != std::string::npos; };
-  for (int k = 0; k < count; ++k) {
-    const test::PlanningScene scene = test::generate_scene(seed, k);
-    const auto env = std::make_shared<const Environment>(scene.environment());
-    const SceneChecker exact(checker, env);
-    const Problem p = make_problem(exact, k, rng, group, arm, base);
-    problems.push_back(p);
-    near += p.near;
-    FclPanda fcl(checker, fcl_models, scene);
-    if (runs('0')) plan_ours(tallies[0], checker, env, group, p, 0.0, limit, fcl);
-    if (runs('1')) plan_ours(tallies[1], checker, env, group, p, 0.01, limit, fcl);
-    if (runs('2')) plan_fcl(tallies[2], checker, env, group, p, limit, fcl);
-    std::printf("problem %d (%zu shapes%s): solved %d/%d/%d so far\n", k, scene.shape_count(), p.near ? ", goal near" : "",
-                tallies[0].solved, tallies[1].solved, tallies[2].solved);
-    std::fflush(stdout);
-  }
-  write_problems(out_dir + "/scenes", problems, seed);
-  report(out_dir, tallies, problems.size(), near, limit, build_seconds);
+  std::ofstream(out_dir + "/scenes/problems.json") << written.dump(1) << "\n";
+  report(out_dir, runs, limit);
   return 0;
 }
