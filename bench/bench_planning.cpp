@@ -19,7 +19,7 @@
 // MoveIt `.scene` text (build/bench/scenes) with the problems (problems.json).
 // BENCH_PLANNING_ROBOTS=panda,pr2_both_arms (say) plans only those robots; BENCH_PLANNING_PROBLEMS=N sets
 // the problems per robot; BENCH_PLANNING_CHECKERS=01 only those rows (0 ours exact, 1 ours 10 mm,
-// 2 FCL), to profile one.
+// 2 FCL), to profile one; BENCH_PLANNING_OMPL_SEED=N another seed for OMPL (1 by default).
 #include <fcl/fcl.h>
 
 #include <ompl/base/DiscreteMotionValidator.h>
@@ -533,7 +533,8 @@ int main(int argc, char** argv) {
   const double limit = quick ? 2.0 : 10.0;
   const std::uint64_t seed = 2026;
   ompl::msg::setLogLevel(ompl::msg::LOG_ERROR);
-  ompl::RNG::setSeed(1);
+  const char* ompl_seed = std::getenv("BENCH_PLANNING_OMPL_SEED");  // another draw of the planner's randomness
+  ompl::RNG::setSeed(ompl_seed != nullptr ? std::strtoul(ompl_seed, nullptr, 10) : 1);
   const char* only = std::getenv("BENCH_PLANNING_ROBOTS");
   std::vector<RobotRun> runs;
   nlohmann::json written = nlohmann::json::array();

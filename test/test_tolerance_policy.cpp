@@ -50,10 +50,10 @@ const Row kTable[] = {
     {Counterpart::kOctree, false, true, false, true, 0.01, 0.0, 0.0},
     {Counterpart::kLink, true, false, false, false, 0.01, 0.0, 0.0},
     {Counterpart::kOctree, true, false, false, true, 0.01, 0.0, 0.0},
-    // Certified motions: the coarsest level up to half the tolerance first.
-    {Counterpart::kLink, true, true, true, false, 0.01, 0.01, 0.005},
-    {Counterpart::kObject, true, true, true, false, 0.01, 0.02, 0.005},
-    {Counterpart::kOctree, true, true, true, true, 0.01, 0.02, 0.005},
+    // Certified motions: the levels down to the coarsest that decides, as a state's.
+    {Counterpart::kLink, true, true, true, false, 0.01, 0.01, 0.01},
+    {Counterpart::kObject, true, true, true, false, 0.01, 0.02, 0.02},
+    {Counterpart::kOctree, true, true, true, true, 0.01, 0.02, 0.02},
 };
 
 ToleranceQuestion question_of(const Row& r) {
@@ -74,8 +74,10 @@ TEST(TolerancePolicy, TheTable) {
 }
 
 // A certified motion's interval that still fails counts as colliding only when the level's error
-// (against a link, the larger) and twice the growth fit the tolerance: never at tolerance 0, and at
-// the level a motion prefers (half the tolerance) a growth up to a quarter of it.
+// (against a link, the larger) and twice the growth fit the tolerance: never at tolerance 0, at a
+// level of half the tolerance a growth up to a quarter of it, and at the level a motion walks down
+// to by default (the tolerance itself) no growth at all: there the tolerance answers the midpoints
+// only (a component clear of it at both ends).
 TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
   for (const double t : {0.0, 1e-4, 0.003, 0.01, 0.05}) {
     ToleranceQuestion q{t, Counterpart::kLink};
@@ -91,14 +93,17 @@ TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
       }
     }
     if (t > 0.0) {
-      EXPECT_TRUE(interval_within_tolerance(preferred, t / 4, t));
-      EXPECT_FALSE(interval_within_tolerance(preferred, t / 4 * (1 + 1e-9), t));
+      EXPECT_TRUE(interval_within_tolerance(t / 2, t / 4, t));
+      EXPECT_FALSE(interval_within_tolerance(t / 2, t / 4 * (1 + 1e-9), t));
+      EXPECT_EQ(preferred, t);
+      EXPECT_TRUE(interval_within_tolerance(preferred, 0.0, t));
+      EXPECT_FALSE(interval_within_tolerance(preferred, 1e-12, t));
     }
   }
 }
 
 // Every combination of the question at every tolerance class: a level allowed to decide errs by
-// at most the tolerance, and is the largest that does; a motion prefers a level that leaves half.
+// at most the tolerance, and is the largest that does; a motion walks down to the same level.
 TEST(TolerancePolicy, EveryLevelAllowedToDecideFitsTheTolerance) {
   int deciding = 0;
   for (const Counterpart other : {Counterpart::kLink, Counterpart::kObject, Counterpart::kOctree}) {
@@ -117,9 +122,7 @@ TEST(TolerancePolicy, EveryLevelAllowedToDecideFitsTheTolerance) {
         EXPECT_LE(proxy_error(use.decide_up_to, other), t);
         EXPECT_GT(proxy_error(use.decide_up_to * (1 + 1e-12), other), t) << "not the largest level that fits";
         EXPECT_LE(use.prefer_up_to, use.decide_up_to);
-        if (q.motion) {
-          EXPECT_LE(proxy_error(use.prefer_up_to, Counterpart::kLink), t / 2);
-        }
+        EXPECT_EQ(use.prefer_up_to, use.decide_up_to);
       }
     }
   }

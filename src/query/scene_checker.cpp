@@ -26,7 +26,7 @@ ProxyUse motion_use(double tolerance) {
 
 // The levels tests go through, coarsest first, down to the finest that serves `tolerance` as a
 // certified motion's (narrowphase/tolerance_policy.h; states use the same): at a tolerance the
-// coarsest level up to half of it (or up to it), exact: every level.
+// coarsest level up to it, exact: every level.
 std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
   const ProxyUse use = motion_use(tolerance);
   const ProxyLevel* finest = m.proxies_for(use.prefer_up_to);
@@ -55,8 +55,9 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
   proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
   proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
-  // (The policy's preferred level for a motion: the rest of the tolerance is the room a failing
-  // interval's growth needs before the tolerance may take it.)
+  // The tolerance answers a component's midpoint where it is clear of it at both ends (a level
+  // that fits decides there); a failing interval is taken as colliding only where the level leaves
+  // room for twice its growth (interval_within_tolerance: never at a level of the tolerance itself).
   tolerance_asked_ = !proxies_.empty() && level_ <= motion_use(options.tolerance).prefer_up_to;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {

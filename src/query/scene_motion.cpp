@@ -184,9 +184,9 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
 
 // At a tolerance, a motion may count as colliding where a component (a self pair, a link against
 // the environment) comes within the tolerance, unless that component already is at one of its
-// ends: a planner must be able to leave a state it accepted. (And only with a level of at most
-// half the tolerance: the rest is the room an interval's growth needs before the tolerance can
-// take the interval as colliding.) May the shortcut take component k on this motion? Asked only
+// ends: a planner must be able to leave a state it accepted. (A failing interval is taken as
+// colliding only where the finest level leaves room for twice its growth within the tolerance:
+// with a level below the tolerance; the midpoints are answered at the tolerance with any level.) May the shortcut take component k on this motion? Asked only
 // of components that fail somewhere, and answered once per motion: the proxies grown by the
 // tolerance at both ends (`ends`, posed) must prove it clear of the tolerance there.
 bool SceneChecker::tolerant_component(int k, Posed* ends) const {

@@ -25,8 +25,11 @@
 //   proxies' leaf test reads the field's occupancy grid).
 // - a certified motion (query/scene_checker.h, motion_check.cpp) grows each interval's proxies
 //   by how far the links move in it; an interval that still fails counts as colliding once growth
-//   and proxy error fit eps. So it prefers the coarsest level up to eps / 2 (the other half is the
-//   room the growth needs, which keeps the intervals near a contact long), else up to eps.
+//   and proxy error fit eps. It walks the levels down to the coarsest that decides (e <= eps, the
+//   same as a state). It used to stop at eps / 2, leaving the other half as room for the growth
+//   near a contact; walking one more, finer level cost more than that room saved: stopping at eps
+//   took ur5e's 10 mm plans 15-20 % less time (three seeds of bench_planning), the demo's certified
+//   sweep at 10 mm 318 us instead of 657 (at 20 mm 72 instead of 298), panda's plans the same.
 #pragma once
 
 namespace bvh_collision {
@@ -51,7 +54,7 @@ struct ToleranceQuestion {
 // 0: no level).
 struct ProxyUse {
   double decide_up_to = 0.0;  // a level e <= this may answer alone: its overlap counts as collision
-  double prefer_up_to = 0.0;  // a certified motion takes the coarsest level up to this first
+  double prefer_up_to = 0.0;  // a certified motion walks the levels down to the coarsest up to this
 };
 ProxyUse proxy_use(const ToleranceQuestion& question);
 

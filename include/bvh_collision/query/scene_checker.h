@@ -222,7 +222,7 @@ class SceneChecker {
   double level_ = 0.0;                       // the finest's
   bool proxies_decide_self_ = false;         // tolerance >= the finest level: overlap is an answer
   bool proxies_decide_objects_ = false;      // tolerance >= half of it
-  // A motion may take the tolerance's shortcut (a tolerance, with a level of at most half of it):
+  // A motion may take the tolerance's shortcuts (a tolerance, with a level that fits it):
   // then each component that fails is asked whether it is clear of the tolerance at both ends.
   bool tolerance_asked_ = false;
   std::shared_ptr<const OctreeDistanceField> field_;
