@@ -54,9 +54,12 @@ void RobotAccelerators::calibrate(const RobotCollisionModel& model, ProxyLevel& 
     for (std::size_t p = first_pair; p < pairs; ++p) level.pair_exact[p] = costs[p - first_pair].proxies_pay() ? 0 : 1;
   }
   level.exact_pairs.clear();
+  double proxied = 0.0, left = 0.0;  // the calibrated exact cost of the pairs either way
   for (std::size_t p = 0; p < pairs; ++p) {
     if (level.pair_exact[p]) level.exact_pairs.push_back(p);
+    if (p < level.pair_costs.size()) (level.pair_exact[p] ? left : proxied) += level.pair_costs[p].exact_seconds;
   }
+  level.lanes_pay = proxied >= left;
 }
 
 // From the cache when it holds this link's proxy at this level (its key covers every number of

@@ -268,7 +268,7 @@ std::vector<char> CollisionChecker::check_batch(const double* states, std::size_
       request.self ? a_->proxies_for(proxy_use({request.tolerance, Counterpart::kLink}).decide_up_to) : nullptr;
   // Self checks in the SIMD lanes, four states a step (model/proxy_batch.h); the environment
   // only for the states found free.
-  if (proxies != nullptr && !proxies->batch.empty()) {
+  if (proxies != nullptr && proxies->in_lanes()) {
     constexpr std::size_t kBlock = 16;
     ThreadPool::shared().for_each((count + kBlock - 1) / kBlock, 1, [&](std::size_t block) {
       const std::size_t begin = block * kBlock, n = std::min(kBlock, count - begin);

@@ -86,7 +86,7 @@ MotionResult motion_in_steps(const CollisionChecker& checker, Segment& segment, 
   const auto steps = static_cast<std::size_t>(needed);
   const ProxyLevel* proxies =
       request.self ? checker.accelerators().proxies_for(proxy_use({request.tolerance, Counterpart::kLink}).decide_up_to) : nullptr;
-  const bool lanes = proxies != nullptr && !proxies->batch.empty();
+  const bool lanes = proxies != nullptr && proxies->in_lanes();
   constexpr std::size_t kBlock = 16;
   const std::size_t n = checker.model().variable_count();
   std::vector<double> block(lanes ? kBlock * n : 0);

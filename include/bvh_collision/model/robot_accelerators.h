@@ -33,6 +33,11 @@ struct ProxyLevel {
   std::vector<std::size_t> exact_pairs;   // the same, as indices
   bool answers(std::size_t pair) const { return pair >= pair_exact.size() || pair_exact[pair] == 0; }
   ProxyBatch batch;  // the pairs the proxies answer, flat, for the vectorised batch kernel
+  // Whether batches take the SIMD lanes (then the exact pairs for the states found free): not
+  // when the pairs left to the exact test carried most of the calibrated exact cost, where the
+  // lanes would add their kinematics to a batch the exact test mostly answers anyway.
+  bool lanes_pay = true;
+  bool in_lanes() const { return lanes_pay && !batch.empty(); }
 };
 
 // RobotAccelerators::with_proxy_level stopped by its cancel flag.
