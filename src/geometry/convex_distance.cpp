@@ -241,13 +241,14 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
   }
   const Mat3 Rt = b_in_a.R.transpose();
   auto b_point = [&](int i) -> Vec3 { return b_in_a * b.vertices[i]; };
+  int last_a = -1, last_b = -1;  // each climb starts from the last support vertex
   auto support_a = [&](const Vec3& d) {
-    const int i = hull_support(a, d);
-    return SupportPoint{a.vertices[i], i};
+    last_a = hull_support(a, d, last_a);
+    return SupportPoint{a.vertices[last_a], last_a};
   };
   auto support_b = [&](const Vec3& d) {
-    const int i = hull_support(b, Rt * d);
-    return SupportPoint{b_point(i), i};
+    last_b = hull_support(b, Rt * d, last_b);
+    return SupportPoint{b_point(last_b), last_b};
   };
   const double scale = a.extent + b.extent + b_in_a.t.norm();
   const GjkEnd end = gjk(support_a, support_b, a.vertices[0] - b_point(0), scale,
@@ -279,7 +280,7 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
 namespace {
 
 // The set's support point in its own frame.
-SupportPoint own_support(const ConvexShape& s, const Vec3& d) {
+SupportPoint own_support(const ConvexShape& s, const Vec3& d, int from = -1) {
   switch (s.kind) {
     case ConvexShape::Kind::kPrimitive: return {support(s.primitive, d), -1};
     case ConvexShape::Kind::kTriangle: {
@@ -291,7 +292,7 @@ SupportPoint own_support(const ConvexShape& s, const Vec3& d) {
       return {s.triangle[best], best};
     }
     case ConvexShape::Kind::kHull: {
-      const int best = hull_support(*s.hull, d);
+      const int best = hull_support(*s.hull, d, from);
       return {s.hull->vertices[best], best};
     }
   }
@@ -410,13 +411,18 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
     return out;
   }
   const Mat3 Rt = b_in_a.R.transpose();
+  // (Each hull's climb starts from its last support vertex: GJK's directions turn a little a step.)
+  int last_a = -1, last_b = -1;
   auto support_a = [&](const Vec3& d) {
     ++out.support_queries;
-    return own_support(a, d);
+    const SupportPoint p = own_support(a, d, last_a);
+    last_a = p.index;
+    return p;
   };
   auto support_b = [&](const Vec3& d) {
     ++out.support_queries;
-    const SupportPoint p = own_support(b, Rt * d);
+    const SupportPoint p = own_support(b, Rt * d, last_b);
+    last_b = p.index;
     return SupportPoint{b_in_a * p.p, p.index};
   };
   const double scale = extent(a) + extent(b) + b_in_a.t.norm();

@@ -259,23 +259,69 @@ ConvexHull convex_hull(const std::vector<Vec3>& points) {
   return hull;
 }
 
-int hull_support(const ConvexHull& hull, const Vec3& d) {
+namespace {
+
+// A climb stalled at `at`: some neighbour is level with it within `rounding`. On a convex polytope
+// every vertex that is not furthest along d has an edge that truly rises, so a path of rising
+// edges leads from `at` to a furthest vertex, every vertex of it no lower than `at` (so computed
+// no lower than here - 2 rounding). The vertices reachable from `at` through such vertices hold
+// that path: the search spreads over them (a flat face, not the hull) and either meets a vertex
+// higher than `at` by more than the rounding, where the climb goes on (-1 and `at` moved), or
+// answers the highest it met, as high as the furthest of all within the rounding.
+int search_level(const ConvexHull& hull, const Vec3& d, int& at, double rounding, std::size_t* work) {
+  thread_local std::vector<std::uint32_t> seen;  // per vertex: the search that last met it
+  thread_local std::uint32_t search = 0;
+  thread_local std::vector<int> queue;
   const std::vector<Vec3>& v = hull.vertices;
-  auto every_vertex = [&] {
+  if (seen.size() < v.size()) seen.assign(v.size(), 0), search = 0;
+  if (++search == 0) std::fill(seen.begin(), seen.end(), 0), search = 1;
+  const double here = d.dot(v[at]);
+  queue.assign(1, at);
+  seen[at] = search;
+  int best = at;
+  double best_dot = here;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const int u = queue[q];
+    for (std::uint32_t k = hull.neighbour_start[u]; k < hull.neighbour_start[u + 1]; ++k) {
+      const std::uint32_t w = hull.neighbours[k];
+      if (seen[w] == search) continue;
+      seen[w] = search;
+      const double x = d.dot(v[w]);
+      if (work != nullptr) ++*work;
+      if (x > here + rounding) {
+        at = static_cast<int>(w);
+        return -1;
+      }
+      if (x < here - 2.0 * rounding) continue;
+      if (x > best_dot) best_dot = x, best = static_cast<int>(w);
+      queue.push_back(static_cast<int>(w));
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+int hull_support(const ConvexHull& hull, const Vec3& d, int from, std::size_t* work) {
+  const std::vector<Vec3>& v = hull.vertices;
+  if (v.size() < kClimbFrom || hull.neighbours.empty()) {
     int best = 0;
     double best_dot = -std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < v.size(); ++i) {
       if (const double x = d.dot(v[i]); x > best_dot) best_dot = x, best = static_cast<int>(i);
     }
+    if (work != nullptr) *work += v.size();
     return best;
-  };
-  if (v.size() < kClimbFrom || hull.neighbours.empty()) return every_vertex();
-  int at = hull.extremes[d.x() >= 0 ? 1 : 0];
-  for (const int e : {d.y() >= 0 ? hull.extremes[3] : hull.extremes[2], d.z() >= 0 ? hull.extremes[5] : hull.extremes[4]}) {
-    if (d.dot(v[e]) > d.dot(v[at])) at = e;
   }
-  // Each dot product is within 3 ulps of |d|_1 * extent of its value: a neighbour lower by more
-  // than this is truly lower.
+  int at = from;
+  if (at < 0 || static_cast<std::size_t>(at) >= v.size()) {
+    at = hull.extremes[d.x() >= 0 ? 1 : 0];
+    for (const int e : {d.y() >= 0 ? hull.extremes[3] : hull.extremes[2], d.z() >= 0 ? hull.extremes[5] : hull.extremes[4]}) {
+      if (d.dot(v[e]) > d.dot(v[at])) at = e;
+    }
+  }
+  // Each dot product is within 3 ulps of |d|_1 * extent of its value: a neighbour higher by more
+  // than this is truly higher.
   const double rounding = 1e-13 * d.cwiseAbs().sum() * hull.extent;
   for (;;) {
     const double here = d.dot(v[at]);
@@ -286,11 +332,13 @@ int hull_support(const ConvexHull& hull, const Vec3& d) {
       nearest = std::max(nearest, x);
       if (x > next_dot) next_dot = x, next = static_cast<int>(hull.neighbours[k]);
     }
+    if (work != nullptr) *work += hull.neighbour_start[at + 1] - hull.neighbour_start[at];
     if (next >= 0 && next_dot > here + rounding) {
       at = next;
       continue;
     }
-    return nearest < here - rounding ? at : every_vertex();
+    if (nearest < here - rounding) return at;
+    if (const int best = search_level(hull, d, at, rounding, work); best >= 0) return best;
   }
 }
 

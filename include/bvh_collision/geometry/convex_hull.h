@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -27,12 +28,14 @@ struct ConvexHull {
   bool empty() const { return vertices.empty(); }
 };
 
-// The index of a vertex furthest along d (the hull's support function, exactly the input's). A
-// large hull is climbed along its edges from the best of its axis extremes: on a convex polytope a
-// vertex that no edge rises from is furthest. A vertex is taken only when every neighbour is lower
-// by more than the dot products' rounding; otherwise (a face almost square to d, where a climb could
-// stall on a vertex inside a flat face) every vertex is tried.
-int hull_support(const ConvexHull& hull, const Vec3& d);
+// The index of a vertex furthest along d (the hull's support function, exactly the input's, up to
+// the dot products' rounding). A large hull is climbed along its edges from the best of its axis
+// extremes, or from `from` when that is a vertex index (the last answer, when d has turned a little
+// since, as GJK's directions do; a vertex as far whatever the start): on a convex polytope a vertex
+// that no edge rises from is furthest. Where a neighbour is level with the climb within the
+// rounding (a face almost square to d, where a climb could stall inside a flat face), the search
+// spreads over the level vertices, not the whole hull. `work`, when given, counts the dot products.
+int hull_support(const ConvexHull& hull, const Vec3& d, int from = -1, std::size_t* work = nullptr);
 
 // The hull of `points`. When the points span no volume (all coplanar), `vertices` holds every
 // distinct point (still a superset of the hull's vertices) and `faces` is empty.
