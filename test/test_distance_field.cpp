@@ -15,6 +15,8 @@
 #include "bvh_collision/robot/package_resolver.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/octree/distance_field.h"
+#include "bvh_collision/octree/scan.h"
+#include "bvh_collision/octree/voxel_set.h"
 #include "checker_fixtures.h"
 #include "robot_data.h"
 
@@ -217,6 +219,110 @@ TEST(OctreeDistanceField, TheEnvironmentKeepsItUntilTheOctreeChanges) {
   EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2, 1 << 24, false), nullptr);
   const auto c = env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2);
   EXPECT_EQ(env.octree_distance_field(Vec3::Constant(-0.5), Vec3::Constant(0.5), 0.2, 1 << 24, false), c);
+}
+
+// A field follows the voxels whose occupancy flipped exactly as a build of the new tree would:
+// voxels turned occupied and freed (in clusters, alone, inside the pruned block, which expands, and
+// outside the grid), over several rounds, each updated field equal to a build cell for cell. Small
+// rounds recompute blocks; large ones (a fifth of the occupied voxels freed) reach more than an
+// eighth of the grid and are built anew.
+TEST(OctreeDistanceField, AnUpdateFollowsTheFlippedVoxelsAsABuildWould) {
+  for (const std::uint64_t seed : {7u, 8u}) {
+    Octree tree = scene(seed);
+    const Vec3 lo = Vec3::Constant(-1.5), hi = Vec3::Constant(1.5);
+    const double cap = 0.2;
+    OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, cap);
+    std::mt19937_64 rng(seed + 40);
+    std::uniform_int_distribution<int> u(-20, 19), small(0, 3);
+    int by_blocks = 0, built = 0;
+    for (int round = 0; round < 8; ++round) {
+      const bool large = round % 2 == 1;
+      std::vector<OctreeKey> flipped;
+      VoxelSet add, free;
+      const int cx = 8 * (round - 4), cy = u(rng), cz = u(rng);
+      for (int i = 0; i < 40; ++i) add.insert(key_at(cx + small(rng), cy + small(rng), cz + small(rng)));
+      add.insert(key_at(400, 0, 0));  // outside the grid
+      free.insert(key_at(2 + round % 4, 3, 4));  // inside the pruned block
+      for (const Octree::Leaf& leaf : tree.leaves()) {
+        if (large && tree.occupied(leaf.log_odds) && std::uniform_int_distribution<int>(0, 4)(rng) == 0) free.insert(leaf.key);
+      }
+      if (large) {
+        for (int i = 0; i < 10; ++i) add.insert(key_at(u(rng), u(rng), u(rng)));
+      }
+      free.erase_all(add);
+      // A miss frees an occupied voxel in a few updates: each round repeats them.
+      for (int k = 0; k < 4; ++k) tree.update_sorted(free.sorted_keys(), false, &flipped);
+      tree.update_sorted(add.sorted_keys(), true, &flipped);
+      OctreeDistanceField::UpdateWork work;
+      field = field.updated(tree, flipped, &work);
+      ASSERT_TRUE(field.same_values(OctreeDistanceField::build(tree, lo, hi, cap))) << "seed " << seed << ", round " << round;
+      EXPECT_GT(work.flipped, 0u);
+      by_blocks += !work.rebuilt && work.blocks > 0;
+      built += work.rebuilt;
+    }
+    EXPECT_GE(by_blocks, 3);
+    EXPECT_GE(built, 1);
+  }
+}
+
+// The work of an update is bounded by the change, not the map: on a 3 m box at 2 cm (4.4 million
+// cells), one flipped voxel recomputes at most the blocks its reach touches (a 3 x 3 x 3 of 16^3
+// cells at this cap), a cluster of 500 about as many, and the cells read are their windows'.
+TEST(OctreeDistanceField, AnUpdateRecomputesTheBlocksTheChangeReachesNotTheMap) {
+  Octree tree(0.02);
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> u(-70, 69);
+  for (int i = 0; i < 3000; ++i) tree.update(key_at(u(rng), u(rng), u(rng)), true);
+  const Vec3 lo = Vec3::Constant(-1.5), hi = Vec3::Constant(1.5);
+  const double cap = 0.1;
+  const OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, cap);
+  ASSERT_GT(field.cells(), 4000000u);
+  std::vector<OctreeKey> one;
+  tree.update_sorted({key_at(5, 5, 5)}, true, &one);
+  ASSERT_EQ(one.size(), 1u);
+  OctreeDistanceField::UpdateWork work;
+  const OctreeDistanceField a = field.updated(tree, one, &work);
+  EXPECT_TRUE(a.same_values(OctreeDistanceField::build(tree, lo, hi, cap)));
+  // reach = ceil(sqrt(clamp)) = 8 voxels at this cap: 17 cells across, within 3 blocks a side.
+  EXPECT_LE(work.blocks, 27u);
+  EXPECT_LE(work.cells, 27u * 4096u);
+  EXPECT_LE(work.window_cells, 27u * 32u * 32u * 32u);
+  const OctreeDistanceField::UpdateWork for_one = work;
+  VoxelSet cluster;
+  for (int i = 0; i < 500; ++i) cluster.insert(key_at(30 + u(rng) % 8, -20 + u(rng) % 8, 10 + u(rng) % 8));
+  std::vector<OctreeKey> flipped;
+  tree.update_sorted(cluster.sorted_keys(), true, &flipped);
+  const OctreeDistanceField b = a.updated(tree, flipped, &work);
+  EXPECT_TRUE(b.same_values(OctreeDistanceField::build(tree, lo, hi, cap)));
+  EXPECT_LE(work.blocks, 64u);  // a 16-voxel cube of changes and its reach: 4 blocks a side at most
+  EXPECT_LT(work.cells * 10, field.cells());
+  std::printf("grid %zu cells; one voxel: %zu blocks, %zu cells written, %zu read; %zu voxels: %zu blocks, %zu written, %zu read\n",
+              field.cells(), for_one.blocks, for_one.cells, for_one.window_cells, work.flipped, work.blocks, work.cells,
+              work.window_cells);
+}
+
+// The environment's kept field follows a scan's flipped voxels (note_octree_changes): the field it
+// answers after each scan equals a build of the new tree; a note that does not start at the kept
+// field's revision (a change the note does not cover) is not followed but rebuilt.
+TEST(OctreeDistanceField, TheEnvironmentsFieldFollowsAScan) {
+  Environment env(0.05);
+  const Vec3 lo = Vec3::Constant(-0.5), hi = Vec3::Constant(0.5);
+  env.octree().update(key_at(3, 3, 3), true);
+  ASSERT_NE(env.octree_distance_field(lo, hi, 0.2), nullptr);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (int scan = 0; scan < 5; ++scan) {
+    std::vector<ScanPoint> points;
+    for (int i = 0; i < 200; ++i) points.emplace_back(u(rng), u(rng), 0.3 + 0.2 * u(rng));
+    const std::uint64_t from = env.octree().revision();
+    ScanStats stats = insert_scan(env.octree(), points, ScanPoint(0.0, 0.0, -0.8));
+    EXPECT_GT(stats.flipped.size(), 0u);
+    env.note_octree_changes(from, std::move(stats.flipped));
+    if (scan == 3) env.octree().update(key_at(-2, -2, -2), true);  // a change the note does not cover
+    const auto field = env.octree_distance_field(lo, hi, 0.2);
+    ASSERT_NE(field, nullptr);
+    EXPECT_TRUE(field->same_values(OctreeDistanceField::build(env.octree(), lo, hi, 0.2))) << "scan " << scan;
+  }
 }
 
 // Environment checks with the field answer as without it, state by state (at tolerance 0 the

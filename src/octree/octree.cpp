@@ -161,12 +161,12 @@ std::int32_t Octree::add_child(std::int32_t node, int b) {
   return slot;
 }
 
-void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
+void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change, std::vector<OctreeKey>* flipped) {
   if (keys.empty()) return;
   revision_ = next_revision();
   const bool created_root = empty();
   if (created_root) create_root();
-  update_range(0, created_root, keys.data(), keys.data() + keys.size(), 0, change);
+  update_range(0, created_root, keys.data(), keys.data() + keys.size(), 0, change, flipped);
 }
 
 // update_below for a run of keys that all lie in `node`. Applying the updates one after another
@@ -174,9 +174,13 @@ void Octree::update_sorted(const std::vector<OctreeKey>& keys, float change) {
 // children's final values, and OctoMap's early abort (the containing node already sits at the
 // clamp) skips exactly the keys it would skip one by one, since they all see the same node.
 void Octree::update_range(std::int32_t node, bool just_created, const OctreeKey* first, const OctreeKey* last,
-                          int depth, float change) {
+                          int depth, float change, std::vector<OctreeKey>* flipped) {
   if (depth == kOctreeDepth) {
+    // (A voxel just created was unknown, which counts as free; an expanded one holds the value of
+    // the pruned node it was part of.)
+    const bool was = !just_created && occupied(at(node).log_odds);
     set_value(node, clamped(at(node).log_odds + change));
+    if (flipped != nullptr && occupied(at(node).log_odds) != was) flipped->push_back(*first);
     return;
   }
   if (at(node).children < 0 && !just_created) {
@@ -189,7 +193,7 @@ void Octree::update_range(std::int32_t node, bool just_created, const OctreeKey*
     while (end != last && child_bits(*end, depth) == b) ++end;
     const bool created = !((at(node).mask >> b) & 1);
     const std::int32_t child = created ? add_child(node, b) : at(node).children + b;
-    update_range(child, created, first, end, depth + 1, change);
+    update_range(child, created, first, end, depth + 1, change, flipped);
     first = end;
   }
   if (!prune(node)) refresh(node);

@@ -443,8 +443,9 @@ ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const 
   // A voxel that ends a ray is occupied, not also freed. Free updates go first, as in OctoMap.
   scan.free.erase_all(scan.occupied);
   const std::vector<OctreeKey> free = scan.free.sorted_keys(), occupied = scan.occupied.sorted_keys();
-  tree.update_sorted(free, false);
-  tree.update_sorted(occupied, true);
+  // (The two lists are disjoint: a voxel flips at most once.)
+  tree.update_sorted(free, false, &scan.stats.flipped);
+  tree.update_sorted(occupied, true, &scan.stats.flipped);
   scan.stats.free = free.size();
   scan.stats.occupied = occupied.size();
   return scan.stats;
@@ -466,7 +467,7 @@ ScanStats insert_points(Octree& tree, const std::vector<ScanPoint>& points, cons
     }
   }
   const std::vector<OctreeKey> keys = occupied.sorted_keys();
-  tree.update_sorted(keys, true);
+  tree.update_sorted(keys, true, &stats.flipped);
   stats.occupied = keys.size();
   return stats;
 }

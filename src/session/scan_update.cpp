@@ -22,7 +22,10 @@ ScanUpdateResult update_scan(EnvironmentStore& store, const RobotCheckers& check
   }
   ScanUpdateResult result;
   result.stats = store.modify([&](Environment& env) {
-    return insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options.scan);
+    const std::uint64_t from = env.octree().revision();
+    ScanStats stats = insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options.scan);
+    env.note_octree_changes(from, std::move(stats.flipped));  // the kept distance field follows them
+    return stats;
   });
   // The new map's distance field, here rather than in the first query.
   if (options.distance_field) checkers.current()->prepare_distance_field(*store.snapshot(), root);

@@ -109,7 +109,8 @@ Environment::Environment(const Environment& other)
       objects_(other.objects_),
       allowed_(other.allowed_),
       attached_(other.attached_),
-      field_(std::atomic_load(&other.field_)) {}
+      field_(std::atomic_load(&other.field_)),
+      changes_(other.changes_) {}
 
 Environment& Environment::operator=(const Environment& other) {
   if (this == &other) return *this;
@@ -118,7 +119,12 @@ Environment& Environment::operator=(const Environment& other) {
   allowed_ = other.allowed_;
   attached_ = other.attached_;
   std::atomic_store(&field_, std::atomic_load(&other.field_));
+  changes_ = other.changes_;
   return *this;
+}
+
+void Environment::note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped) {
+  changes_ = std::make_shared<const OctreeChanges>(OctreeChanges{from, octree_.revision(), std::move(flipped)});
 }
 
 std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
@@ -131,11 +137,18 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
   if (!build) return nullptr;
   auto fresh = std::make_shared<FieldCache>();
   fresh->revision = octree_.revision();
-  fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
-  try {
-    fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
-  } catch (const std::invalid_argument&) {
-    return nullptr;  // too large a box at this resolution (or not finite): no field
+  const bool follows = kept && changes_ && kept->revision == changes_->from && changes_->to == octree_.revision() &&
+                       kept->cap >= cap && (kept->lo.array() <= lo.array()).all() && (kept->hi.array() >= hi.array()).all();
+  if (follows) {  // the kept field, its box and cap, updated for the voxels that flipped since
+    fresh->lo = kept->lo, fresh->hi = kept->hi, fresh->cap = kept->cap;
+    fresh->field = kept->field.updated(octree_, changes_->flipped);
+  } else {
+    fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
+    try {
+      fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
+    } catch (const std::invalid_argument&) {
+      return nullptr;  // too large a box at this resolution (or not finite): no field
+    }
   }
   std::shared_ptr<const FieldCache> out = std::move(fresh);
   std::atomic_store(&field_, out);

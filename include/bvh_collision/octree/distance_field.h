@@ -43,6 +43,26 @@ class OctreeDistanceField {
   // whenever it meets one. Empty when the ball's voxels are not all in the grid.
   std::optional<bool> ball_meets_occupied(const Vec3& centre, double radius) const;
 
+  // The field of `tree` when this one is the field of a tree that differs from it only in the
+  // occupancy of the voxels `flipped` (Octree::update_sorted's, ScanStats::flipped; duplicates and
+  // voxels outside the grid allowed): the same box and cap, every value equal to a build's. Only
+  // the blocks of 16^3 voxels that a flipped voxel can reach (within the cap's squared distance,
+  // past which every value reads as the cap) are recomputed, each from the occupancy of a window
+  // reaching that far around it: the work grows with the change, not with the map, until those
+  // blocks are an eighth of the grid, where a build costs less and is done instead
+  // (docs/performance.md, "A live world"). The counts of the work into `work` when given.
+  struct UpdateWork {
+    std::size_t flipped = 0;        // flipped voxels inside the grid
+    std::size_t blocks = 0;         // blocks recomputed
+    std::size_t cells = 0;          // their cells (written)
+    std::size_t window_cells = 0;   // cells read: the blocks' windows
+    bool rebuilt = false;           // the blocks were more than an eighth of the grid: built anew
+  };
+  OctreeDistanceField updated(const Octree& tree, const std::vector<OctreeKey>& flipped, UpdateWork* work = nullptr) const;
+
+  // Equal grids and bounds (a test's comparison of an updated field with a build).
+  bool same_values(const OctreeDistanceField& other) const;
+
   double cap() const { return cap_; }
   std::size_t cells() const { return squared_.size(); }
   std::size_t memory_bytes() const { return squared_.capacity() * sizeof(std::uint32_t); }
@@ -52,7 +72,11 @@ class OctreeDistanceField {
   std::vector<double> bound_of_squared_;  // the bound for each D whose bound is below the cap
   std::int64_t inner_lo_[3] = {0, 0, 0}, inner_hi_[3] = {-1, -1, -1};  // the box's voxels
   std::int64_t grid_lo_[3] = {0, 0, 0}, size_[3] = {0, 0, 0};          // the box and the cap
-  std::vector<std::uint32_t> squared_;  // per grid voxel, D (kFar: no occupied voxel in the grid)
+  // per grid voxel, D, at most the first D whose bound is the cap (bound_of_squared_.size() - 1):
+  // every larger one reads as the cap, and an update recomputes only what the cap can reach
+  std::vector<std::uint32_t> squared_;
+  std::int64_t index(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * size_[1] + y) * size_[2] + z; }
+  void recompute_block(const std::int64_t lo[3], const std::int64_t hi[3], std::int64_t reach, UpdateWork& work);
 };
 
 }  // namespace bvh_collision

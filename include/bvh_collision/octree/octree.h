@@ -52,10 +52,11 @@ class Octree {
   void update(const OctreeKey& key, bool occupied) { update(key, occupied ? model_.hit : model_.miss); }
 
   // The same as update(key, change) for each key in turn, in one descent: keys must be distinct
-  // and in depth-first order (VoxelSet::sorted_keys, or sorted by morton_code).
-  void update_sorted(const std::vector<OctreeKey>& keys, float change);
-  void update_sorted(const std::vector<OctreeKey>& keys, bool occupied) {
-    update_sorted(keys, occupied ? model_.hit : model_.miss);
+  // and in depth-first order (VoxelSet::sorted_keys, or sorted by morton_code). `flipped`, when
+  // given, gets the keys whose occupancy changed (what a distance field must follow).
+  void update_sorted(const std::vector<OctreeKey>& keys, float change, std::vector<OctreeKey>* flipped = nullptr);
+  void update_sorted(const std::vector<OctreeKey>& keys, bool occupied, std::vector<OctreeKey>* flipped = nullptr) {
+    update_sorted(keys, occupied ? model_.hit : model_.miss, flipped);
   }
 
   // The smallest existing node containing the voxel: its depth (16 = voxel), seed index and
@@ -163,7 +164,7 @@ class Octree {
   void refresh(std::int32_t node);
   void update_below(std::int32_t node, bool just_created, const OctreeKey& key, int depth, float change);
   void update_range(std::int32_t node, bool just_created, const OctreeKey* first, const OctreeKey* last, int depth,
-                    float change);
+                    float change, std::vector<OctreeKey>* flipped);
   bool at_clamp(float value, float change) const {
     return (change >= 0 && value >= model_.clamp_max) || (change <= 0 && value <= model_.clamp_min);
   }

@@ -58,6 +58,9 @@ struct ScanStats {
   std::size_t occupied = 0;           // voxels updated as occupied
   std::size_t free = 0;               // voxels updated as free
   bool bitmap = false;                // crossed voxels marked in a bitmap of the scan's box (max_dense_voxels)
+  // The voxels whose occupancy the scan changed (free or unknown to occupied, or back), each once:
+  // what a kept distance field follows (OctreeDistanceField::updated).
+  std::vector<OctreeKey> flipped;
 };
 
 // One scan, as octomap::OcTree::insertPointCloud (with setBBXMin/Max and useBBXLimit when a

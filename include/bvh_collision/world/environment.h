@@ -165,9 +165,15 @@ class Environment {
   // cap it does not cover is asked for; null when that would take more than `max_cells` cells.
   // Safe to call from several threads on one environment (two may build it; one is kept).
   // With build = false, only a field already kept (else null).
+  // A field kept for an earlier revision is updated, not rebuilt, when the octree changed from it
+  // only by the voxels note_octree_changes was told of.
   std::shared_ptr<const OctreeDistanceField> octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
                                                                    std::size_t max_cells = std::size_t(1) << 24,
                                                                    bool build = true) const;
+
+  // The octree went from revision `from` to its current one by flipping the occupancy of `flipped`
+  // (a scan's ScanStats::flipped) and nothing else: a distance field kept for `from` follows them.
+  void note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped);
 
  private:
   struct FieldCache {
@@ -181,6 +187,11 @@ class Environment {
   std::shared_ptr<const NamedAllowedCollisions> allowed_ = std::make_shared<const NamedAllowedCollisions>();
   std::shared_ptr<const std::vector<AttachedBody>> attached_ = std::make_shared<const std::vector<AttachedBody>>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
+  struct OctreeChanges {
+    std::uint64_t from = 0, to = 0;
+    std::vector<OctreeKey> flipped;
+  };
+  std::shared_ptr<const OctreeChanges> changes_;  // the last note_octree_changes (copies share it)
 };
 
 }  // namespace bvh_collision
