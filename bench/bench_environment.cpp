@@ -509,6 +509,7 @@ int main(int argc, char** argv) {
     speed_error_octree_table(scan, camera, test::load_checker("panda", levels), states, sizes, dir);
   }
   motion_table(sizes, dir);
+  live_world_table(sizes, dir);
   clutter_table(checker, states, sizes, dir);
   voxel_error_table(checker, sizes, dir);
   workspace_table(scan, camera, checker, states, sizes, dir);

@@ -18,16 +18,7 @@ using bench::Table;
 // certified (the interval engine) and at a fixed 0.02 rad step: the demo's sweep (joint1
 // from -0.6 to 1.6 rad, joint2 at 1.0) and random motions, per tolerance, with the states each
 // checked. At a tolerance a proxy level fits, fixed-step self checks run in the SIMD lanes.
-void motion_table(const Sizes& sizes, const std::string& dir) {
-  Table table("motion_speed_error", "Motions against tolerance: the demo arm and its pillar",
-              {"motions", "kind", "tolerance_mm", "us_per_motion", "states_per_motion", "colliding motions"});
-  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
-                                           PackageResolver({}));
-  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
-  CheckerOptions options;
-  options.proxy_levels = sizes.proxy_levels;
-  const CollisionChecker checker(std::move(model), std::move(acm), options);
-  Environment env(0.02);
+std::vector<ScanPoint> demo_pillar() {
   std::vector<ScanPoint> pillar;
   const Vec3 lo(0.39, 0.29, 0.0), hi(0.51, 0.41, 0.8);
   for (double x = lo.x(); x <= hi.x() + 1e-9; x += 0.01) {
@@ -39,7 +30,24 @@ void motion_table(const Sizes& sizes, const std::string& dir) {
       }
     }
   }
-  insert_points(env.octree(), pillar);
+  return pillar;
+}
+
+CollisionChecker demo_checker(const std::vector<double>& proxy_levels) {
+  RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
+                                           PackageResolver({}));
+  AllowedCollisionMatrix acm = AllowedCollisionMatrix::adjacent_links(model);
+  CheckerOptions options;
+  options.proxy_levels = proxy_levels;
+  return CollisionChecker(std::move(model), std::move(acm), options);
+}
+
+void motion_table(const Sizes& sizes, const std::string& dir) {
+  Table table("motion_speed_error", "Motions against tolerance: the demo arm and its pillar",
+              {"motions", "kind", "tolerance_mm", "us_per_motion", "states_per_motion", "colliding motions"});
+  const CollisionChecker checker = demo_checker(sizes.proxy_levels);
+  Environment env(0.02);
+  insert_points(env.octree(), demo_pillar());
   checker.prepare_distance_field(env);  // as the node keeps it
   const std::size_t n = checker.model().variable_count();
   std::vector<std::pair<std::vector<double>, std::vector<double>>> sweep(1, {std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)});

@@ -1,7 +1,7 @@
 // What the environment benchmark's units share (bench_environment.cpp, the insertion, octree and
 // clutter tables; bench_environment_world.cpp, the self filter and the snapshots;
 // bench_environment_updates.cpp, the clearing and per-core insertion tables;
-// bench_environment_motions.cpp, the motion table):
+// bench_environment_motions.cpp, the motion table; bench_environment_live.cpp, the live world):
 // the run's sizes and the depth camera's table scene.
 #pragma once
 
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bvh_collision/octree/octree.h"
+#include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/octree/scan.h"
 
 namespace bvh_collision::environment_bench {
@@ -57,6 +58,11 @@ void clearing_table(bool quick, const std::string& dir);
 void insertion_cpu_table(bool quick, const std::string& dir);
 // Motions against tolerance on the demo arm and its pillar (bench_environment_motions.cpp).
 void motion_table(const Sizes& sizes, const std::string& dir);
+// The demo's pillar (the surface of a 12 x 12 x 80 cm box at 1 cm) and arm.
+std::vector<ScanPoint> demo_pillar();
+CollisionChecker demo_checker(const std::vector<double>& proxy_levels);
+// bench_environment_live.cpp: certified motions while clouds arrive (table live_world).
+void live_world_table(const Sizes& sizes, const std::string& dir);
 // "5, 10 and 20 mm": the proxy levels a table was measured with.
 std::string levels_mm(const std::vector<double>& levels);
 

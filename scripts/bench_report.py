@@ -159,6 +159,17 @@ def check_speed_error_costs(tables):
                               f"({fmt(r[col['us_per_state']])} us against at most {fmt(exact[key][col['us_per_state max']])} us exact)")
 
 
+def check_live_world(tables):
+    """Issue 58: with clouds at 30 Hz, certified motions keep 80 % of the static run's throughput
+    and at most twice its p99 latency (in-process rows of the live_world table)."""
+    t = need(tables, "live_world")
+    col = {c: t["columns"].index(c) for c in ("clouds Hz", "throughput / static", "p99 / static")}
+    for r in t["rows"]:
+        if r[col["clouds Hz"]] == 30 and (r[col["throughput / static"]] < 0.8 or r[col["p99 / static"]] > 2.0):
+            raise ReportError(f"live_world: at 30 Hz throughput {fmt(r[col['throughput / static']])} of the static run's "
+                              f"(at least 0.8) and p99 {fmt(r[col['p99 / static']])}x (at most 2)")
+
+
 def check_promises(tables):
     """The figures that must hold whatever the machine: raise on the first broken one."""
     for robot in ROBOTS:
@@ -445,6 +456,7 @@ def build_report(tables, bench_dir, quick):
     if not quick:  # single runs on small inputs: no spread to judge a time by
         check_tolerance_costs(tables)
         check_speed_error_costs(tables)
+        check_live_world(tables)
     out = ["# bvh_collision: speed against error", ""]
     when = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     out += [f"Measured {when} by `make bench` on: {machine(tables)}.", ""]
@@ -477,7 +489,7 @@ def build_report(tables, bench_dir, quick):
 
     out += ["## 4. Environment", "", f"![environment]({plot_environment(tables, plots_dir)})", ""]
     out += [markdown(need(tables, i)) for i in ["env_insert", "env_resolution", "env_clutter", "env_voxel_error",
-                                               "env_self_filter", "env_snapshots", "clearing", "insertion", "scene_scale"]]
+                                               "env_self_filter", "env_snapshots", "live_world", "clearing", "insertion", "scene_scale"]]
 
     out += ["## 5. Model only what the scene needs", "",
             "Time saved per query by each restriction, on the same states. Sampled never-colliding pairs are the only "

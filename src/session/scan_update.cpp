@@ -25,10 +25,11 @@ ScanUpdateResult update_scan(EnvironmentStore& store, const RobotCheckers& check
     const std::uint64_t from = env.octree().revision();
     ScanStats stats = insert_scan(env.octree(), filtered.obstacles, filtered.clear_only, origin, options.scan);
     env.note_octree_changes(from, std::move(stats.flipped));  // the kept distance field follows them
+    // The new map's distance field, here rather than in the first query, and before the snapshot
+    // is published: a query that meets the new snapshot finds it kept (the snapshot shares it).
+    if (options.distance_field) checkers.current()->prepare_distance_field(env, root);
     return stats;
   });
-  // The new map's distance field, here rather than in the first query.
-  if (options.distance_field) checkers.current()->prepare_distance_field(*store.snapshot(), root);
   result.on_robot = filtered.on_robot;
   result.shadowed = filtered.shadowed;
   result.on_objects = filtered.on_objects;
