@@ -73,7 +73,7 @@ TEST(EnvironmentStore, ReadersNeverSeeAHalfWrittenEnvironment) {
   EXPECT_EQ(went_back, 0);
   EXPECT_GT(reads, 100);
   EXPECT_EQ(generation_of(*store.snapshot()), 300);
-  EXPECT_EQ(store.version(), 300u);
+  EXPECT_EQ(store.version(), 301u);  // the initial snapshot is version 1
 }
 
 TEST(EnvironmentStore, AChangeThatThrowsLeavesNothingBehind) {
@@ -88,7 +88,7 @@ TEST(EnvironmentStore, AChangeThatThrowsLeavesNothingBehind) {
                }),
                std::invalid_argument);
   EXPECT_EQ(store.snapshot(), before) << "a failed change published a snapshot";
-  EXPECT_EQ(store.version(), 0u);
+  EXPECT_EQ(store.version(), 1u);
   // The working copy went back too: the next change starts from generation 0.
   const std::size_t objects = store.modify([](Environment& env) { return env.objects().size(); });
   EXPECT_EQ(objects, static_cast<std::size_t>(kObjects));
@@ -218,6 +218,57 @@ TEST(SharedSnapshots, ObjectChangesLeaveOtherCopiesAndShareHierarchies) {
   EXPECT_EQ(env.find_object("a")->pose.t.x(), 2.0);
   EXPECT_EQ(env.find_object("a")->mesh, copy.find_object("a")->mesh) << "moving an object rebuilt or copied its hierarchy";
   EXPECT_EQ(env.find_object("b"), nullptr);
+}
+
+// One world for one plan: a pinned version answers with the snapshot it pinned, its voxels
+// unchanged while scans change the current map; a use renews the pin, and one left unused past
+// its timeout, or released, is an error naming the setting. The clock is the test's own.
+TEST(PinnedVersions, AnswerTheWorldTheyPinnedUntilReleasedOrExpired) {
+  EnvironmentStore store{Environment(0.02)};
+  store.modify([](Environment& env) {  // a map of many pages: 8,000 voxels of a rough wall
+    for (int y = 0; y < 200; ++y) {
+      for (int z = 0; z < 40; ++z) env.octree().update(OctreeKey{{std::uint16_t(33000 + (y * z) % 3), std::uint16_t(32768 + y), std::uint16_t(32768 + z)}}, true);
+    }
+  });
+  const std::size_t voxels = store.snapshot()->octree().leaves().size();
+  using Clock = EnvironmentStore::Clock;
+  const Clock::time_point t0{};  // the test's clock
+  const auto timeout = std::chrono::seconds(2);
+  const EnvironmentStore::Pin pin = store.pin(timeout, t0);
+  EXPECT_EQ(pin.version, store.version());
+  const std::uint64_t revision = pin.snapshot->octree().revision();
+  for (int k = 1; k <= 20; ++k) {  // scans after the pin: the current map moves on
+    store.modify([&](Environment& env) { env.octree().update(OctreeKey{{std::uint16_t(32768 + k), 32768, 32768}}, true); });
+  }
+  EXPECT_GT(store.version(), pin.version);
+  // Used every second: each use renews it, past the first timeout.
+  for (int s = 1; s <= 5; ++s) {
+    const auto world = store.pinned(pin.version, t0 + std::chrono::seconds(s));
+    EXPECT_EQ(world, pin.snapshot);
+    EXPECT_EQ(world->octree().revision(), revision);
+    EXPECT_EQ(world->octree().leaves().size(), voxels);
+  }
+  EXPECT_EQ(store.pins(t0 + std::chrono::seconds(5)), 1u);
+  // What it holds beyond the current map: the pages the scans since have copied, not a map.
+  EXPECT_GT(store.pinned_extra_bytes(), 0u);
+  EXPECT_LT(store.pinned_extra_bytes() * 4, store.snapshot()->octree().memory_bytes());
+  // Unused for longer than the timeout: an error that names the setting.
+  try {
+    store.pinned(pin.version, t0 + std::chrono::seconds(8));
+    ADD_FAILURE() << "an expired pin answered";
+  } catch (const PinError& e) {
+    EXPECT_NE(std::string(e.what()).find("pin_timeout"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(store.pins(t0 + std::chrono::seconds(8)), 0u);
+  EXPECT_EQ(store.pinned_extra_bytes(), 0u);
+  // Released: gone at once; a version never pinned is the same error.
+  const EnvironmentStore::Pin again = store.pin(timeout, t0 + std::chrono::seconds(9));
+  EXPECT_EQ(again.snapshot, store.snapshot());
+  EXPECT_TRUE(store.release(again.version));
+  EXPECT_FALSE(store.release(again.version));
+  EXPECT_THROW(store.pinned(again.version, t0 + std::chrono::seconds(9)), PinError);
+  EXPECT_THROW(store.pinned(12345, t0), PinError);
+  EXPECT_THROW(store.pin(std::chrono::seconds(0), t0), std::invalid_argument);
 }
 
 TEST(CheckBatch, EqualsOneCheckPerState) {

@@ -4,9 +4,12 @@
 // and then publishes a fresh snapshot of it.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
@@ -25,11 +28,35 @@ class EnvironmentStore {
     return current_;
   }
 
-  // Publications so far: a reader can tell whether anything changed since it last looked.
+  // The world version: a reader can tell whether anything changed since it last looked. The
+  // initial snapshot is world version 1, the one the n-th publication made n + 1 (0 names none: a
+  // request that names no version asks the latest).
   std::uint64_t version() const {
     std::lock_guard<std::mutex> lock(pointer_mutex_);
     return version_;
   }
+
+  // ---- Pinned versions: one world for one plan ----
+  // A client that checks the states and motions of one plan against one world pins the current
+  // version and names it in each query; the store keeps that snapshot (sharing every octree page
+  // and object that did not change since) until it is released or `timeout` passes without a use.
+  // Times are given, not read, so that callers (and tests) own the clock.
+  using Clock = std::chrono::steady_clock;
+  struct Pin {
+    std::uint64_t version = 0;
+    std::shared_ptr<const Environment> snapshot;
+  };
+  Pin pin(Clock::duration timeout, Clock::time_point now);
+  // The pinned snapshot of `version`, its expiry renewed; throws PinError (naming `parameter`, the
+  // setting that bounds a pin's life) for a version never pinned, released or expired.
+  std::shared_ptr<const Environment> pinned(std::uint64_t version, Clock::time_point now,
+                                            const std::string& parameter = "pin_timeout");
+  // False when the version was not pinned (or had expired).
+  bool release(std::uint64_t version);
+  // Pins held (expired ones dropped at `now`), and the memory they hold beyond the current
+  // snapshot: the octree pages they do not share with it (copy on write: what changed since).
+  std::size_t pins(Clock::time_point now);
+  std::size_t pinned_extra_bytes() const;
 
   // Applies `change(Environment&)` to the working copy and publishes the result. When `change`
   // throws, the working copy goes back to the last snapshot and nothing is published: a bad
@@ -66,7 +93,20 @@ class EnvironmentStore {
   Environment working_;
   mutable std::mutex pointer_mutex_;  // guards current_ and version_
   std::shared_ptr<const Environment> current_;
-  std::uint64_t version_ = 0;
+  std::uint64_t version_ = 1;
+  struct Held {
+    std::shared_ptr<const Environment> snapshot;
+    Clock::duration timeout;
+    Clock::time_point expires;
+  };
+  mutable std::mutex pins_mutex_;  // guards pins_ (taken before pointer_mutex_, never after)
+  std::map<std::uint64_t, Held> pins_;
+  void drop_expired(Clock::time_point now);
+};
+
+// A query named a world version that is not (or no longer) pinned.
+struct PinError : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 }  // namespace bvh_collision

@@ -1,0 +1,68 @@
+// EnvironmentStore's pinned versions (world/environment_store.h).
+#include "bvh_collision/world/environment_store.h"
+
+#include <string>
+#include <vector>
+
+namespace bvh_collision {
+
+void EnvironmentStore::drop_expired(Clock::time_point now) {
+  for (auto it = pins_.begin(); it != pins_.end();) {
+    it = it->second.expires < now ? pins_.erase(it) : std::next(it);
+  }
+}
+
+EnvironmentStore::Pin EnvironmentStore::pin(Clock::duration timeout, Clock::time_point now) {
+  if (timeout <= Clock::duration::zero()) throw std::invalid_argument("a pin's timeout must be positive");
+  std::lock_guard<std::mutex> pins(pins_mutex_);
+  drop_expired(now);
+  Pin out;
+  {
+    std::lock_guard<std::mutex> lock(pointer_mutex_);
+    out = {version_, current_};
+  }
+  Held& held = pins_[out.version];  // pinned again: the same snapshot, the later expiry
+  held.snapshot = out.snapshot;
+  held.timeout = std::max(held.timeout, timeout);
+  held.expires = std::max(held.expires, now + timeout);
+  return out;
+}
+
+std::shared_ptr<const Environment> EnvironmentStore::pinned(std::uint64_t version, Clock::time_point now,
+                                                            const std::string& parameter) {
+  std::lock_guard<std::mutex> pins(pins_mutex_);
+  const auto it = pins_.find(version);
+  if (it == pins_.end() || it->second.expires < now) {
+    if (it != pins_.end()) pins_.erase(it);
+    throw PinError("world version " + std::to_string(version) + " is not pinned: it was never pinned, was released, or " +
+                   "went unused for longer than " + parameter + " allows");
+  }
+  it->second.expires = now + it->second.timeout;
+  return it->second.snapshot;
+}
+
+bool EnvironmentStore::release(std::uint64_t version) {
+  std::lock_guard<std::mutex> pins(pins_mutex_);
+  return pins_.erase(version) > 0;
+}
+
+std::size_t EnvironmentStore::pins(Clock::time_point now) {
+  std::lock_guard<std::mutex> pins(pins_mutex_);
+  drop_expired(now);
+  return pins_.size();
+}
+
+std::size_t EnvironmentStore::pinned_extra_bytes() const {
+  std::vector<const Octree*> trees;
+  std::shared_ptr<const Environment> current = snapshot();
+  {
+    std::lock_guard<std::mutex> pins(pins_mutex_);
+    if (pins_.empty()) return 0;
+    // (The snapshots stay alive while the lock is held: the map holds them.)
+    trees.push_back(&current->octree());
+    for (const auto& [version, held] : pins_) trees.push_back(&held.snapshot->octree());
+    return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes();
+  }
+}
+
+}  // namespace bvh_collision
