@@ -16,6 +16,8 @@
 
 #include "bvh_collision/ros/conversions.h"
 #include "bvh_collision/CheckMotions.h"
+#include "bvh_collision/CheckState.h"
+#include "bvh_collision/PinWorld.h"
 #include "bvh_collision/ros/service_validity.h"
 #include "node_test_client.h"
 
@@ -98,6 +100,7 @@ TEST(NodePlanning, RrtConnectThroughTheServicesAroundAnObstacleSeenOnlyAsACloud)
   bool straight_free = true;
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(60.0);  // an event's deadline
   while (straight_free && ros::WallTime::now() < deadline) {
+    service->new_plan();  // each poll asks the latest world (a plan pins one)
     straight_free = service->motion_valid(kStart.data(), kGoal.data(), &straight_fraction);
     if (straight_free) ros::WallDuration(0.1).sleep();
   }
@@ -137,6 +140,35 @@ TEST(NodePlanning, RrtConnectThroughTheServicesAroundAnObstacleSeenOnlyAsACloud)
   for (const bool free : service->states_valid(waypoints.data(), path.getStateCount())) {
     EXPECT_TRUE(free);
   }
+  // One world for the plan (issue 58): every call above, the re-checks too, was answered by the
+  // version the last poll pinned (the context throws otherwise), while the clouds that kept
+  // arriving made newer ones; that version's snapshot does not change under it (PinnedVersions).
+  const std::uint64_t pinned = service->world_version();
+  EXPECT_NE(pinned, 0u);
+  const ros::WallTime newer_deadline = ros::WallTime::now() + ros::WallDuration(60.0);
+  std::uint64_t latest = pinned;
+  while (latest == pinned && ros::WallTime::now() < newer_deadline) {
+    CheckState now;
+    now.request.state.name = arm.names;
+    now.request.state.position = kStart;
+    ASSERT_TRUE(ros::service::call("/collision_checker/check_state", now));
+    latest = now.response.world_version;
+    if (latest == pinned) ros::WallDuration(0.1).sleep();
+  }
+  EXPECT_GT(latest, pinned) << "clouds made newer worlds while the plan held its own";
+  EXPECT_TRUE(service->motion_valid(waypoints.data(), waypoints.data() + arm.size()));
+  EXPECT_EQ(service->world_version(), pinned);
+  PinWorld expired;  // a version never pinned is refused, naming the setting
+  expired.request.release = true;
+  expired.request.version = 987654321;
+  ASSERT_TRUE(ros::service::call("/collision_checker/pin_world", expired));
+  EXPECT_NE(expired.response.error.find("not pinned"), std::string::npos);
+  CheckState stale;
+  stale.request.state.name = arm.names;
+  stale.request.state.position = kStart;
+  stale.request.world_version = 987654321;
+  ASSERT_TRUE(ros::service::call("/collision_checker/check_state", stale));
+  EXPECT_NE(stale.response.error.find("pin_timeout"), std::string::npos) << stale.response.error;
 
   // check_motions: every segment and the straight motion in one call, each answered as
   // check_motion answers it (free segments; the straight motion colliding, free up to the same

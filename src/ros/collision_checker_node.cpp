@@ -20,7 +20,7 @@ namespace {
 const char* const kServices[] = {"check_state", "check_states", "check_motion", "check_motions", "cast_ray", "clear_environment",
                                  "clear_box", "set_collision_object", "remove_collision_object", "save_octree",
                                  "load_scene", "save_scene", "set_allowed_collisions", "attach_object",
-                                 "detach_object"};
+                                 "detach_object", "pin_world"};
 
 }  // namespace
 
@@ -174,6 +174,7 @@ void CollisionCheckerNode::advertise() {
   services_.push_back(private_nh_.advertiseService("check_motion", &CollisionCheckerNode::check_motion, this));
   services_.push_back(private_nh_.advertiseService("check_motions", &CollisionCheckerNode::check_motions, this));
   services_.push_back(private_nh_.advertiseService("cast_ray", &CollisionCheckerNode::cast_ray, this));
+  services_.push_back(private_nh_.advertiseService("pin_world", &CollisionCheckerNode::pin_world, this));
   services_.push_back(
       private_nh_.advertiseService("clear_environment", &CollisionCheckerNode::clear_environment, this));
   services_.push_back(private_nh_.advertiseService("clear_box", &CollisionCheckerNode::clear_box, this));

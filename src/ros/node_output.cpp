@@ -181,6 +181,8 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
       kv("octree memory (bytes)", std::to_string(env->octree().memory_bytes())),
       kv("octree resolution (m)", std::to_string(env->octree().resolution())),
       kv("collision objects", std::to_string(env->objects().size())),
+      kv("pinned world versions", std::to_string(store_->pins(std::chrono::steady_clock::now()))),
+      kv("pinned worlds' memory beyond the current map (bytes)", std::to_string(store_->pinned_extra_bytes())),
       kv("attached objects", std::to_string(env->attached().size())),
       kv("attached objects' proxy levels", env->attached().empty()            ? std::string("none attached")
                                            : checkers_->carried_levels_built(*env) ? std::string("built")

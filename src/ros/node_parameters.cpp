@@ -148,6 +148,7 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
   p.padding = read_number(nh, "padding", p.padding, false);
   read_link_padding(nh, p);
   p.tolerance = read_number(nh, "tolerance", p.tolerance, false);
+  p.pin_timeout = read_number(nh, "pin_timeout", p.pin_timeout, true);
   read_proxy_levels(nh, p);
   const char* ros_home = std::getenv("ROS_HOME");
   const char* home = std::getenv("HOME");

@@ -66,7 +66,8 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
   res.min_distance = kNaN;
   // One snapshot and the checker that carries its attached objects, for the whole answer (the
   // node may swap in another: a proxy level built, an object attached).
-  const std::shared_ptr<const Environment> env = store_->snapshot();
+  const EnvironmentStore::Pin world_answering = world(req.world_version);
+  const std::shared_ptr<const Environment>& env = world_answering.snapshot;
   const std::shared_ptr<const CollisionChecker> checker = checker_for(env);
   if (checks.self) self_part(*checker, state.data(), req, tolerance, root, res);
   if (checks.environment) environment_part(*checker, state.data(), *env, req, tolerance, root, res);
@@ -77,6 +78,7 @@ void CollisionCheckerNode::answer_check_state(const CheckState::Request& req, Ch
     }
   }
   res.valid = !res.self_collision && !res.environment_collision;
+  res.world_version = world_answering.version;
   ++states_checked_;
   res.warning = join_warnings(warnings);
   if (!res.contacts.empty()) publish_contacts(res.contacts);
@@ -193,12 +195,14 @@ bool CollisionCheckerNode::check_states(CheckStates::Request& req, CheckStates::
     request.environment = checks.environment;
     request.tolerance = tolerance;
     if (checks.environment) request.root_pose = root_pose(ros::Time(0));
-    const std::shared_ptr<const Environment> env = store_->snapshot();  // its attached objects count in self checks too
+    const EnvironmentStore::Pin answering = world(req.world_version);  // its attached objects count in self checks too
+    const std::shared_ptr<const Environment>& env = answering.snapshot;
     const std::vector<char> colliding =
         checker_for(env)->check_batch(states.data(), rows, checks.environment ? env.get() : nullptr, request);
     states_checked_ += rows;
     res.valid.resize(rows);
     for (std::size_t r = 0; r < rows; ++r) res.valid[r] = !colliding[r];
+    res.world_version = answering.version;
     res.warning = join_warnings(warnings, 4);
   });
 }
@@ -227,13 +231,15 @@ bool CollisionCheckerNode::check_motion(CheckMotion::Request& req, CheckMotion::
     request.resolution = req.resolution;
     request.tolerance = params_.tolerance;
     if (checks.environment) request.root_pose = root_pose(ros::Time(0));
-    const std::shared_ptr<const Environment> env = store_->snapshot();
+    const EnvironmentStore::Pin answering = world(req.world_version);
+    const std::shared_ptr<const Environment>& env = answering.snapshot;
     const MotionResult result = req.resolution > 0.0
         ? checker_for(env)->check_motion(start.data(), goal.data(), *env, request)
         : scene_checker(env, checks.self, checks.environment, request.root_pose)->check_motion(start.data(), goal.data(), true);
     res.valid = result.valid;
     res.last_valid_fraction = result.last_valid_fraction;
     res.states_checked = static_cast<std::uint32_t>(result.states_checked);
+    res.world_version = answering.version;
     states_checked_ += result.states_checked;
     if (!result.message.empty()) warnings.push_back(result.message);
     res.warning = join_warnings(warnings);
@@ -258,7 +264,8 @@ bool CollisionCheckerNode::check_motions(CheckMotions::Request& req, CheckMotion
     const std::vector<int> columns = joint_map_->columns(req.joint_names, warnings);
     const std::vector<double> base = current_state_for(columns);
     const Transform root = checks.environment ? root_pose(ros::Time(0)) : Transform::Identity();
-    const std::shared_ptr<const SceneChecker> scene = scene_checker(store_->snapshot(), checks.self, checks.environment, root);
+    const EnvironmentStore::Pin answering = world(req.world_version);
+    const std::shared_ptr<const SceneChecker> scene = scene_checker(answering.snapshot, checks.self, checks.environment, root);
     std::vector<double> start = base, goal = base;
     res.valid.resize(rows);
     res.last_valid_fraction.resize(rows);
@@ -273,8 +280,31 @@ bool CollisionCheckerNode::check_motions(CheckMotions::Request& req, CheckMotion
       if (!result.message.empty()) warnings.push_back("motion " + std::to_string(r) + ": " + result.message);
     }
     res.states_checked = static_cast<std::uint32_t>(std::min<std::size_t>(checked, UINT32_MAX));
+    res.world_version = answering.version;
     states_checked_ += checked;
     res.warning = join_warnings(warnings, 4);
+  });
+}
+
+EnvironmentStore::Pin CollisionCheckerNode::world(std::uint64_t version) {
+  if (version == 0) return store_->latest();
+  try {
+    return {version, store_->pinned(version, std::chrono::steady_clock::now(), "~pin_timeout (" + std::to_string(params_.pin_timeout) + " s)")};
+  } catch (const PinError& e) {
+    throw RequestError(std::string(e.what()) + "; pin one with pin_world");
+  }
+}
+
+bool CollisionCheckerNode::pin_world(PinWorld::Request& req, PinWorld::Response& res) {
+  return serve("pin_world", res, [&] {
+    res.timeout = params_.pin_timeout;
+    if (req.release) {
+      if (!store_->release(req.version)) throw RequestError("world version " + std::to_string(req.version) + " is not pinned");
+      res.version = req.version;
+      return;
+    }
+    const auto timeout = std::chrono::duration_cast<EnvironmentStore::Clock::duration>(std::chrono::duration<double>(params_.pin_timeout));
+    res.version = store_->pin(timeout, std::chrono::steady_clock::now()).version;
   });
 }
 

@@ -45,6 +45,7 @@
 #include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
+#include "bvh_collision/PinWorld.h"
 #include "bvh_collision/ClearBox.h"
 #include "bvh_collision/DetachObject.h"
 #include "bvh_collision/RemoveCollisionObject.h"
@@ -75,6 +76,9 @@ struct NodeParameters {
   double padding = 0.0;
   std::map<std::string, double> link_padding;
   double tolerance = 0.0;
+  // Seconds a world version pinned with pin_world lives without a use (then a query naming it is
+  // an error that names this parameter).
+  double pin_timeout = 60.0;
   // Bounded-error link proxy levels (m) (narrowphase/link_proxy.h), built after start-up on a thread
   // of their own, coarsest first, each put to use as it is done (until then queries at a
   // tolerance take the exact path, within the same contract). Finer levels are skipped once a
@@ -209,6 +213,10 @@ class CollisionCheckerNode {
     return checkers_->prepared(env, self, environment, root, params_.tolerance);
   }
   bool cast_ray(CastRay::Request& req, CastRay::Response& res);
+  bool pin_world(PinWorld::Request& req, PinWorld::Response& res);
+  // The world a query names: the latest (version 0) or a version pinned with pin_world (a
+  // RequestError naming ~pin_timeout when it is not, or no longer, pinned).
+  EnvironmentStore::Pin world(std::uint64_t version);
   void answer_check_state(const CheckState::Request& req, CheckState::Response& res);
   void self_part(const CollisionChecker& checker, const double* state, const CheckState::Request& req, double tolerance,
                  const Transform& root, CheckState::Response& res);

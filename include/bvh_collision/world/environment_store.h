@@ -47,6 +47,11 @@ class EnvironmentStore {
     std::shared_ptr<const Environment> snapshot;
   };
   Pin pin(Clock::duration timeout, Clock::time_point now);
+  // The latest snapshot and its version, read together.
+  Pin latest() const {
+    std::lock_guard<std::mutex> lock(pointer_mutex_);
+    return {version_, current_};
+  }
   // The pinned snapshot of `version`, its expiry renewed; throws PinError (naming `parameter`, the
   // setting that bounds a pin's life) for a version never pinned, released or expired.
   std::shared_ptr<const Environment> pinned(std::uint64_t version, Clock::time_point now,

@@ -6,6 +6,7 @@
 #include "bvh_collision/CheckMotions.h"
 #include "bvh_collision/CheckState.h"
 #include "bvh_collision/CheckStates.h"
+#include "bvh_collision/PinWorld.h"
 #include "bvh_collision/ros/readiness.h"
 
 namespace bvh_collision {
@@ -31,11 +32,54 @@ ServicePlanningContext::ServicePlanningContext(const std::string& checker, plann
   states_ = nh.serviceClient<CheckStates>("check_states", true);
   motion_ = nh.serviceClient<CheckMotion>("check_motion", true);
   motions_ = nh.serviceClient<CheckMotions>("check_motions", true);
-  for (ros::ServiceClient* c : {&state_, &states_, &motion_, &motions_}) {
+  pin_ = nh.serviceClient<PinWorld>("pin_world", true);
+  for (ros::ServiceClient* c : {&state_, &states_, &motion_, &motions_, &pin_}) {
     if (!c->waitForExistence(ros::Duration(timeout))) {
       throw std::runtime_error("no service " + c->getService() + " within " + std::to_string(timeout) + " s");
     }
   }
+}
+
+ServicePlanningContext::~ServicePlanningContext() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    release();
+  } catch (const std::exception&) {  // the node may be gone: its pin expires there
+  }
+}
+
+void ServicePlanningContext::release() const {
+  if (pinned_ == 0) return;
+  PinWorld srv;
+  srv.request.release = true;
+  srv.request.version = pinned_;
+  pinned_ = 0;
+  call(pin_, srv);
+}
+
+void ServicePlanningContext::new_plan() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  release();
+}
+
+std::uint64_t ServicePlanningContext::world_version() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return pinned_;
+}
+
+void ServicePlanningContext::same_world(std::uint64_t answered) const {
+  if (pinned_ != 0 && answered != pinned_) {
+    throw std::runtime_error("the node answered world version " + std::to_string(answered) + ", not the pinned " +
+                             std::to_string(pinned_));
+  }
+}
+
+std::uint64_t ServicePlanningContext::version_for_call() const {
+  if (!pin_per_plan || pinned_ != 0) return pinned_;
+  PinWorld srv;
+  call(pin_, srv);
+  pinned_ = srv.response.version;
+  return pinned_;
 }
 
 bool ServicePlanningContext::state_valid(const double* v) const {
@@ -45,7 +89,9 @@ bool ServicePlanningContext::state_valid(const double* v) const {
   srv.request.checks = checks;
   srv.request.tolerance = tolerance;
   std::lock_guard<std::mutex> lock(mutex_);
+  srv.request.world_version = version_for_call();
   call(state_, srv);
+  same_world(srv.response.world_version);
   return srv.response.valid;
 }
 
@@ -57,7 +103,9 @@ bool ServicePlanningContext::motion_valid(const double* start, const double* goa
   srv.request.checks = checks;
   srv.request.resolution = 0.0;  // certified
   std::lock_guard<std::mutex> lock(mutex_);
+  srv.request.world_version = version_for_call();
   call(motion_, srv);
+  same_world(srv.response.world_version);
   if (last_valid_fraction) *last_valid_fraction = srv.response.last_valid_fraction;
   return srv.response.valid;
 }
@@ -70,7 +118,9 @@ std::vector<bool> ServicePlanningContext::motions_valid(const double* starts, co
   srv.request.goals.assign(goals, goals + count * group.size());
   srv.request.checks = checks;
   std::lock_guard<std::mutex> lock(mutex_);
+  srv.request.world_version = version_for_call();
   call(motions_, srv);
+  same_world(srv.response.world_version);
   if (srv.response.valid.size() != count || srv.response.last_valid_fraction.size() != count) {
     throw std::runtime_error("check_motions answered for a different count");
   }
@@ -85,7 +135,9 @@ std::vector<bool> ServicePlanningContext::states_valid(const double* v, std::siz
   srv.request.checks = checks;
   srv.request.tolerance = tolerance;
   std::lock_guard<std::mutex> lock(mutex_);
+  srv.request.world_version = version_for_call();
   call(states_, srv);
+  same_world(srv.response.world_version);
   if (srv.response.valid.size() != count) throw std::runtime_error("check_states answered for a different count");
   return std::vector<bool>(srv.response.valid.begin(), srv.response.valid.end());
 }
