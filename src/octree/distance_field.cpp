@@ -185,7 +185,9 @@ void OctreeDistanceField::recompute_block(const std::int64_t lo[3], const std::i
   for (std::int64_t x = 0; x < wx; ++x) {
     for (std::int64_t y = 0; y < wy; ++y) {
       const std::uint32_t* row = squared_.data() + index(wlo[0] + x, wlo[1] + y, 0);
-      nearest_along(whi[2], lo[2], hi[2], [&](std::int64_t z) { return z >= wlo[2] && row[z] == 0; }, &g1[std::size_t((x * wy + y) * n[2])]);
+      // (Window-relative: the column is read over the window only, not from the grid's start.)
+      nearest_along(whi[2] - wlo[2], lo[2] - wlo[2], hi[2] - wlo[2], [&](std::int64_t z) { return row[wlo[2] + z] == 0; },
+                    &g1[std::size_t((x * wy + y) * n[2])]);
     }
   }
   work.window_cells += std::size_t(wx * wy * (whi[2] - wlo[2]));
