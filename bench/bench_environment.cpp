@@ -33,47 +33,6 @@ namespace bvh_collision {
 // The shared scene and sizes (environment_bench.h), defined here for both units.
 namespace environment_bench {
 
-struct SceneBox {
-  Vec3 lo, hi;
-};
-
-// A depth camera (600 x 500 rays unless told, 70 x 58 degrees) above and behind a robot, looking at a table
-// with boxes on it, a floor and a wall; 2 mm depth noise; rays that hit nothing return NaN.
-std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra, int width, int height) {
-  const std::vector<SceneBox> boxes = {
-      {{0.3, -0.6, 0.30}, {1.0, 0.6, 0.35}},   // table top
-      {{0.5, -0.2, 0.35}, {0.6, -0.1, 0.50}},  // a box
-      {{0.7, 0.1, 0.35}, {0.8, 0.3, 0.45}},    // another
-      {{-5, -5, -0.1}, {5, 5, 0.0}},           // floor
-      {{2.5, -5, 0.0}, {2.6, 5, 3.0}},         // wall
-  };
-  const Vec3 forward = Vec3(1.0, 0.0, -0.8).normalized(), right = Vec3(0, -1, 0), up = right.cross(forward) * -1.0;
-  std::mt19937 rng(7);
-  std::normal_distribution<double> noise(0.0, 0.002);
-  std::vector<ScanPoint> points;
-  for (int v = 0; v < height; ++v) {
-    for (int u = 0; u < width; ++u) {
-      const double x = std::tan(0.61) * (2.0 * (u + 0.5) / width - 1.0), y = std::tan(0.51) * (2.0 * (v + 0.5) / height - 1.0);
-      const Vec3 d = (forward + x * right + y * up).normalized();
-      double best = std::numeric_limits<double>::infinity();
-      for (const SceneBox& b : boxes) {
-        double t0 = 0.0, t1 = best;
-        for (int a = 0; a < 3 && t0 <= t1; ++a) {
-          const double s1 = (b.lo[a] - camera[a]) / d[a], s2 = (b.hi[a] - camera[a]) / d[a];
-          t0 = std::max(t0, std::min(s1, s2));
-          t1 = std::min(t1, std::max(s1, s2));
-        }
-        if (t0 <= t1) best = t0;
-      }
-      if (extra) best = extra(camera, d, best);
-      const float nan = std::numeric_limits<float>::quiet_NaN();
-      points.push_back(std::isfinite(best) && best < 6.0 ? ScanPoint((camera + (best + noise(rng)) * d).cast<float>())
-                                                         : ScanPoint(nan, nan, nan));
-    }
-  }
-  return points;
-}
-
 std::size_t occupied_voxels(const Octree& tree) {
   std::size_t n = 0;
   for (const Octree::Leaf& l : tree.leaves()) n += tree.occupied(l.log_odds);

@@ -27,16 +27,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A depth camera's view of the pillar: its surface points with 1 cm of noise (a new draw each
-// cloud, so voxels at the surface flip from cloud to cloud, as a real camera's do).
-std::vector<ScanPoint> noisy_view(const std::vector<ScanPoint>& pillar, std::mt19937_64& rng) {
-  std::normal_distribution<float> noise(0.0f, 0.01f);
-  std::vector<ScanPoint> cloud;
-  cloud.reserve(pillar.size());
-  for (const ScanPoint& p : pillar) cloud.emplace_back(p.x() + noise(rng), p.y() + noise(rng), p.z() + noise(rng));
-  return cloud;
-}
-
 struct LiveRun {
   std::vector<double> latencies_us;
   std::vector<double> cloud_ms;
@@ -54,7 +44,7 @@ LiveRun run_live(const CollisionChecker& checker, EnvironmentStore& store, const
     const ScanPoint origin(-0.4f, 0.0f, 1.4f);
     auto next = Clock::now();
     while (!stop) {
-      const std::vector<ScanPoint> cloud = noisy_view(pillar, rng);
+      const std::vector<ScanPoint> cloud = noisy_copy(pillar, 0.01f, rng);
       const auto t0 = Clock::now();
       store.modify([&](Environment& env) {
         const std::uint64_t from = env.octree().revision();
@@ -92,7 +82,7 @@ std::thread camera_thread(const CollisionChecker& checker, EnvironmentStore& sto
     std::mt19937_64 rng(6);
     auto next = Clock::now();
     while (!stop && rate > 0.0) {
-      const std::vector<ScanPoint> cloud = noisy_view(pillar, rng);
+      const std::vector<ScanPoint> cloud = noisy_copy(pillar, 0.01f, rng);
       const auto t0 = Clock::now();
       store.modify([&](Environment& env) {
         const std::uint64_t from = env.octree().revision();

@@ -18,21 +18,6 @@ using bench::Table;
 // certified (the interval engine) and at a fixed 0.02 rad step: the demo's sweep (joint1
 // from -0.6 to 1.6 rad, joint2 at 1.0) and random motions, per tolerance, with the states each
 // checked. At a tolerance a proxy level fits, fixed-step self checks run in the SIMD lanes.
-std::vector<ScanPoint> demo_pillar() {
-  std::vector<ScanPoint> pillar;
-  const Vec3 lo(0.39, 0.29, 0.0), hi(0.51, 0.41, 0.8);
-  for (double x = lo.x(); x <= hi.x() + 1e-9; x += 0.01) {
-    for (double y = lo.y(); y <= hi.y() + 1e-9; y += 0.01) {
-      for (double z = lo.z(); z <= hi.z() + 1e-9; z += 0.01) {
-        const bool surface = x < lo.x() + 0.005 || x > hi.x() - 0.005 || y < lo.y() + 0.005 || y > hi.y() - 0.005 ||
-                             z < lo.z() + 0.005 || z > hi.z() - 0.005;
-        if (surface) pillar.emplace_back(float(x), float(y), float(z));
-      }
-    }
-  }
-  return pillar;
-}
-
 CollisionChecker demo_checker(const std::vector<double>& proxy_levels) {
   RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::source_dir() + "/urdf/demo_arm.urdf"),
                                            PackageResolver({}));

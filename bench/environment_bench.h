@@ -2,7 +2,7 @@
 // clutter tables; bench_environment_world.cpp, the self filter and the snapshots;
 // bench_environment_updates.cpp, the clearing and per-core insertion tables;
 // bench_environment_motions.cpp, the motion table; bench_environment_live.cpp, the live world):
-// the run's sizes and the depth camera's table scene.
+// the run's sizes (the scenes: bench_scenes.h).
 #pragma once
 
 #include <octomap/OcTree.h>
@@ -17,6 +17,7 @@
 #include "bvh_collision/octree/octree.h"
 #include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/octree/scan.h"
+#include "bench_scenes.h"
 
 namespace bvh_collision::environment_bench {
 
@@ -31,14 +32,6 @@ struct Sizes {
   std::vector<double> proxy_levels;
 };
 
-// The distance along a ray (unit direction) to something more in the scene than the boxes, if
-// nearer than `best`: the robot, for the self-filter figures.
-using ExtraHit = std::function<double(const Vec3& origin, const Vec3& direction, double best)>;
-
-// A depth camera (600 x 500 rays unless told, 70 x 58 degrees) above and behind a robot, looking
-// at a table with boxes on it, a floor and a wall; 2 mm depth noise; rays that hit nothing
-// return NaN.
-std::vector<ScanPoint> table_scene(const Vec3& camera, const ExtraHit& extra = nullptr, int width = 600, int height = 500);
 std::size_t occupied_voxels(const Octree& tree);
 // Every leaf by (key of its lowest voxel, depth) with its log-odds: two trees are identical when
 // these are equal.
@@ -58,8 +51,7 @@ void clearing_table(bool quick, const std::string& dir);
 void insertion_cpu_table(bool quick, const std::string& dir);
 // Motions against tolerance on the demo arm and its pillar (bench_environment_motions.cpp).
 void motion_table(const Sizes& sizes, const std::string& dir);
-// The demo's pillar (the surface of a 12 x 12 x 80 cm box at 1 cm) and arm.
-std::vector<ScanPoint> demo_pillar();
+// The demo's arm (its pillar: bench_scenes.h).
 CollisionChecker demo_checker(const std::vector<double>& proxy_levels);
 // bench_environment_live.cpp: certified motions while clouds arrive (table live_world).
 void live_world_table(const Sizes& sizes, const std::string& dir);

@@ -94,6 +94,12 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
         << robot;
   }
   EXPECT_NE(report.find("Link proxies built at a first start"), std::string::npos) << "the table proxy_build";
+  for (const char* robot : {"demo_arm", "panda"}) {
+    EXPECT_NE(report.find(std::string("A live world through the services: certified motions while a camera's clouds arrive (") +
+                          robot + ")"),
+              std::string::npos)
+        << robot;
+  }
   EXPECT_EQ(report.find("nan"), std::string::npos) << "a figure that is not a number";
   const std::regex link(R"(\]\((plots/[a-z_]+\.png)\))");
   int plots = 0;
@@ -104,6 +110,28 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
     EXPECT_EQ(read(png).substr(1, 3), "PNG") << png;
   }
   EXPECT_EQ(plots, 6);
+}
+
+// The live world through the services (issue 58): the clouds reached the node while the motions
+// were timed, at every rate asked, for both robots; every call answered (an error fails the run).
+TEST_F(BenchReport, TheServiceLiveWorldInsertsCloudsWhileMotionsAreTimed) {
+  BVH_REQUIRE_ROBOTS();
+  for (const char* robot : {"demo_arm", "panda"}) {
+    const nlohmann::json t =
+        nlohmann::json::parse(read(dir_ / "tables" / (std::string("live_world_service_") + robot + ".json")));
+    const auto col = [&](const char* name) {
+      const auto& c = t["columns"];
+      return static_cast<std::size_t>(std::find(c.begin(), c.end(), name) - c.begin());
+    };
+    ASSERT_EQ(t["rows"].size(), 6u) << robot << ": check_motion and check_motions at 0, 10 and 30 Hz";
+    for (const auto& row : t["rows"]) {
+      const double rate = row[col("clouds Hz")].get<double>();
+      EXPECT_GT(row[col("calls")].get<double>(), 0.0) << robot;
+      if (rate > 0.0) {
+        EXPECT_GT(row[col("clouds inserted per s")].get<double>(), 0.0) << robot << " at " << rate << " Hz";
+      }
+    }
+  }
 }
 
 // A copy of the run's tables with one figure changed: the generator must refuse it.

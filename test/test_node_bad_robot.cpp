@@ -94,6 +94,11 @@ TEST(NodeBadRobot, ServiceThreadsOutOfRange) {
   expect_startup_failure("huge_threads", "~service_threads must be a whole number from 1 to 64");
 }
 
+// A negative nice value would raise the cloud thread above the queries (and needs privilege).
+TEST(NodeBadRobot, CloudNiceOutOfRange) {
+  expect_startup_failure("negative_nice", "~cloud_nice must be a whole number from 0 to 19");
+}
+
 TEST(NodeBadRobot, RaysCrossingTooManyVoxels) {
   expect_startup_failure("long_rays", "~max_ray_voxels");  // 5 m at 0.1 mm: 50,000 voxels a ray
 }

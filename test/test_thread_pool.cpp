@@ -2,8 +2,10 @@
 // participants, an exception reaching the caller (never std::terminate), a job started while the
 // pool is lent out run by its caller alone; and a batch check whose worker throws.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <stdexcept>
 #include <thread>
@@ -78,6 +80,38 @@ TEST(ThreadPool, AJobStartedWhileThePoolIsLentOutRunsOnItsCaller) {
   pool.for_each(5000, 3, [&](std::size_t) { ++total; });
   other.join();
   EXPECT_EQ(total.load(), 10000);
+}
+
+// A node's map updates run behind its queries: a thread given a background pool finds it as
+// shared(), every participant of its jobs runs at the pool's nice value, and other threads keep
+// the process's pool and their own priority.
+TEST(ThreadPool, ABackgroundThreadsFanOutsRunAtItsPriority) {
+  errno = 0;
+  const int base = getpriority(PRIO_PROCESS, 0);
+  ASSERT_EQ(errno, 0);
+  const int background_nice = std::min(19, base + 7);
+  ThreadPool background(2, background_nice);
+  std::vector<int> nice_of(3, -100);
+  bool found_background = false;
+  unsigned participants = 0;
+  std::thread updater([&] {
+    ASSERT_TRUE(ThreadPool::lower_this_thread(background_nice));
+    ThreadPool::use_on_this_thread(&background);
+    found_background = &ThreadPool::shared() == &background;
+    std::atomic<unsigned> arrived{0};
+    participants = ThreadPool::shared().run(3, [&](unsigned p) {
+      ++arrived;
+      while (arrived.load() < 3) std::this_thread::yield();  // all three at once: the workers take part
+      nice_of[p] = getpriority(PRIO_PROCESS, 0);
+    });
+  });
+  updater.join();
+  EXPECT_TRUE(found_background);
+  ASSERT_EQ(participants, 3u);
+  for (const int nice : nice_of) EXPECT_EQ(nice, background_nice);
+  EXPECT_NE(&ThreadPool::shared(), &background) << "another thread keeps the process's pool";
+  EXPECT_EQ(getpriority(PRIO_PROCESS, 0), base) << "and its priority";
+  EXPECT_TRUE(ThreadPool::lower_this_thread(base)) << "no change asked: nothing to refuse";
 }
 
 // A batch whose states throw inside the workers (a root pose that is not rigid): the caller gets

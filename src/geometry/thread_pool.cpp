@@ -1,12 +1,25 @@
 #include "bvh_collision/geometry/thread_pool.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <cerrno>
 
 namespace bvh_collision {
+namespace {
 
-ThreadPool::ThreadPool(unsigned workers) {
+thread_local ThreadPool* this_threads_pool = nullptr;
+
+}  // namespace
+
+ThreadPool::ThreadPool(unsigned workers, int nice) {
   threads_.reserve(workers);
-  for (unsigned id = 1; id <= workers; ++id) threads_.emplace_back([this, id] { work(id); });
+  for (unsigned id = 1; id <= workers; ++id) {
+    threads_.emplace_back([this, id, nice] {
+      if (nice > 0) lower_this_thread(nice);
+      work(id);
+    });
+  }
 }
 
 ThreadPool::~ThreadPool() {
@@ -19,8 +32,21 @@ ThreadPool::~ThreadPool() {
 }
 
 ThreadPool& ThreadPool::shared() {
+  if (this_threads_pool) return *this_threads_pool;
   static ThreadPool pool(std::max(1u, std::thread::hardware_concurrency()) - 1);
   return pool;
+}
+
+void ThreadPool::use_on_this_thread(ThreadPool* pool) { this_threads_pool = pool; }
+
+bool ThreadPool::lower_this_thread(int nice) {
+  // On Linux the nice value belongs to the thread (setpriority(2), "BUGS"): PRIO_PROCESS with
+  // who 0 is the calling thread alone. Raising it back would need CAP_SYS_NICE: never done.
+  errno = 0;
+  const int now = getpriority(PRIO_PROCESS, 0);
+  if (errno != 0) return false;
+  const int wanted = std::min(19, nice);
+  return wanted <= now || setpriority(PRIO_PROCESS, 0, wanted) == 0;
 }
 
 unsigned ThreadPool::run(unsigned participants, const std::function<void(unsigned)>& body) {

@@ -196,6 +196,7 @@ void CollisionCheckerNode::advertise() {
   // clouds rather than insert stale ones.
   ros::NodeHandle cloud_nh(nh_);
   cloud_nh.setCallbackQueue(&cloud_queue_);
+  cloud_pool_ = std::make_unique<ThreadPool>(std::max(1u, std::thread::hardware_concurrency()) - 1, params_.cloud_nice);
   cloud_sub_ = cloud_nh.subscribe("obstacle_cloud", 1, &CollisionCheckerNode::on_cloud, this);
   if (!params_.camera_info_topic.empty()) {
     camera_info_sub_ = cloud_nh.subscribe(params_.camera_info_topic, 1, &CollisionCheckerNode::on_camera_info, this);

@@ -82,6 +82,13 @@ void CollisionCheckerNode::count_superseded(const ros::MessageEvent<const sensor
 }
 
 void CollisionCheckerNode::on_cloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event) {
+  // The cloud thread and its fan-outs behind the queries (~cloud_nice): set on its first cloud.
+  static thread_local const bool background = [this] {
+    if (!ThreadPool::lower_this_thread(params_.cloud_nice)) ROS_WARN("collision_checker: ~cloud_nice could not be applied");
+    ThreadPool::use_on_this_thread(cloud_pool_.get());
+    return true;
+  }();
+  (void)background;
   ++clouds_.received;
   count_superseded(event);
   try {

@@ -185,6 +185,12 @@ NodeParameters read_node_parameters(const ros::NodeHandle& nh) {
     throw NodeStartupError("parameter ~marker_alpha must be in (0, 1], got " + std::to_string(p.marker_alpha));
   }
   p.service_threads = static_cast<int>(read_count(nh, "service_threads", p.service_threads, kMostServiceThreads));
+  double nice = p.cloud_nice;
+  if (nh.hasParam("cloud_nice") && !nh.getParam("cloud_nice", nice)) throw NodeStartupError("parameter ~cloud_nice must be a number");
+  if (!(nice >= 0.0 && nice <= 19.0) || nice != std::floor(nice)) {
+    throw NodeStartupError("parameter ~cloud_nice must be a whole number from 0 to 19, got " + std::to_string(nice));
+  }
+  p.cloud_nice = static_cast<int>(nice);
   read_limits(nh, p);
   return p;
 }

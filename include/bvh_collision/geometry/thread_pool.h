@@ -6,6 +6,11 @@
 // (a second service thread, or a job started from inside a job) is run by its caller alone: it
 // never waits for the pool and never deadlocks. An exception thrown by any participant stops the
 // others taking more work and reaches the caller, rethrown from run(): never std::terminate.
+//
+// Background work (a node's map updates) gets a pool of its own at a lower priority: a thread
+// that calls use_on_this_thread() finds that pool as shared(), so the core's fan-outs on that
+// thread run on workers the scheduler puts behind the queries' threads, and never borrow the
+// process pool a query would take.
 #pragma once
 
 #include <atomic>
@@ -22,14 +27,22 @@ namespace bvh_collision {
 
 class ThreadPool {
  public:
-  // `workers` threads besides the caller.
-  explicit ThreadPool(unsigned workers);
+  // `workers` threads besides the caller, each at `nice` (Linux: a thread's own nice value, 0 to
+  // 19; only ever lowered, which needs no privilege).
+  explicit ThreadPool(unsigned workers, int nice = 0);
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
 
-  // The process's pool: hardware_concurrency() - 1 workers.
+  // The process's pool: hardware_concurrency() - 1 workers; on a thread that called
+  // use_on_this_thread(), the pool it gave.
   static ThreadPool& shared();
+  // Makes `pool` this thread's shared() (null: the process's pool again). The pool must outlive
+  // the thread's use of it.
+  static void use_on_this_thread(ThreadPool* pool);
+  // Lowers the calling thread's priority to `nice` (0 to 19; a value at or below the thread's
+  // own changes nothing). False when the system refused.
+  static bool lower_this_thread(int nice);
 
   // The most participants a job can have: the workers and the caller.
   unsigned capacity() const { return static_cast<unsigned>(threads_.size()) + 1; }

@@ -36,6 +36,7 @@
 
 #include "bvh_collision/AttachObject.h"
 #include "bvh_collision/CastRay.h"
+#include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/io/scene_file.h"
 #include "bvh_collision/session/joint_states.h"
@@ -130,6 +131,9 @@ struct NodeParameters {
   double marker_rate = 2.0;              // Hz, at most, for occupied_cells (only when subscribed)
   double marker_alpha = 1.0;             // opacity of the occupied_cells cubes (below 1: the cloud shows through)
   int service_threads = 4;               // spinner threads for services (batches use every core anyway)
+  // The nice value (0 to 19) of the cloud thread and of the pool its insertions fan out on: the
+  // scheduler serves queries first and the map takes the CPU they leave (0: as the queries).
+  int cloud_nice = 10;
   // ~max_motion_states, ~max_batch_states, ~max_cloud_points, ~max_ray_voxels,
   // ~max_object_triangles, ~max_robot_links, ~max_checked_pairs (geometry/limits.h).
   Limits limits;
@@ -272,6 +276,7 @@ class CollisionCheckerNode {
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
 
   ros::CallbackQueue cloud_queue_;
+  std::unique_ptr<ThreadPool> cloud_pool_;  // the cloud thread's fan-outs, at ~cloud_nice
   std::unique_ptr<ros::AsyncSpinner> cloud_spinner_;
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber joint_state_sub_, cloud_sub_, camera_info_sub_;
