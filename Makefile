@@ -31,6 +31,7 @@ DEB_PACKAGES := \
   libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libgmp-dev libmpfr-dev libfcl-dev \
   libkdl-parser-dev liborocos-kdl-dev python3-matplotlib libyaml-cpp-dev \
   libompl-dev \
+  pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-venv \
   python3-rospy python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-shape-msgs \
   python3-diagnostic-msgs python3-visualization-msgs \
   rviz xvfb xauth libgl1-mesa-dri imagemagick

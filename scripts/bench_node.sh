@@ -2,6 +2,8 @@
 # The service benchmarks (make bench), each against the node on a private ROS master:
 #   - bench_node on panda (from ../shared/robots, or $BVH_COLLISION_ROBOTS): the round trip
 #     against in-process (<dir>/bench_node.md, tables service and service_under_flood);
+#   - bench_python (the in-process Python module) beside the C++ call and that node's rospy
+#     services (<dir>/bench_python.md, table python);
 #   - bench_node_live on the demo arm (its pillar) and on panda (a 640 x 480 depth camera):
 #     certified motions while clouds arrive (<dir>/bench_node_live_<robot>.md, tables
 #     live_world_service_<robot>).
@@ -42,6 +44,10 @@ start_node() {
 start_node "$robots/panda/robot.urdf" "$robots/panda/robot.srdf" "[0.01]"
 devel/lib/bvh_collision/bench_node _urdf_file:="$robots/panda/robot.urdf" _output_dir:="$out" _quick:="$quick" \
   | tee "$out/bench_node.md"
+# The Python module beside the C++ call and this node's rospy services (table python).
+quick_flag=$([[ $quick == true ]] && echo --quick || true)
+BVH_COLLISION_ROBOTS="$robots" python3 scripts/bench_python.py "$out" $quick_flag --node /collision_checker \
+  | tee "$out/bench_python.md"
 stop_node
 
 start_node "$(pwd)/urdf/demo_arm.urdf" "" "[0.01]"

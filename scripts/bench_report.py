@@ -175,6 +175,16 @@ def check_live_world(tables):
                                   f"run's (at least 0.8) and p99 {fmt(r[col['p99 / static']])}x (at most 2)")
 
 
+def check_python(tables):
+    """Issue 59: the Python module costs at most 1.2x the C++ call for batches of 100 and more."""
+    t = need(tables, "python")
+    col = {c: t["columns"].index(c) for c in ("query", "batch", "module / C++")}
+    for r in t["rows"]:
+        if r[col["batch"]] >= 100 and r[col["module / C++"]] > 1.2:
+            raise ReportError(f"python: {r[col['query']]} in batches of {r[col['batch']]} costs "
+                              f"{fmt(r[col['module / C++']])}x the C++ call (at most 1.2)")
+
+
 def check_live_plans(tables):
     """Issue 58: planning while clouds arrive at 30 Hz takes at most 1.5x the static median."""
     t = need(tables, "live_world_plans")
@@ -473,6 +483,7 @@ def build_report(tables, bench_dir, quick):
         check_speed_error_costs(tables)
         check_live_world(tables)
         check_live_plans(tables)
+        check_python(tables)
     out = ["# bvh_collision: speed against error", ""]
     when = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     out += [f"Measured {when} by `make bench` on: {machine(tables)}.", ""]
@@ -517,6 +528,8 @@ def build_report(tables, bench_dir, quick):
 
     out += ["## 6. Service", ""]
     out += [markdown(need(tables, "service")), markdown(need(tables, "service_under_flood"))]
+    out += ["From Python: the in-process module (`import bvh_collision`, [python.md](../../docs/python.md)) against the "
+            "same call in C++ and the node's services through rospy:", "", markdown(need(tables, "python"))]
     out += ["Certified motions through the services while a camera's clouds arrive (the live world of section 4, "
             "through the node):", ""]
     out += [markdown(need(tables, f"live_world_service_{r}")) for r in LIVE_SERVICE_ROBOTS]

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The body of `make test`: the Release build (what `make build` builds), catkin_lint, then every
-# unit and launch test of the Release build
+# unit and launch test of the Release build and the Python module's pytest suite
 # (unless SANITIZE=1), then the unit tests under AddressSanitizer and UndefinedBehaviorSanitizer
 # on the library of their own build folder (when SANITIZE=1 or CI=true). The last line is the combined count,
 # `N passed, N failed, N skipped`; the exit status is non-zero when anything failed.
@@ -77,6 +77,11 @@ if [[ $run_normal == 1 ]]; then
   unit_tests "$BUILD" || status=1
   echo "== launch tests ($BUILD) $(date +%T)"
   ctest --test-dir "$BUILD" -R '^_ctest_bvh_collision_rostest_' --output-on-failure || status=1
+  # The in-process Python module (docs/python.md) with pytest, its cases counted from its XML.
+  echo "== Python module (pytest) $(date +%T)"
+  ( set +u; source devel/setup.bash; set -u
+    python3 -m pytest -q -p no:cacheprovider test/python --junitxml="$BUILD/test_results/bvh_collision/pytest-python.xml" ) \
+    || status=1
   # catkin_test_results is the gate; its counts double gtest cases, so the summary counts XML.
   catkin_test_results "$BUILD/test_results" > /dev/null || status=1
   result_dirs+=("$BUILD/test_results")

@@ -94,6 +94,9 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
         << robot;
   }
   EXPECT_NE(report.find("Link proxies built at a first start"), std::string::npos) << "the table proxy_build";
+  EXPECT_NE(report.find("Python in-process (bvh_collision.Checker) against the C++ call and the rospy service"),
+            std::string::npos)
+      << "the table python";
   for (const char* robot : {"demo_arm", "panda"}) {
     EXPECT_NE(report.find(std::string("A live world through the services: certified motions while a camera's clouds arrive (") +
                           robot + ")"),

@@ -39,6 +39,8 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"session", with(kBelowWorld, {"robot", "world", "model", "query", "io", "session"})},
     {"planning", with(kBelowWorld, {"robot", "world", "model", "query", "planning"})},
     {"ros", with(kBelowWorld, {"robot", "world", "model", "query", "io", "session", "planning", "ros"})},
+    // The in-process Python module: an adapter over the core as ros is, with no ROS include.
+    {"python", with(kBelowWorld, {"robot", "world", "model", "query", "io", "session", "python"})},
     {"nodes", with(kBelowWorld, {"robot", "world", "model", "query", "io", "session", "planning", "ros"})},
 };
 // The ROS-free library (everything below planning and ros).
