@@ -27,33 +27,33 @@ struct Row {
   Counterpart other;
   bool boolean, solids, motion, field;
   double tolerance;
-  double decide, prefer;  // expected ProxyUse
+  double decide;  // expected ProxyUse
 };
 
 // The policy as a table, written out: read it as the documentation of the header.
 const Row kTable[] = {
     // Exact (tolerance 0): the proxies only prune, whatever the question.
-    {Counterpart::kLink, true, true, false, false, 0.0, 0.0, 0.0},
-    {Counterpart::kObject, true, true, false, false, 0.0, 0.0, 0.0},
-    {Counterpart::kOctree, true, true, false, true, 0.0, 0.0, 0.0},
-    {Counterpart::kLink, true, true, true, false, 0.0, 0.0, 0.0},
+    {Counterpart::kLink, true, true, false, false, 0.0, 0.0},
+    {Counterpart::kObject, true, true, false, false, 0.0, 0.0},
+    {Counterpart::kOctree, true, true, false, true, 0.0, 0.0},
+    {Counterpart::kLink, true, true, true, false, 0.0, 0.0},
     // A boolean question on solids at 1 cm: a level's error is e against a link, e / 2 against
     // an obstacle.
-    {Counterpart::kLink, true, true, false, false, 0.01, 0.01, 0.01},
-    {Counterpart::kObject, true, true, false, false, 0.01, 0.02, 0.02},
-    {Counterpart::kOctree, true, true, false, true, 0.01, 0.02, 0.02},
+    {Counterpart::kLink, true, true, false, false, 0.01, 0.01},
+    {Counterpart::kObject, true, true, false, false, 0.01, 0.02},
+    {Counterpart::kOctree, true, true, false, true, 0.01, 0.02},
     // The octree without its distance field: exact (the proxies' leaf test reads the field).
-    {Counterpart::kOctree, true, true, false, false, 0.01, 0.0, 0.0},
+    {Counterpart::kOctree, true, true, false, false, 0.01, 0.0},
     // Distances and contacts, and surfaces only: exact.
-    {Counterpart::kLink, false, true, false, false, 0.01, 0.0, 0.0},
-    {Counterpart::kObject, false, true, false, false, 0.01, 0.0, 0.0},
-    {Counterpart::kOctree, false, true, false, true, 0.01, 0.0, 0.0},
-    {Counterpart::kLink, true, false, false, false, 0.01, 0.0, 0.0},
-    {Counterpart::kOctree, true, false, false, true, 0.01, 0.0, 0.0},
+    {Counterpart::kLink, false, true, false, false, 0.01, 0.0},
+    {Counterpart::kObject, false, true, false, false, 0.01, 0.0},
+    {Counterpart::kOctree, false, true, false, true, 0.01, 0.0},
+    {Counterpart::kLink, true, false, false, false, 0.01, 0.0},
+    {Counterpart::kOctree, true, false, false, true, 0.01, 0.0},
     // Certified motions: the levels down to the coarsest that decides, as a state's.
-    {Counterpart::kLink, true, true, true, false, 0.01, 0.01, 0.01},
-    {Counterpart::kObject, true, true, true, false, 0.01, 0.02, 0.02},
-    {Counterpart::kOctree, true, true, true, true, 0.01, 0.02, 0.02},
+    {Counterpart::kLink, true, true, true, false, 0.01, 0.01},
+    {Counterpart::kObject, true, true, true, false, 0.01, 0.02},
+    {Counterpart::kOctree, true, true, true, true, 0.01, 0.02},
 };
 
 ToleranceQuestion question_of(const Row& r) {
@@ -69,7 +69,6 @@ TEST(TolerancePolicy, TheTable) {
   for (const Row& r : kTable) {
     const ProxyUse use = proxy_use(question_of(r));
     EXPECT_EQ(use.decide_up_to, r.decide) << "row " << (&r - kTable);
-    EXPECT_EQ(use.prefer_up_to, r.prefer) << "row " << (&r - kTable);
   }
 }
 
@@ -82,7 +81,7 @@ TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
   for (const double t : {0.0, 1e-4, 0.003, 0.01, 0.05}) {
     ToleranceQuestion q{t, Counterpart::kLink};
     q.motion = true;
-    const double preferred = proxy_use(q).prefer_up_to;
+    const double preferred = proxy_use(q).decide_up_to;
     for (const double level : {0.0, preferred, 0.002, 0.005, 0.01, 0.02}) {
       for (const double growth : {0.0, 1e-6, t / 4, t / 2, t}) {
         const bool fits = level + 2.0 * growth <= t;
@@ -115,14 +114,11 @@ TEST(TolerancePolicy, EveryLevelAllowedToDecideFitsTheTolerance) {
         const bool exact = t == 0.0 || !q.boolean || !q.solids || (other == Counterpart::kOctree && !q.octree_field);
         if (exact) {
           EXPECT_EQ(use.decide_up_to, 0.0);
-          EXPECT_EQ(use.prefer_up_to, 0.0);
           continue;
         }
         ++deciding;
         EXPECT_LE(proxy_error(use.decide_up_to, other), t);
         EXPECT_GT(proxy_error(use.decide_up_to * (1 + 1e-12), other), t) << "not the largest level that fits";
-        EXPECT_LE(use.prefer_up_to, use.decide_up_to);
-        EXPECT_EQ(use.prefer_up_to, use.decide_up_to);
       }
     }
   }

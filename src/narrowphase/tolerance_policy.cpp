@@ -11,7 +11,6 @@ ProxyUse proxy_use(const ToleranceQuestion& q) {
   if (q.other == Counterpart::kOctree && !q.octree_field) return use;
   // The largest level whose error against the counterpart fits the tolerance.
   use.decide_up_to = q.other == Counterpart::kLink ? q.tolerance : 2.0 * q.tolerance;
-  use.prefer_up_to = use.decide_up_to;  // motions too: the header says why
   return use;
 }
 

@@ -29,8 +29,7 @@ ProxyUse motion_use(double tolerance) {
 // coarsest level up to it, exact: every level.
 std::vector<const ProxyLevel*> levels_for(const RobotAccelerators& m, double tolerance) {
   const ProxyUse use = motion_use(tolerance);
-  const ProxyLevel* finest = m.proxies_for(use.prefer_up_to);
-  if (finest == nullptr) finest = m.proxies_for(use.decide_up_to);
+  const ProxyLevel* finest = m.proxies_for(use.decide_up_to);
   std::vector<const ProxyLevel*> out;
   for (const ProxyLevel& p : m.proxy_levels()) {
     if (finest == nullptr || p.level >= finest->level) out.push_back(&p);
@@ -58,7 +57,7 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   // The tolerance answers a component's midpoint where it is clear of it at both ends (a level
   // that fits decides there); a failing interval is taken as colliding only where the level leaves
   // room for twice its growth (interval_within_tolerance: never at a level of the tolerance itself).
-  tolerance_asked_ = !proxies_.empty() && level_ <= motion_use(options.tolerance).prefer_up_to;
+  tolerance_asked_ = !proxies_.empty() && level_ <= motion_use(options.tolerance).decide_up_to;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {
     if (m.shapes()[l].empty()) continue;

@@ -53,8 +53,9 @@ struct ToleranceQuestion {
 // How proxy levels may serve the question (RobotAccelerators::proxies_for takes these bounds;
 // 0: no level).
 struct ProxyUse {
-  double decide_up_to = 0.0;  // a level e <= this may answer alone: its overlap counts as collision
-  double prefer_up_to = 0.0;  // a certified motion walks the levels down to the coarsest up to this
+  // A level e <= this may answer alone (its overlap counts as collision); a certified motion walks
+  // the levels down to the coarsest up to this too.
+  double decide_up_to = 0.0;
 };
 ProxyUse proxy_use(const ToleranceQuestion& question);
 
