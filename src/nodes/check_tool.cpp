@@ -16,6 +16,7 @@
 #include "bvh_collision/robot/link_solidity.h"
 #include "bvh_collision/robot/robot_description.h"
 #include "bvh_collision/robot/urdf_validation.h"
+#include "bvh_collision/session/scene_frames.h"
 
 namespace bvh_collision {
 namespace {
@@ -231,27 +232,6 @@ void apply_scene_state(const SceneFile& scene, const RobotModel& m, std::vector<
   }
 }
 
-// The frames a scene may name, at the robot's state with its root link at the world's origin:
-// the root (also named "world", and the parent frame of the SRDF's virtual joint that holds it)
-// and every link.
-SceneFrameLookup robot_frames(const RobotModel& m, const std::string& srdf_xml, const std::vector<double>& state) {
-  std::vector<Transform> poses;
-  forward_kinematics(m, state.data(), poses);
-  std::string mount;
-  if (!srdf_xml.empty()) {
-    for (const SrdfVirtualJoint& v : parse_srdf(srdf_xml, &m).virtual_joints) {  // (its warnings shown once, above)
-      if (v.child_link == m.links()[m.root_link()].name) mount = v.parent_frame;
-    }
-  }
-  // The tool's world is the root's frame: "world" names it too unless a link is so named.
-  return [&m, poses, mount](const std::string& frame) -> std::optional<Transform> {
-    if ((!mount.empty() && frame == mount) || (frame == "world" && m.link_index(frame) < 0)) return Transform::Identity();
-    const int l = m.link_index(frame);
-    if (l < 0) return std::nullopt;
-    return poses[static_cast<std::size_t>(l)];
-  };
-}
-
 // One configuration's line: `INDEX free` or `INDEX collision A:B,...` (link pairs and, with a
 // scene, link:object pairs, name-sorted), then with --distance the nearest pair of either kind.
 void print_state(const Options& o, const CollisionChecker& checker, const Environment* world,
@@ -337,7 +317,7 @@ int run_check_tool(const std::vector<std::string>& args, std::ostream& out, std:
       SceneFile scene = read_scene_file(o.scene);
       for (const std::string& w : scene.warnings) err << "warning: " << w << "\n";
       apply_scene_state(scene, m, state, err);
-      place_in_world(scene, robot_frames(m, srdf_xml, state));
+      place_in_world(scene, robot_scene_frames(m, srdf_xml, state.data()));  // (SRDF warnings shown once, above)
       world = scene.environment();
     }
     // A robot that holds objects checks them as links of its own (self and world).

@@ -5,6 +5,7 @@
 
 #include "bvh_collision/octree/octomap_bridge.h"
 #include "bvh_collision/python/in_process_checker.h"
+#include "bvh_collision/session/scene_frames.h"
 #include "bvh_collision/world/object_filter.h"
 
 namespace bvh_collision {
@@ -40,22 +41,7 @@ Transform InProcessChecker::link_pose(int link, const double* state) const {
 std::vector<std::string> InProcessChecker::load_scene(const std::string& path, const double* state) {
   require_state(state, "load_scene");
   SceneFile scene = read_scene_file(path);
-  std::vector<Transform> poses;
-  forward_kinematics(model(), state, poses);
-  std::string mount;
-  if (!srdf_.empty()) {
-    for (const SrdfVirtualJoint& v : parse_srdf(srdf_, &model()).virtual_joints) {
-      if (v.child_link == model().links()[model().root_link()].name) mount = v.parent_frame;
-    }
-  }
-  // The world is the root link's frame: "world" names it too unless a link is so named.
-  const RobotModel& m = model();
-  place_in_world(scene, [&](const std::string& frame) -> std::optional<Transform> {
-    if ((!mount.empty() && frame == mount) || (frame == "world" && m.link_index(frame) < 0)) return Transform::Identity();
-    const int l = m.link_index(frame);
-    if (l < 0) return std::nullopt;
-    return poses[static_cast<std::size_t>(l)];
-  });
+  place_in_world(scene, robot_scene_frames(model(), srdf_, state));
   std::vector<std::string> warnings = scene.warnings;
   Environment next = *snapshot();
   apply_scene_objects(scene, next, warnings);  // on the copy: a failure changes nothing
