@@ -224,3 +224,12 @@ def test_queries_release_the_gil(panda):
         stop.set()
         counter.join()
     assert during > 1000
+
+
+def test_urdf_and_srdf_given_as_text_answer_as_from_files(bvh, panda):
+    urdf, srdf, paths = robot_files("panda")
+    with open(urdf) as u, open(srdf) as s:
+        from_text = bvh.Checker(u.read(), s.read(), package_paths=paths)
+    assert from_text.joint_names == panda.joint_names
+    states = random_states(panda, 300, seed=10)
+    assert np.array_equal(from_text.check_states(states), panda.check_states(states))
