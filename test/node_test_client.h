@@ -122,6 +122,8 @@ inline ros::Time joint_states_from(const std::string& node = "/collision_checker
 struct CloudCounts {
   std::uint64_t received = 0, inserted = 0, in_progress = 0, superseded = 0;
   std::uint64_t no_transform = 0, no_state = 0, malformed = 0, over_limit = 0;
+  // the distance fields the inserted clouds' maps got: made in place, copied, built
+  std::uint64_t fields_in_place = 0, fields_copied = 0, fields_built = 0;
   std::uint64_t sent() const { return received + superseded; }
   std::uint64_t outcomes() const { return inserted + no_transform + no_state + malformed + over_limit; }
 };
@@ -142,6 +144,9 @@ inline CloudCounts cloud_counts(const std::string& node = "/collision_checker") 
   c.no_state = number("clouds dropped (no joint state at the stamp)");
   c.malformed = number("clouds rejected (malformed)");
   c.over_limit = number("clouds rejected (over ~max_cloud_points)");
+  c.fields_in_place = number("distance fields updated in place");
+  c.fields_copied = number("distance fields copied (every older one held)");
+  c.fields_built = number("distance fields built");
   return c;
 }
 

@@ -325,6 +325,32 @@ TEST(OctreeDistanceField, TheEnvironmentsFieldFollowsAScan) {
   }
 }
 
+// follow: a field made the field of a tree several changes later, in place, from the union of the
+// changes' lists (voxels flipped twice among them, and outside the grid), equals a build.
+TEST(OctreeDistanceField, FollowingSeveralChangesInPlaceEqualsABuild) {
+  Octree tree(0.05);
+  std::mt19937_64 rng(17);
+  std::uniform_int_distribution<int> u(-12, 11);
+  for (int i = 0; i < 300; ++i) tree.update(key_at(u(rng), u(rng), u(rng)), true);
+  const Vec3 lo = Vec3::Constant(-0.5), hi = Vec3::Constant(0.5);
+  OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, 0.2);
+  std::vector<std::vector<OctreeKey>> lists(3);
+  VoxelSet first;
+  for (int i = 0; i < 30; ++i) first.insert(key_at(u(rng), u(rng), u(rng)));
+  first.insert(key_at(300, 0, 0));  // outside the grid
+  tree.update_sorted(first.sorted_keys(), true, &lists[0]);
+  for (int k = 0; k < 4; ++k) tree.update_sorted(first.sorted_keys(), false, &lists[1]);  // some back again
+  VoxelSet third;
+  for (int i = 0; i < 30; ++i) third.insert(key_at(u(rng), u(rng), u(rng)));
+  tree.update_sorted(third.sorted_keys(), true, &lists[2]);
+  ASSERT_FALSE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.2)));
+  OctreeDistanceField::UpdateWork work;
+  field.follow(tree, {&lists[0], &lists[1], &lists[2]}, &work);
+  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.2)));
+  EXPECT_EQ(work.copied_cells, 0u);
+  EXPECT_GT(work.flipped, lists[2].size());
+}
+
 // Environment checks with the field answer as without it, state by state (at tolerance 0 the
 // answers are exact, so equal), on the demo arm amid random boxes, with a moved base, and after
 // the octree changes under a kept field.

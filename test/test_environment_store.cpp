@@ -142,6 +142,73 @@ TEST(SharedSnapshots, ClearingOneVoxelCopiesAFewPagesNotTheMap) {
   EXPECT_FALSE(now->octree().locate(centre) && now->octree().locate(centre)->depth == kOctreeDepth);
 }
 
+// Scans into a store, each followed by the map's distance field, as the node's cloud thread does
+// (session/scan_update.cpp): once the field of the scan before last is held by nobody, the next
+// field is made in place on it from the voxels the two scans changed, with no copy of the grid;
+// while a reader holds it (and its field) the kept field is copied instead, and the held field
+// never changes under the reader. Every field equals a build of its snapshot's tree.
+TEST(SharedSnapshots, TheNextDistanceFieldIsMadeInPlaceOnAFieldNobodyHolds) {
+  EnvironmentStore store(scattered_map(20000, 4));
+  const Vec3 lo(-1.2, -1.2, -0.2), hi(1.2, 1.2, 1.2);
+  const double cap = 0.1;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(-0.2f, 0.2f);
+  auto scan = [&](float x) {
+    std::vector<ScanPoint> cloud(300);
+    for (auto& p : cloud) p = ScanPoint(x + u(rng), u(rng), 0.6f + u(rng));
+    return store.modify([&](Environment& env) {
+      const std::uint64_t from = env.octree().revision();
+      ScanStats stats = insert_scan(env.octree(), cloud, ScanPoint(0.0f, 0.0f, 0.0f));
+      env.note_octree_changes(from, std::move(stats.flipped));
+      EXPECT_NE(env.octree_distance_field(lo, hi, cap), nullptr);
+      return env.octree_field_work().value();
+    });
+  };
+  auto equals_a_build = [&](const Environment& env) {
+    const auto field = env.octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false);
+    return field && field->same_values(OctreeDistanceField::build(env.octree(), lo, hi, cap));
+  };
+  store.modify([&](Environment& env) { env.octree_distance_field(lo, hi, cap); });
+  const std::size_t grid = store.snapshot()->octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false)->cells();
+  ASSERT_GT(grid, 1000000u);
+  int in_place = 0;
+  for (int i = 0; i < 6; ++i) {
+    const OctreeDistanceField::UpdateWork work = scan(-0.8f + 0.3f * float(i));
+    ASSERT_TRUE(equals_a_build(*store.snapshot())) << "scan " << i;
+    ASSERT_FALSE(work.rebuilt) << "scan " << i;
+    EXPECT_GT(work.flipped, 0u);
+    EXPECT_LT(work.cells * 8, grid);  // the blocks the scans reached, not the map
+    if (i >= 1) {  // the field before the kept one is free from the second scan on
+      EXPECT_EQ(work.copied_cells, 0u) << "scan " << i;
+      in_place += work.copied_cells == 0;
+    }
+  }
+  EXPECT_EQ(in_place, 5);
+
+  // A reader holds a snapshot and its field over three scans: the fields around it are copies
+  // until it lets go, and its field keeps its tree's values.
+  const auto held = store.snapshot();
+  const auto held_field = held->octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false);
+  ASSERT_NE(held_field, nullptr);
+  int copied = 0;
+  for (int i = 0; i < 3; ++i) {
+    const OctreeDistanceField::UpdateWork work = scan(0.5f - 0.4f * float(i));
+    copied += work.copied_cells == grid;
+    ASSERT_TRUE(equals_a_build(*store.snapshot()));
+  }
+  EXPECT_GE(copied, 1);  // the second scan: the reader holds one pooled field, the snapshot the other
+  EXPECT_TRUE(held_field->same_values(OctreeDistanceField::build(held->octree(), lo, hi, cap)));
+
+  // A pinned version holds its field once the map changed: the pin's memory counts it.
+  const auto t0 = EnvironmentStore::Clock::now();
+  const EnvironmentStore::Pin pin = store.pin(std::chrono::seconds(60), t0);
+  const std::size_t before = store.pinned_extra_bytes();  // (the pin shares the current field)
+  EXPECT_LT(before, held_field->memory_bytes());
+  scan(0.0f);
+  EXPECT_GE(store.pinned_extra_bytes(), before + held_field->memory_bytes());
+  EXPECT_TRUE(store.release(pin.version));
+}
+
 // Four readers each hold a snapshot while scans stream in (each scan re-observes part of the
 // map): the snapshots together hold less than twice one map, and none of them changes.
 TEST(SharedSnapshots, FourOldSnapshotsHoldLessThanTwoMaps) {

@@ -7,6 +7,7 @@
 // - a camera on the hand of the sweeping arm sees a pillar, each cloud stamped before the latest
 //   joint state and transform.
 #include <algorithm>
+#include <cstdio>
 #include <condition_variable>
 #include <filesystem>
 #include <functional>
@@ -240,6 +241,12 @@ class NodeChangingWorld : public testing::Test {
     for (const char* node : {kNoReturn, kOctomapRule}) {
       const CloudCounts c = wait_for_clouds(sent_, 60.0, node);
       EXPECT_EQ(c.inserted, sent_) << node;
+      // Each cloud that changed the map gave it a distance field, made one of three ways.
+      const std::uint64_t fields = c.fields_in_place + c.fields_copied + c.fields_built;
+      EXPECT_GT(fields, 0u) << node;
+      EXPECT_LE(fields, c.inserted) << node;
+      std::printf("%s: fields in place %llu, copied %llu, built %llu of %llu clouds\n", node, (unsigned long long)c.fields_in_place,
+                  (unsigned long long)c.fields_copied, (unsigned long long)c.fields_built, (unsigned long long)c.inserted);
     }
   }
   static Driver* driver_;

@@ -159,6 +159,7 @@ TEST(ScanUpdate, ASnapshotIsPublishedWithItsDistanceField) {
   const std::vector<double> q(checker.model().variable_count(), 0.0);
   std::atomic<bool> done{false};
   std::atomic<int> seen{0}, without{0};
+  int in_place = 0;
   std::thread reader([&] {
     std::uint64_t last = store.version();
     while (!done) {
@@ -176,7 +177,14 @@ TEST(ScanUpdate, ASnapshotIsPublishedWithItsDistanceField) {
     for (double y = -0.3; y <= 0.3; y += 0.02) {
       for (double z = 0.1; z <= 0.9; z += 0.02) points.emplace_back(0.7f + noise(rng), float(y), float(z));
     }
-    update_scan(store, checkers, points, {}, ScanPoint(0.0f, -1.5f, 0.5f), q.data(), Transform(), ScanUpdateOptions{});
+    const ScanUpdateResult result = update_scan(store, checkers, points, {}, ScanPoint(0.0f, -1.5f, 0.5f), q.data(), Transform(), ScanUpdateOptions{});
+    EXPECT_TRUE(result.field_made) << "scan " << scan;
+    // From the third scan on, the field two scans old is held by no one (the reader has moved on,
+    // the store holds the last): the new one is made on it in place, with no copy of the grid.
+    if (scan >= 2) {
+      EXPECT_EQ(result.field.copied_cells, 0u) << "scan " << scan;
+      in_place += !result.field.rebuilt;
+    }
     // (The reader takes each publication before the next: it waits for the version to move.)
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (seen.load() <= scan && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
@@ -185,6 +193,7 @@ TEST(ScanUpdate, ASnapshotIsPublishedWithItsDistanceField) {
   reader.join();
   EXPECT_EQ(seen.load(), 8);
   EXPECT_EQ(without.load(), 0);
+  EXPECT_GE(in_place, 5);
   const std::shared_ptr<const Environment> now = store.snapshot();
   const auto field = checker.kept_distance_field(*now);
   ASSERT_NE(field, nullptr);

@@ -214,64 +214,108 @@ void OctreeDistanceField::recompute_block(const std::int64_t lo[3], const std::i
   work.cells += std::size_t(n[0] * n[1] * n[2]);
 }
 
-OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<OctreeKey>& flipped,
-                                                 UpdateWork* work) const {
-  UpdateWork counted;
-  if (squared_.empty()) return *this;
-  // The flipped voxels inside the grid, and the blocks within reach of each.
-  const std::uint32_t clamp = static_cast<std::uint32_t>(bound_of_squared_.size() - 1);
-  const std::int64_t reach = static_cast<std::int64_t>(std::ceil(std::sqrt(double(clamp))));
-  std::int64_t blocks[3];
-  for (int a = 0; a < 3; ++a) blocks[a] = (size_[a] + kBlock - 1) / kBlock;
-  std::vector<char> dirty(std::size_t(blocks[0] * blocks[1] * blocks[2]), 0);
+// The flipped voxels of `flipped` inside the grid, and the blocks within the cap's reach of each.
+struct OctreeDistanceField::Change {
+  std::vector<char> dirty;                                     // per block
   std::vector<std::pair<std::int64_t, const OctreeKey*>> inside;  // (cell, key)
-  for (const OctreeKey& key : flipped) {
-    std::int64_t c[3], b0[3], b1[3];
-    for (int a = 0; a < 3; ++a) c[a] = std::int64_t(key.k[a]) - kOctreeKeyOffset - grid_lo_[a];
-    if (!(c[0] >= 0 && c[0] < size_[0] && c[1] >= 0 && c[1] < size_[1] && c[2] >= 0 && c[2] < size_[2])) continue;
-    inside.emplace_back(index(c[0], c[1], c[2]), &key);
-    for (int a = 0; a < 3; ++a) {
-      b0[a] = std::max<std::int64_t>(0, c[a] - reach) / kBlock;
-      b1[a] = std::min<std::int64_t>(size_[a] - 1, c[a] + reach) / kBlock;
-    }
-    for (std::int64_t x = b0[0]; x <= b1[0]; ++x) {
-      for (std::int64_t y = b0[1]; y <= b1[1]; ++y) std::fill_n(&dirty[std::size_t((x * blocks[1] + y) * blocks[2] + b0[2])], b1[2] - b0[2] + 1, 1);
-    }
-  }
-  counted.flipped = inside.size();
-  // A block's window costs about 25 cell passes a cell, a build about 3 over the grid: past an
-  // eighth of the grid, a build is cheaper (the same values).
-  const std::size_t dirty_blocks = static_cast<std::size_t>(std::count(dirty.begin(), dirty.end(), 1));
-  if (dirty_blocks * std::size_t(kBlock * kBlock * kBlock) * 8 > squared_.size()) {
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // the centres of the box's first and last voxels
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = (static_cast<double>(inner_lo_[a]) + 0.5) * resolution_;
-      hi[a] = (static_cast<double>(inner_hi_[a]) + 0.5) * resolution_;
-    }
-    counted.rebuilt = true;
-    counted.cells = squared_.size();
-    if (work != nullptr) *work = counted;
-    return build(tree, lo, hi, cap_, squared_.size());
-  }
-  // Their new occupancy into a copy (0: occupied; a freed one at the clamp, which its block's
-  // recomputation replaces), then the blocks.
-  OctreeDistanceField out = *this;
-  for (const auto& [cell, key] : inside) {
-    const auto found = tree.find(*key);
-    out.squared_[std::size_t(cell)] = found && tree.occupied(found->log_odds) ? 0 : clamp;
-  }
-  for (std::int64_t x = 0; x < blocks[0]; ++x) {
-    for (std::int64_t y = 0; y < blocks[1]; ++y) {
-      for (std::int64_t z = 0; z < blocks[2]; ++z) {
-        if (!dirty[std::size_t((x * blocks[1] + y) * blocks[2] + z)]) continue;
-        const std::int64_t lo[3] = {x * kBlock, y * kBlock, z * kBlock};
-        const std::int64_t hi[3] = {std::min(size_[0], lo[0] + kBlock), std::min(size_[1], lo[1] + kBlock), std::min(size_[2], lo[2] + kBlock)};
-        out.recompute_block(lo, hi, reach, counted);
+  std::size_t dirty_blocks = 0;
+  std::int64_t blocks[3] = {0, 0, 0};
+};
+
+OctreeDistanceField::Change OctreeDistanceField::change_of(const std::vector<const std::vector<OctreeKey>*>& flipped) const {
+  Change c;
+  const std::int64_t reach = this->reach();
+  for (int a = 0; a < 3; ++a) c.blocks[a] = (size_[a] + kBlock - 1) / kBlock;
+  c.dirty.assign(std::size_t(c.blocks[0] * c.blocks[1] * c.blocks[2]), 0);
+  for (const std::vector<OctreeKey>* list : flipped) {
+    for (const OctreeKey& key : *list) {
+      std::int64_t v[3], b0[3], b1[3];
+      for (int a = 0; a < 3; ++a) v[a] = std::int64_t(key.k[a]) - kOctreeKeyOffset - grid_lo_[a];
+      if (!(v[0] >= 0 && v[0] < size_[0] && v[1] >= 0 && v[1] < size_[1] && v[2] >= 0 && v[2] < size_[2])) continue;
+      c.inside.emplace_back(index(v[0], v[1], v[2]), &key);
+      for (int a = 0; a < 3; ++a) {
+        b0[a] = std::max<std::int64_t>(0, v[a] - reach) / kBlock;
+        b1[a] = std::min<std::int64_t>(size_[a] - 1, v[a] + reach) / kBlock;
+      }
+      for (std::int64_t x = b0[0]; x <= b1[0]; ++x) {
+        for (std::int64_t y = b0[1]; y <= b1[1]; ++y) {
+          std::fill_n(&c.dirty[std::size_t((x * c.blocks[1] + y) * c.blocks[2] + b0[2])], b1[2] - b0[2] + 1, 1);
+        }
       }
     }
   }
+  c.dirty_blocks = static_cast<std::size_t>(std::count(c.dirty.begin(), c.dirty.end(), 1));
+  return c;
+}
+
+// A block's window costs about 25 cell passes a cell, a build about 3 over the grid: past an
+// eighth of the grid, a build is cheaper (the same values).
+bool OctreeDistanceField::build_is_cheaper(const Change& change) const {
+  return change.dirty_blocks * std::size_t(kBlock * kBlock * kBlock) * 8 > squared_.size();
+}
+
+OctreeDistanceField OctreeDistanceField::rebuilt(const Octree& tree, std::size_t flipped, UpdateWork* work) const {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // the centres of the box's first and last voxels
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = (static_cast<double>(inner_lo_[a]) + 0.5) * resolution_;
+    hi[a] = (static_cast<double>(inner_hi_[a]) + 0.5) * resolution_;
+  }
+  if (work != nullptr) {
+    *work = UpdateWork{};
+    work->flipped = flipped;
+    work->rebuilt = true;
+    work->cells = squared_.size();
+  }
+  return build(tree, lo, hi, cap_, squared_.size());
+}
+
+// The changed voxels' new occupancy (0: occupied; a freed one at the clamp, which its block's
+// recomputation replaces), then the blocks.
+void OctreeDistanceField::apply(const Octree& tree, const Change& change, UpdateWork& work) {
+  const std::uint32_t clamp = static_cast<std::uint32_t>(bound_of_squared_.size() - 1);
+  for (const auto& [cell, key] : change.inside) {
+    const auto found = tree.find(*key);
+    squared_[std::size_t(cell)] = found && tree.occupied(found->log_odds) ? 0 : clamp;
+  }
+  const std::int64_t reach = this->reach();
+  for (std::int64_t x = 0; x < change.blocks[0]; ++x) {
+    for (std::int64_t y = 0; y < change.blocks[1]; ++y) {
+      for (std::int64_t z = 0; z < change.blocks[2]; ++z) {
+        if (!change.dirty[std::size_t((x * change.blocks[1] + y) * change.blocks[2] + z)]) continue;
+        const std::int64_t lo[3] = {x * kBlock, y * kBlock, z * kBlock};
+        const std::int64_t hi[3] = {std::min(size_[0], lo[0] + kBlock), std::min(size_[1], lo[1] + kBlock), std::min(size_[2], lo[2] + kBlock)};
+        recompute_block(lo, hi, reach, work);
+      }
+    }
+  }
+}
+
+OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<OctreeKey>& flipped,
+                                                 UpdateWork* work) const {
+  if (squared_.empty()) return *this;
+  const Change change = change_of({&flipped});
+  if (build_is_cheaper(change)) return rebuilt(tree, change.inside.size(), work);
+  UpdateWork counted;
+  counted.flipped = change.inside.size();
+  OctreeDistanceField out = *this;
+  counted.copied_cells = squared_.size();
+  out.apply(tree, change, counted);
   if (work != nullptr) *work = counted;
   return out;
+}
+
+void OctreeDistanceField::follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
+                                 UpdateWork* work) {
+  if (squared_.empty()) return;
+  const Change change = change_of(flipped);
+  if (build_is_cheaper(change)) {
+    *this = rebuilt(tree, change.inside.size(), work);
+    return;
+  }
+  UpdateWork counted;
+  counted.flipped = change.inside.size();
+  apply(tree, change, counted);
+  if (work != nullptr) *work = counted;
 }
 
 bool OctreeDistanceField::same_values(const OctreeDistanceField& other) const {

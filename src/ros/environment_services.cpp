@@ -169,6 +169,9 @@ void CollisionCheckerNode::insert_cloud(const sensor_msgs::PointCloud2& msg) {
   clouds_.on_robot += result.on_robot;
   clouds_.shadowed += result.shadowed;
   clouds_.on_objects += result.on_objects;
+  if (result.field_made) {
+    ++(result.field.rebuilt ? clouds_.fields_built : result.field.copied_cells > 0 ? clouds_.fields_copied : clouds_.fields_in_place);
+  }
   clouds_.last_insert_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // Last: diagnostics read this first, so a cloud counted inserted has its points counted and its
   // octree in the store.

@@ -27,7 +27,11 @@ ScanUpdateResult update_scan(EnvironmentStore& store, const RobotCheckers& check
     env.note_octree_changes(from, std::move(stats.flipped));  // the kept distance field follows them
     // The new map's distance field, here rather than in the first query, and before the snapshot
     // is published: a query that meets the new snapshot finds it kept (the snapshot shares it).
-    if (options.distance_field) checkers.current()->prepare_distance_field(env, root);
+    if (options.distance_field && checkers.current()->prepare_distance_field(env, root)) {
+      const auto work = env.octree_field_work();
+      result.field_made = work.has_value() && env.octree().revision() != from;  // (else the kept one)
+      if (work) result.field = *work;
+    }
     return stats;
   });
   result.on_robot = filtered.on_robot;

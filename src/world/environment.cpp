@@ -110,6 +110,7 @@ Environment::Environment(const Environment& other)
       allowed_(other.allowed_),
       attached_(other.attached_),
       field_(std::atomic_load(&other.field_)),
+      pool_(other.pool_),
       changes_(other.changes_) {}
 
 Environment& Environment::operator=(const Environment& other) {
@@ -119,40 +120,102 @@ Environment& Environment::operator=(const Environment& other) {
   allowed_ = other.allowed_;
   attached_ = other.attached_;
   std::atomic_store(&field_, std::atomic_load(&other.field_));
+  pool_ = other.pool_;
   changes_ = other.changes_;
   return *this;
 }
 
+// Two notes are enough for a field to be made from the one before the kept one (the kept one is
+// held by the current snapshot); the others cover a snapshot held a little longer.
+constexpr std::size_t kNotesKept = 4;
+constexpr std::size_t kFieldsPooled = 2;
+
 void Environment::note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped) {
-  changes_ = std::make_shared<const OctreeChanges>(OctreeChanges{from, octree_.revision(), std::move(flipped)});
+  if (!changes_.empty() && changes_.back()->to != from) changes_.clear();  // a change no note covers
+  if (changes_.size() >= kNotesKept) changes_.erase(changes_.begin());
+  changes_.push_back(std::make_shared<const OctreeChanges>(OctreeChanges{from, octree_.revision(), std::move(flipped)}));
+}
+
+// The flipped lists that take the tree of `revision` to the current one, from the notes (none when
+// it is the current one); false when the notes do not reach back to it.
+bool Environment::changes_since(std::uint64_t revision, std::vector<const std::vector<OctreeKey>*>& steps) const {
+  steps.clear();
+  if (revision == octree_.revision()) return true;
+  if (changes_.empty() || changes_.back()->to != octree_.revision()) return false;
+  for (std::size_t i = changes_.size(); i-- > 0;) {
+    if (changes_[i]->from == revision) {
+      for (std::size_t j = i; j < changes_.size(); ++j) steps.push_back(&changes_[j]->flipped);
+      return true;
+    }
+  }
+  return false;
+}
+
+bool Environment::covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, double cap) const {
+  return f.cap >= cap && (f.lo.array() <= lo.array()).all() && (f.hi.array() >= hi.array()).all();
+}
+
+// The newest pooled field that nothing else holds and the notes reach, taken out of the pool.
+std::shared_ptr<Environment::FieldCache> Environment::reusable_field(const Vec3& lo, const Vec3& hi, double cap,
+                                                                     std::vector<const std::vector<OctreeKey>*>& steps) const {
+  std::lock_guard<std::mutex> lock(pool_->mutex);
+  for (std::size_t i = pool_->recent.size(); i-- > 0;) {
+    std::shared_ptr<FieldCache>& f = pool_->recent[i];
+    // use_count 1: no snapshot, checker or query holds it, and none can take it but from here
+    if (f.use_count() != 1 || !covers(*f, lo, hi, cap) || !changes_since(f->revision, steps)) continue;
+    std::atomic_thread_fence(std::memory_order_acquire);  // after the last holder's reads of it
+    std::shared_ptr<FieldCache> out = std::move(f);
+    pool_->recent.erase(pool_->recent.begin() + std::ptrdiff_t(i));
+    return out;
+  }
+  return nullptr;
 }
 
 std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
                                                                               std::size_t max_cells, bool build) const {
   const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
-  if (kept && kept->revision == octree_.revision() && kept->cap >= cap && (kept->lo.array() <= lo.array()).all() &&
-      (kept->hi.array() >= hi.array()).all()) {
+  if (kept && kept->revision == octree_.revision() && covers(*kept, lo, hi, cap)) {
     return std::shared_ptr<const OctreeDistanceField>(kept, &kept->field);
   }
   if (!build) return nullptr;
-  auto fresh = std::make_shared<FieldCache>();
-  fresh->revision = octree_.revision();
-  const bool follows = kept && changes_ && kept->revision == changes_->from && changes_->to == octree_.revision() &&
-                       kept->cap >= cap && (kept->lo.array() <= lo.array()).all() && (kept->hi.array() >= hi.array()).all();
-  if (follows) {  // the kept field, its box and cap, updated for the voxels that flipped since
-    fresh->lo = kept->lo, fresh->hi = kept->hi, fresh->cap = kept->cap;
-    fresh->field = kept->field.updated(octree_, changes_->flipped);
+  std::vector<const std::vector<OctreeKey>*> steps;
+  std::shared_ptr<FieldCache> fresh = reusable_field(lo, hi, cap, steps);
+  if (fresh) {  // in place: the voxels changed since its revision
+    fresh->work = {};
+    fresh->field.follow(octree_, steps, &fresh->work);
+  } else if (kept && covers(*kept, lo, hi, cap) && changes_since(kept->revision, steps)) {
+    fresh = std::make_shared<FieldCache>(*kept);  // the kept field (a snapshot holds it) copied and updated
+    fresh->work = {};
+    fresh->field.follow(octree_, steps, &fresh->work);
+    if (!fresh->work.rebuilt) fresh->work.copied_cells = fresh->field.cells();
   } else {
+    fresh = std::make_shared<FieldCache>();
     fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
     try {
       fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
     } catch (const std::invalid_argument&) {
       return nullptr;  // too large a box at this resolution (or not finite): no field
     }
+    fresh->work.rebuilt = true;
+    fresh->work.cells = fresh->field.cells();
+  }
+  fresh->revision = octree_.revision();
+  {
+    std::lock_guard<std::mutex> lock(pool_->mutex);
+    pool_->recent.push_back(fresh);
+    if (pool_->recent.size() > kFieldsPooled) pool_->recent.erase(pool_->recent.begin());
+    pool_->last = fresh->work;
+    pool_->last_revision = fresh->revision;
   }
   std::shared_ptr<const FieldCache> out = std::move(fresh);
   std::atomic_store(&field_, out);
   return std::shared_ptr<const OctreeDistanceField>(out, &out->field);
+}
+
+std::optional<OctreeDistanceField::UpdateWork> Environment::octree_field_work() const {
+  std::lock_guard<std::mutex> lock(pool_->mutex);
+  if (pool_->last_revision != octree_.revision()) return std::nullopt;
+  return pool_->last;
 }
 
 void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {

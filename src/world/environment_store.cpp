@@ -1,6 +1,7 @@
 // EnvironmentStore's pinned versions (world/environment_store.h).
 #include "bvh_collision/world/environment_store.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -60,8 +61,18 @@ std::size_t EnvironmentStore::pinned_extra_bytes() const {
     if (pins_.empty()) return 0;
     // (The snapshots stay alive while the lock is held: the map holds them.)
     trees.push_back(&current->octree());
-    for (const auto& [version, held] : pins_) trees.push_back(&held.snapshot->octree());
-    return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes();
+    // and the distance fields they hold that the current one does not (a field is one grid)
+    std::vector<const OctreeDistanceField*> fields{current->held_octree_field().get()};
+    std::size_t field_bytes = 0;
+    for (const auto& [version, held] : pins_) {
+      trees.push_back(&held.snapshot->octree());
+      const OctreeDistanceField* field = held.snapshot->held_octree_field().get();
+      if (field != nullptr && std::find(fields.begin(), fields.end(), field) == fields.end()) {
+        fields.push_back(field);
+        field_bytes += field->memory_bytes();
+      }
+    }
+    return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes() + field_bytes;
   }
 }
 

@@ -15,6 +15,7 @@
 // and of the square root. It is at most 2 sqrt(3) res below the true distance (when under cap).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -56,9 +57,17 @@ class OctreeDistanceField {
     std::size_t blocks = 0;         // blocks recomputed
     std::size_t cells = 0;          // their cells (written)
     std::size_t window_cells = 0;   // cells read: the blocks' windows
+    std::size_t copied_cells = 0;   // cells copied from this field into the new one (updated's copy)
     bool rebuilt = false;           // the blocks were more than an eighth of the grid: built anew
   };
   OctreeDistanceField updated(const Octree& tree, const std::vector<OctreeKey>& flipped, UpdateWork* work = nullptr) const;
+
+  // The same, in place and without the copy: this field becomes the field of `tree` when it is the
+  // field of a tree that differs from it only in the occupancy of the voxels of `flipped`, the
+  // lists of one change or of several in a row (their union is recomputed; each voxel takes the
+  // occupancy `tree` gives it). An environment makes a field no snapshot holds any more the next
+  // one this way (Environment::octree_distance_field): the work is that of the changes since it.
+  void follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped, UpdateWork* work = nullptr);
 
   // Equal grids and bounds (a test's comparison of an updated field with a build).
   bool same_values(const OctreeDistanceField& other) const;
@@ -77,6 +86,16 @@ class OctreeDistanceField {
   std::vector<std::uint32_t> squared_;
   std::int64_t index(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * size_[1] + y) * size_[2] + z; }
   void recompute_block(const std::int64_t lo[3], const std::int64_t hi[3], std::int64_t reach, UpdateWork& work);
+  // An update's parts: the blocks a change reaches, whether a build is cheaper, the build, the blocks.
+  struct Change;
+  Change change_of(const std::vector<const std::vector<OctreeKey>*>& flipped) const;
+  bool build_is_cheaper(const Change& change) const;
+  OctreeDistanceField rebuilt(const Octree& tree, std::size_t flipped, UpdateWork* work) const;
+  void apply(const Octree& tree, const Change& change, UpdateWork& work);
+  // how far (in voxels) a changed voxel's effect reaches: past it every value reads as the cap
+  std::int64_t reach() const {
+    return static_cast<std::int64_t>(std::ceil(std::sqrt(double(bound_of_squared_.size() - 1))));
+  }
 };
 
 }  // namespace bvh_collision

@@ -23,6 +23,8 @@ struct ScanUpdateOptions {
 struct ScanUpdateResult {
   ScanStats stats;                 // the insertion's
   std::size_t on_robot = 0, shadowed = 0, on_objects = 0;  // the filters'
+  bool field_made = false;          // a distance field was made for the new map
+  OctreeDistanceField::UpdateWork field;  // how (Environment::octree_field_work)
 };
 
 // Inserts `points` seen from `origin` (all in the world frame) into the store's environment, the

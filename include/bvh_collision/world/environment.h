@@ -2,7 +2,10 @@
 // (boxes, spheres, cylinders, meshes) that a planner adds, moves and removes by id.
 #pragma once
 
+#include <atomic>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -166,14 +169,29 @@ class Environment {
   // Safe to call from several threads on one environment (two may build it; one is kept).
   // With build = false, only a field already kept (else null).
   // A field kept for an earlier revision is updated, not rebuilt, when the octree changed from it
-  // only by the voxels note_octree_changes was told of.
+  // only by the voxels note_octree_changes was told of. The update is made in place on the field
+  // of an earlier revision that no snapshot holds any more (the environment and its copies keep
+  // the last two they made), with the voxels changed since that one: its work is that of the
+  // changes, with no copy of the grid; only when each is still held (a query on an older
+  // snapshot, a pinned version) is the kept field copied and updated (octree_field_work says which).
   std::shared_ptr<const OctreeDistanceField> octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
                                                                    std::size_t max_cells = std::size_t(1) << 24,
                                                                    bool build = true) const;
 
   // The octree went from revision `from` to its current one by flipping the occupancy of `flipped`
   // (a scan's ScanStats::flipped) and nothing else: a distance field kept for `from` follows them.
+  // The last few notes are kept while each starts where the one before ended.
   void note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped);
+
+  // How the field octree_distance_field last made here (or in a copy) came to be, when it was made
+  // for the current octree: built, or updated from an earlier one (`copied_cells` 0: in place, on
+  // a field no snapshot held any more). Empty when none was made for it.
+  std::optional<OctreeDistanceField::UpdateWork> octree_field_work() const;
+  // The distance field this environment holds (for any revision), or null: what it keeps in memory.
+  std::shared_ptr<const OctreeDistanceField> held_octree_field() const {
+    const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
+    return kept ? std::shared_ptr<const OctreeDistanceField>(kept, &kept->field) : nullptr;
+  }
 
  private:
   struct FieldCache {
@@ -181,17 +199,32 @@ class Environment {
     Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
     double cap = 0.0;
     OctreeDistanceField field;
+    OctreeDistanceField::UpdateWork work;  // how it was made
   };
+  // The fields this environment and its copies made last (the newest at the back): one no
+  // snapshot holds (its only owner is this list) becomes the next field in place.
+  struct FieldPool {
+    std::mutex mutex;
+    std::vector<std::shared_ptr<FieldCache>> recent;
+    OctreeDistanceField::UpdateWork last;
+    std::uint64_t last_revision = 0;
+  };
+  std::shared_ptr<FieldCache> reusable_field(const Vec3& lo, const Vec3& hi, double cap,
+                                             std::vector<const std::vector<OctreeKey>*>& steps) const;
+  bool covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, double cap) const;
+  bool changes_since(std::uint64_t revision, std::vector<const std::vector<OctreeKey>*>& steps) const;
   Octree octree_;
   ObjectList objects_;
   std::shared_ptr<const NamedAllowedCollisions> allowed_ = std::make_shared<const NamedAllowedCollisions>();
   std::shared_ptr<const std::vector<AttachedBody>> attached_ = std::make_shared<const std::vector<AttachedBody>>();
   mutable std::shared_ptr<const FieldCache> field_;  // read and written with std::atomic_load/store
+  std::shared_ptr<FieldPool> pool_ = std::make_shared<FieldPool>();  // copies share it
   struct OctreeChanges {
     std::uint64_t from = 0, to = 0;
     std::vector<OctreeKey> flipped;
   };
-  std::shared_ptr<const OctreeChanges> changes_;  // the last note_octree_changes (copies share it)
+  // the last notes, oldest first, each starting where the one before ended (copies share them)
+  std::vector<std::shared_ptr<const OctreeChanges>> changes_;
 };
 
 }  // namespace bvh_collision
