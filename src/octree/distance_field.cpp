@@ -292,8 +292,13 @@ void OctreeDistanceField::apply(const Octree& tree, const Change& change, Update
 
 OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<OctreeKey>& flipped,
                                                  UpdateWork* work) const {
+  return updated(tree, std::vector<const std::vector<OctreeKey>*>{&flipped}, work);
+}
+
+OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
+                                                 UpdateWork* work) const {
   if (squared_.empty()) return *this;
-  const Change change = change_of({&flipped});
+  const Change change = change_of(flipped);
   if (build_is_cheaper(change)) return rebuilt(tree, change.inside.size(), work);
   UpdateWork counted;
   counted.flipped = change.inside.size();

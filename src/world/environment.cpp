@@ -184,10 +184,9 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
     fresh->work = {};
     fresh->field.follow(octree_, steps, &fresh->work);
   } else if (kept && covers(*kept, lo, hi, cap) && changes_since(kept->revision, steps)) {
-    fresh = std::make_shared<FieldCache>(*kept);  // the kept field (a snapshot holds it) copied and updated
-    fresh->work = {};
-    fresh->field.follow(octree_, steps, &fresh->work);
-    if (!fresh->work.rebuilt) fresh->work.copied_cells = fresh->field.cells();
+    fresh = std::make_shared<FieldCache>();  // the kept field (a snapshot holds it) copied and updated
+    fresh->lo = kept->lo, fresh->hi = kept->hi, fresh->cap = kept->cap;
+    fresh->field = kept->field.updated(octree_, steps, &fresh->work);
   } else {
     fresh = std::make_shared<FieldCache>();
     fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
@@ -204,8 +203,6 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
     std::lock_guard<std::mutex> lock(pool_->mutex);
     pool_->recent.push_back(fresh);
     if (pool_->recent.size() > kFieldsPooled) pool_->recent.erase(pool_->recent.begin());
-    pool_->last = fresh->work;
-    pool_->last_revision = fresh->revision;
   }
   std::shared_ptr<const FieldCache> out = std::move(fresh);
   std::atomic_store(&field_, out);
@@ -213,9 +210,9 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
 }
 
 std::optional<OctreeDistanceField::UpdateWork> Environment::octree_field_work() const {
-  std::lock_guard<std::mutex> lock(pool_->mutex);
-  if (pool_->last_revision != octree_.revision()) return std::nullopt;
-  return pool_->last;
+  const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
+  if (!kept || kept->revision != octree_.revision()) return std::nullopt;
+  return kept->work;
 }
 
 void Environment::add_object(const std::string& id, const ObjectShape& shape, const Transform& pose) {

@@ -62,14 +62,15 @@ std::size_t EnvironmentStore::pinned_extra_bytes() const {
     // (The snapshots stay alive while the lock is held: the map holds them.)
     trees.push_back(&current->octree());
     // and the distance fields they hold that the current one does not (a field is one grid)
-    std::vector<const OctreeDistanceField*> fields{current->held_octree_field().get()};
+    // (Held here: a query on a pinned snapshot may replace the field that snapshot keeps.)
+    std::vector<std::shared_ptr<const OctreeDistanceField>> fields{current->held_octree_field()};
     std::size_t field_bytes = 0;
     for (const auto& [version, held] : pins_) {
       trees.push_back(&held.snapshot->octree());
-      const OctreeDistanceField* field = held.snapshot->held_octree_field().get();
+      std::shared_ptr<const OctreeDistanceField> field = held.snapshot->held_octree_field();
       if (field != nullptr && std::find(fields.begin(), fields.end(), field) == fields.end()) {
-        fields.push_back(field);
         field_bytes += field->memory_bytes();
+        fields.push_back(std::move(field));
       }
     }
     return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes() + field_bytes;

@@ -61,6 +61,9 @@ class OctreeDistanceField {
     bool rebuilt = false;           // the blocks were more than an eighth of the grid: built anew
   };
   OctreeDistanceField updated(const Octree& tree, const std::vector<OctreeKey>& flipped, UpdateWork* work = nullptr) const;
+  // The same over the lists of several changes in a row (their union).
+  OctreeDistanceField updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
+                              UpdateWork* work = nullptr) const;
 
   // The same, in place and without the copy: this field becomes the field of `tree` when it is the
   // field of a tree that differs from it only in the occupancy of the voxels of `flipped`, the

@@ -183,9 +183,8 @@ class Environment {
   // The last few notes are kept while each starts where the one before ended.
   void note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped);
 
-  // How the field octree_distance_field last made here (or in a copy) came to be, when it was made
-  // for the current octree: built, or updated from an earlier one (`copied_cells` 0: in place, on
-  // a field no snapshot held any more). Empty when none was made for it.
+  // How the field kept for the current octree came to be: built, or updated from an earlier one
+  // (`copied_cells` 0: in place, on a field no snapshot held any more). Empty when none is kept.
   std::optional<OctreeDistanceField::UpdateWork> octree_field_work() const;
   // The distance field this environment holds (for any revision), or null: what it keeps in memory.
   std::shared_ptr<const OctreeDistanceField> held_octree_field() const {
@@ -206,8 +205,6 @@ class Environment {
   struct FieldPool {
     std::mutex mutex;
     std::vector<std::shared_ptr<FieldCache>> recent;
-    OctreeDistanceField::UpdateWork last;
-    std::uint64_t last_revision = 0;
   };
   std::shared_ptr<FieldCache> reusable_field(const Vec3& lo, const Vec3& hi, double cap,
                                              std::vector<const std::vector<OctreeKey>*>& steps) const;
