@@ -94,17 +94,16 @@ std::vector<PlanningRobot> planning_robots() {
   out.push_back({"ur5e", "ur5e", {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"},
                  {}, {0.005, 0.01, 0.02}, "wrist_3_link",
                  [](std::uint64_t seed, int k, std::optional<Vec3>&) { return test::generate_scene(seed, k); }});
-  // pr2: 28k spheres at 20 mm and 106k at 10 mm, so the node's budget stops before 5 mm.
   std::vector<std::string> both = arm("r_");
   for (const std::string& j : arm("l_")) both.push_back(j);
-  out.push_back({"pr2 both arms", "pr2", both, {{"torso_lift_joint", 0.15}}, {0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
+  out.push_back({"pr2 both arms", "pr2", both, {{"torso_lift_joint", 0.15}}, {0.005, 0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
   std::vector<std::string> torso_arm = {"torso_lift_joint"};
   for (const std::string& j : arm("r_")) torso_arm.push_back(j);
   // The left arm tucked beside the body, as pr2's tuck_arms leaves it.
   const std::map<std::string, double> tucked = {{"l_shoulder_pan_joint", 0.06}, {"l_shoulder_lift_joint", 1.25}, {"l_upper_arm_roll_joint", 1.79},
                                                 {"l_elbow_flex_joint", -1.68}, {"l_forearm_roll_joint", -1.73}, {"l_wrist_flex_joint", -0.1},
                                                 {"l_wrist_roll_joint", -0.09}};
-  out.push_back({"pr2 torso + right arm", "pr2", torso_arm, tucked, {0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
+  out.push_back({"pr2 torso + right arm", "pr2", torso_arm, tucked, {0.005, 0.01, 0.02}, "r_gripper_palm_link", pr2_scenes});
   return out;
 }
 
@@ -450,8 +449,8 @@ void report(const std::string& out_dir, const std::vector<RobotRun>& runs, doubl
              "simplifier on the same validators; plan times count unsolved problems at the limit. Per-check figures are "
              "medians over every call the planners made (each call timed on its own); time in checks: the sum of those "
              "calls (for ours the adapter's state layout included) over the plan time, the rest is OMPL's own work. Ours: "
-             "planning/ompl_validity.h (SceneChecker, certified motions), the node's proxy levels (pr2: 10 and 20 mm, its "
-             "sphere budget stops there). FCL: BVHModel<OBBRSS> link meshes and primitive URDF shapes, each checked pair "
+             "planning/ompl_validity.h (SceneChecker, certified motions), the node's proxy levels (5, 10 and 20 mm: pr2's 5 mm "
+             "level, 415k spheres, fits the node's sphere budget). FCL: BVHModel<OBBRSS> link meshes and primitive URDF shapes, each checked pair "
              "behind an AABB test, primitive objects in a dynamic AABB tree, OMPL's DiscreteMotionValidator at 1 %. Scenes "
              "and problems: build/bench/scenes (MoveIt .scene text, problems.json).");
   table.write(out_dir);

@@ -43,6 +43,34 @@ TEST(RobotCheckers, ProxyLevelsJoinTheCheckerAsTheyAreBuilt) {
   EXPECT_TRUE(before->accelerators().proxy_levels().empty()) << "a checker a query holds never changes";
 }
 
+// The sphere budget stops before a level predicted beyond it (a surface's cover grows as the
+// inverse square of the level), not after one that already went past it.
+TEST(RobotCheckers, AFinerLevelPredictedBeyondTheSphereBudgetIsNotBuilt) {
+  RobotCheckers coarse = demo_checkers({0.02});
+  coarse.start_proxy_levels();
+  coarse.wait_for_proxy_levels();
+  const std::size_t at_20mm = coarse.current()->accelerators().proxies_for(0.02)->leaves;
+  ASSERT_GT(at_20mm, 10u);
+  // Room for twice the 20 mm spheres: 10 mm (about four times as many) does not fit.
+  std::vector<std::string> log;
+  RobotCheckers checkers(test::demo_arm_checker(), {0.005, 0.01, 0.02}, 2 * at_20mm,
+                         [&](SessionLogLevel, const std::string& line) { log.push_back(line); });
+  checkers.start_proxy_levels();
+  checkers.wait_for_proxy_levels();
+  const auto& built = checkers.current()->accelerators().proxy_levels();
+  ASSERT_EQ(built.size(), 1u) << "the coarsest level is always built, and only it fits";
+  EXPECT_EQ(built[0].level, 0.02);
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_NE(log[1].find("finer proxy levels skipped: 0.01 m would need about " + std::to_string(4 * at_20mm) + " spheres"),
+            std::string::npos)
+      << log[1];
+  // A budget the levels fit: every one built.
+  RobotCheckers roomy = demo_checkers({0.005, 0.01, 0.02});
+  roomy.start_proxy_levels();
+  roomy.wait_for_proxy_levels();
+  EXPECT_EQ(roomy.current()->accelerators().proxy_levels().size(), 3u);
+}
+
 TEST(RobotCheckers, ASnapshotsAttachedObjectsAreCarriedOnceAndKept) {
   RobotCheckers checkers = demo_checkers({});
   auto env = std::make_shared<Environment>(0.05);

@@ -3,6 +3,7 @@
 #include "bvh_collision/session/robot_checkers.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace bvh_collision {
@@ -49,11 +50,19 @@ void RobotCheckers::build_proxy_levels() {
       std::snprintf(line, sizeof line, "proxy level %.4g m ready: %zu spheres, %.1f KiB, in %.2f s (%zu links from the cache)",
                     built->level, built->leaves, built->memory_bytes / 1024.0, built->build_seconds, built->links_from_cache);
       log_(SessionLogLevel::kInfo, line);
-      if (built->leaves > sphere_budget_ && i + 1 < levels.size()) {
-        std::snprintf(line, sizeof line, "finer proxy levels skipped: %.4g m needed %zu spheres (budget %zu)", built->level,
-                      built->leaves, sphere_budget_);
-        log_(SessionLogLevel::kInfo, line);
-        return;
+      // A surface's cover grows as the inverse square of the level: the next one's spheres are
+      // predicted from this one's, and a level predicted beyond the budget is not built (pr2:
+      // 28,346 at 20 mm predict 113k at 10 mm, built 105,893; those predict 424k at 5 mm, built
+      // 415,194).
+      if (i + 1 < levels.size()) {
+        const double ratio = levels[i] / levels[i + 1];
+        const auto predicted = static_cast<std::size_t>(std::llround(static_cast<double>(built->leaves) * ratio * ratio));
+        if (predicted > sphere_budget_) {
+          std::snprintf(line, sizeof line, "finer proxy levels skipped: %.4g m would need about %zu spheres (budget %zu)",
+                        levels[i + 1], predicted, sphere_budget_);
+          log_(SessionLogLevel::kInfo, line);
+          return;
+        }
       }
     } catch (const ProxyBuildCancelled&) {
       return;

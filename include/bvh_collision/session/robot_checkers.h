@@ -26,8 +26,8 @@ using SessionLog = std::function<void(SessionLogLevel, const std::string&)>;
 
 class RobotCheckers {
  public:
-  // `levels` (m): the proxy levels to build, any order; a level that needs more than
-  // `sphere_budget` spheres is the last one built.
+  // `levels` (m): the proxy levels to build, any order, coarsest first; a finer level predicted
+  // (from the one before) to need more than `sphere_budget` spheres is not built, nor any after it.
   RobotCheckers(CollisionChecker robot, std::vector<double> levels, std::size_t sphere_budget, SessionLog log);
   ~RobotCheckers();  // stops the builds (at their next link) and waits for them
   RobotCheckers(const RobotCheckers&) = delete;
