@@ -3,6 +3,7 @@
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
+#include "bvh_collision/query/motion_calibration.h"
 
 #include <algorithm>
 #include <cmath>
@@ -56,7 +57,21 @@ struct SelfScratch {
 
 CollisionChecker::CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options)
     : m_(std::make_shared<const RobotCollisionModel>(std::move(model), std::move(acm), options)),
-      a_(std::make_shared<const RobotAccelerators>(*m_, options)) {}
+      a_(calibrated(m_, std::make_shared<RobotAccelerators>(*m_, options))) {}
+
+CollisionChecker CollisionChecker::with_proxy_level(double level, const std::atomic<bool>* cancel) const {
+  return CollisionChecker(m_, calibrated(m_, std::make_shared<RobotAccelerators>(a_->with_proxy_level(*m_, level, cancel))));
+}
+
+std::shared_ptr<const RobotAccelerators> CollisionChecker::calibrated(const std::shared_ptr<const RobotCollisionModel>& model,
+                                                                      std::shared_ptr<RobotAccelerators> accelerators) {
+  if (accelerators->calibrates() && accelerators->proxy_levels().size() >= 2) {
+    // (The checker timed holds the accelerators only while it is timed: they are set once it is gone.)
+    const double growth = choose_pair_exact_growth(CollisionChecker(model, accelerators)).growth;
+    accelerators->set_pair_exact_growth(growth);
+  }
+  return accelerators;
+}
 
 bool CollisionChecker::pair_collides(int a, int b, const std::vector<Transform>& poses,
                                      const SelfCollisionRequest& request, SelfCollisionResult& result) const {

@@ -52,6 +52,8 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   const RobotCollisionModel& m = checker_.collision_model();
   proxies_ = levels_for(checker_.accelerators(), options.tolerance);
   level_ = proxies_.empty() ? 0.0 : proxies_.back()->level;
+  pair_exact_growth_ = std::max(level_, options.pair_exact_growth >= 0.0 ? options.pair_exact_growth
+                                                                          : checker_.accelerators().pair_exact_growth());
   proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
   proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
   // The tolerance answers a component's midpoint where it is clear of it at both ends (a level
@@ -175,7 +177,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   if (walked != nullptr && !proxies_overlap(walked->links[a], s.poses[a], walked->links[b], s.poses[b], pads)) return Answer::kFree;
   if (s.growth != nullptr) {
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
-    if (!exact_distance_pays(s, grow, level_)) return s.no_free_radius();
+    if (!exact_distance_pays(s, grow, pair_exact_growth_)) return s.no_free_radius();
     const double limit = grown_radius(pads) + margin;
     Vec3 wa, wb;
     QueryStats stats;

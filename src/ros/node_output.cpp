@@ -202,6 +202,10 @@ void CollisionCheckerNode::publish_diagnostics(const ros::WallTimerEvent&) {
     levels << (levels.tellp() > 0 ? " " : "") << level.level;
   }
   queries.values.push_back(kv("proxy levels ready (m)", levels.str()));
+  // (query/motion_calibration.h: timed when the levels were built; 0 before two are.)
+  std::ostringstream growth;
+  growth << checker->accelerators().pair_exact_growth();
+  queries.values.push_back(kv("exact motions: self pairs' distance from growth (m)", growth.str()));
   queries.values.push_back(kv("states checked", std::to_string(states_checked_.load())));
   for (const auto& [service, stats] : latency_) {
     const LatencyStats::Summary s = stats.summary();

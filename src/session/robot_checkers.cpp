@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace bvh_collision {
 
@@ -46,9 +47,13 @@ void RobotCheckers::build_proxy_levels() {
       auto next = std::make_shared<const CollisionChecker>(current()->with_proxy_level(levels[i], &stop_));
       const ProxyLevel* built = next->accelerators().proxies_for(levels[i]);
       std::atomic_store(&current_, std::shared_ptr<const CollisionChecker>(next));
-      char line[200];
+      char line[300];
       std::snprintf(line, sizeof line, "proxy level %.4g m ready: %zu spheres, %.1f KiB, in %.2f s (%zu links from the cache)",
                     built->level, built->leaves, built->memory_bytes / 1024.0, built->build_seconds, built->links_from_cache);
+      if (const double growth = next->accelerators().pair_exact_growth(); growth > 0.0) {
+        const std::size_t used = std::strlen(line);
+        std::snprintf(line + used, sizeof line - used, "; exact motions' self pairs take their distance from %.4g m of growth (timed)", growth);
+      }
       log_(SessionLogLevel::kInfo, line);
       // A surface's cover grows as the inverse square of the level: the next one's spheres are
       // predicted from this one's, and a level predicted beyond the budget is not built (pr2:

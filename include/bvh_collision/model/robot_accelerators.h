@@ -57,6 +57,14 @@ class RobotAccelerators {
   const std::vector<ProxyLevel>& proxy_levels() const { return proxy_levels_; }
   const ProxyLevel* proxies_for(double tolerance) const;
   const PairClearance& pair_clearance() const { return pair_clearance_; }
+  // A certified exact motion's growth below which a self pair takes its exact distance rather
+  // than a halved interval (SceneCheckOptions::pair_exact_growth; 0: the finest level's), chosen
+  // by timing once the levels are built (query/motion_calibration.h): a pair of convex-like links
+  // measures its distance in a few GJK steps and gains from taking it at a coarse level's growth,
+  // a pair of concave meshes walks a BVH for it and gains from the finest level's spheres first.
+  double pair_exact_growth() const { return pair_exact_growth_; }
+  void set_pair_exact_growth(double growth) { pair_exact_growth_ = growth; }
+  bool calibrates() const { return calibrate_; }  // CheckerOptions::calibrate_proxies
 
   // A copy with proxy level `level` built from `model` (the one these were built from) as well:
   // it answers every query as this one does and uses the level wherever it fits (a node builds
@@ -81,6 +89,7 @@ class RobotAccelerators {
   bool calibrate_ = true;    // CheckerOptions::calibrate_proxies
   std::vector<ProxyLevel> proxy_levels_;
   PairClearance pair_clearance_;
+  double pair_exact_growth_ = 0.0;
 };
 
 }  // namespace bvh_collision

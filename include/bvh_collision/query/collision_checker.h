@@ -39,10 +39,10 @@ class SceneChecker;
 class CollisionChecker {
  public:
   CollisionChecker(RobotModel model, AllowedCollisionMatrix acm, const CheckerOptions& options = {});
-  // This checker with one more proxy level (RobotAccelerators::with_proxy_level); the model is shared.
-  CollisionChecker with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const {
-    return CollisionChecker(m_, std::make_shared<const RobotAccelerators>(a_->with_proxy_level(*m_, level, cancel)));
-  }
+  // This checker with one more proxy level (RobotAccelerators::with_proxy_level); the model is
+  // shared. With two levels or more (and CheckerOptions::calibrate_proxies), the self pairs' exact
+  // growth of certified motions is chosen again (query/motion_calibration.h).
+  CollisionChecker with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const;
 
   // This checker carrying `bodies` (AttachedBody, world/environment.h; the model's carrying and
   // its accelerators'): each body one more link, named by its id, after the robot's links; the
@@ -211,6 +211,9 @@ class CollisionChecker {
 
   CollisionChecker(std::shared_ptr<const RobotCollisionModel> model, std::shared_ptr<const RobotAccelerators> accelerators)
       : m_(std::move(model)), a_(std::move(accelerators)) {}
+  // `accelerators` with the pair exact growth chosen for them (query/motion_calibration.h).
+  static std::shared_ptr<const RobotAccelerators> calibrated(const std::shared_ptr<const RobotCollisionModel>& model,
+                                                             std::shared_ptr<RobotAccelerators> accelerators);
 
   // The scene the last certified motion was answered on (motion_check.cpp), kept for the next.
   struct PreparedMotions {

@@ -51,6 +51,12 @@ struct SceneCheckOptions {
   // state free, an exact test confirms a hit), so that a planner can accept a goal a millimetre
   // from a table; true: a state within the tolerance may count as colliding (cheaper hits).
   bool states_at_tolerance = false;
+  // At tolerance 0, a self pair that an interval's proxies cannot certify takes its exact
+  // distance at the midpoint once its growth is at most this (m; never below the finest level,
+  // where halving the interval no longer helps the proxies); below it the interval is halved.
+  // Negative: the checker's own (RobotAccelerators::pair_exact_growth, chosen when its levels
+  // were built: query/motion_calibration.h). The answers are the same at every value.
+  double pair_exact_growth = -1.0;
 };
 
 class SceneChecker {
@@ -220,6 +226,7 @@ class SceneChecker {
   SceneCheckOptions options_;
   std::vector<const ProxyLevel*> proxies_;  // coarsest first; the last is the finest used
   double level_ = 0.0;                       // the finest's
+  double pair_exact_growth_ = 0.0;           // SceneCheckOptions::pair_exact_growth, at least level_
   bool proxies_decide_self_ = false;         // tolerance >= the finest level: overlap is an answer
   bool proxies_decide_objects_ = false;      // tolerance >= half of it
   // A motion may take the tolerance's shortcuts (a tolerance, with a level that fits it):
