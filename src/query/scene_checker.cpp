@@ -142,11 +142,12 @@ const ProxyLevel* SceneChecker::walked_level(double growth) const {
   return finest == proxies_.rend() ? nullptr : *finest;
 }
 
-// An interval the proxies could not certify: is an exact distance at its midpoint worth its cost
-// (ten times a proxy test's)? Not at a tolerance, where a failed interval is
-// bisected until the tolerance takes it as colliding; at tolerance 0 once the growth is below the
-// proxies' own error, `error` (half the level against an obstacle, the level for a self pair),
-// where halving the interval no longer helps them; always without proxies.
+// An interval the proxies could not certify: is an exact distance at its midpoint worth its cost?
+// Not at a tolerance, where a failed interval is bisected until the tolerance takes it as
+// colliding; at tolerance 0 once the growth is at most `error`: against an obstacle the proxies'
+// own error (half the finest level), where halving the interval no longer helps them; for a self
+// pair the growth the robot's timing chose (pair_exact_growth_, at least the finest level:
+// query/motion_calibration.h); always without proxies.
 bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double error) const {
   if (proxies_.empty()) return true;
   return growth <= error && !s.tolerant();

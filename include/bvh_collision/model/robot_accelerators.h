@@ -59,9 +59,9 @@ class RobotAccelerators {
   const PairClearance& pair_clearance() const { return pair_clearance_; }
   // A certified exact motion's growth below which a self pair takes its exact distance rather
   // than a halved interval (SceneCheckOptions::pair_exact_growth; 0: the finest level's), chosen
-  // by timing once the levels are built (query/motion_calibration.h): a pair of convex-like links
-  // measures its distance in a few GJK steps and gains from taking it at a coarse level's growth,
-  // a pair of concave meshes walks a BVH for it and gains from the finest level's spheres first.
+  // by timing once the levels are built (query/motion_calibration.h): where a pair's distance
+  // costs a few walks of its grown spheres (ur5e) it pays at a coarse level's growth, where it
+  // costs a dozen or more (pr2's concave meshes) the finest level's spheres pay first.
   double pair_exact_growth() const { return pair_exact_growth_; }
   void set_pair_exact_growth(double growth) { pair_exact_growth_ = growth; }
   bool calibrates() const { return calibrate_; }  // CheckerOptions::calibrate_proxies
