@@ -325,30 +325,52 @@ TEST(OctreeDistanceField, TheEnvironmentsFieldFollowsAScan) {
   }
 }
 
-// follow: a field made the field of a tree several changes later, in place, from the union of the
-// changes' lists (voxels flipped twice among them, and outside the grid), equals a build.
-TEST(OctreeDistanceField, FollowingSeveralChangesInPlaceEqualsABuild) {
+// A field made the field of a tree several changes later, in place on its grid, from the union
+// of the changes' lists (voxels flipped twice among them, and outside the grid), equals a build;
+// the field it was made from keeps its values, holding only the pages that changed; a second
+// field made from that one (no longer the grid's latest) is a copy, with the same values.
+TEST(OctreeDistanceField, SeveralChangesInPlaceEqualABuildAndTheOldFieldKeepsItsValues) {
   Octree tree(0.05);
   std::mt19937_64 rng(17);
   std::uniform_int_distribution<int> u(-12, 11);
   for (int i = 0; i < 300; ++i) tree.update(key_at(u(rng), u(rng), u(rng)), true);
-  const Vec3 lo = Vec3::Constant(-0.5), hi = Vec3::Constant(0.5);
-  OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, 0.2);
+  const Vec3 lo = Vec3::Constant(-2.0), hi = Vec3::Constant(2.0);  // 636,056 cells; the changes reach 8 blocks
+  std::uniform_int_distribution<int> near(-4, 3);
+  const Octree original = tree;
+  const OctreeDistanceField field = OctreeDistanceField::build(tree, lo, hi, 0.1);
   std::vector<std::vector<OctreeKey>> lists(3);
   VoxelSet first;
-  for (int i = 0; i < 30; ++i) first.insert(key_at(u(rng), u(rng), u(rng)));
+  for (int i = 0; i < 30; ++i) first.insert(key_at(near(rng), near(rng), near(rng)));
   first.insert(key_at(300, 0, 0));  // outside the grid
   tree.update_sorted(first.sorted_keys(), true, &lists[0]);
   for (int k = 0; k < 4; ++k) tree.update_sorted(first.sorted_keys(), false, &lists[1]);  // some back again
   VoxelSet third;
-  for (int i = 0; i < 30; ++i) third.insert(key_at(u(rng), u(rng), u(rng)));
+  for (int i = 0; i < 30; ++i) third.insert(key_at(near(rng), near(rng), near(rng)));
   tree.update_sorted(third.sorted_keys(), true, &lists[2]);
-  ASSERT_FALSE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.2)));
+  const OctreeDistanceField built = OctreeDistanceField::build(tree, lo, hi, 0.1);
+  ASSERT_FALSE(field.same_values(built));
   OctreeDistanceField::UpdateWork work;
-  field.follow(tree, {&lists[0], &lists[1], &lists[2]}, &work);
-  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.2)));
+  const OctreeDistanceField next = field.updated(tree, {&lists[0], &lists[1], &lists[2]}, &work);
+  EXPECT_TRUE(next.same_values(built));
+  EXPECT_FALSE(work.rebuilt);
   EXPECT_EQ(work.copied_cells, 0u);
+  EXPECT_LT(work.cells * 8, field.cells());
   EXPECT_GT(work.flipped, lists[2].size());
+  EXPECT_GT(work.changed_cells, 0u);
+  EXPECT_LE(work.changed_cells, work.cells);
+  // The old field: its tree's values, and memory of its own only for the pages that changed.
+  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(original, lo, hi, 0.1)));
+  const std::size_t grid_bytes = next.memory_bytes();
+  EXPECT_EQ(OctreeDistanceField::distinct_memory_bytes({&field, &next}), grid_bytes + work.kept_pages * VersionedGrid::kPageBytes);
+  EXPECT_LE(work.kept_pages, (work.changed_cells + lists[0].size() + lists[1].size() + lists[2].size()));
+  // Made again from the old field: a copy (the grid's file holds the newer values).
+  OctreeDistanceField::UpdateWork again;
+  const OctreeDistanceField copy = field.updated(tree, {&lists[0], &lists[1], &lists[2]}, &again);
+  EXPECT_TRUE(copy.same_values(built));
+  EXPECT_FALSE(again.rebuilt);
+  EXPECT_EQ(again.copied_cells, field.cells());
+  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(original, lo, hi, 0.1)));
+  EXPECT_TRUE(next.same_values(built));
 }
 
 // Environment checks with the field answer as without it, state by state (at tolerance 0 the

@@ -143,11 +143,12 @@ TEST(SharedSnapshots, ClearingOneVoxelCopiesAFewPagesNotTheMap) {
 }
 
 // Scans into a store, each followed by the map's distance field, as the node's cloud thread does
-// (session/scan_update.cpp): once the field of the scan before last is held by nobody, the next
-// field is made in place on it from the voxels the two scans changed, with no copy of the grid;
-// while a reader holds it (and its field) the kept field is copied instead, and the held field
-// never changes under the reader. Every field equals a build of its snapshot's tree.
-TEST(SharedSnapshots, TheNextDistanceFieldIsMadeInPlaceOnAFieldNobodyHolds) {
+// (session/scan_update.cpp): every field is made in place on the grid of the one before, from the
+// voxels the scan changed, with no copy of the grid, whether or not a reader holds the earlier
+// one; a held field never changes under its reader and holds memory of its own only for the pages
+// changed since (a pinned version too: its memory is what changed, not a grid). Every field
+// equals a build of its snapshot's tree.
+TEST(SharedSnapshots, TheNextDistanceFieldIsMadeInPlaceAndAHeldOneKeepsOnlyWhatChanged) {
   EnvironmentStore store(scattered_map(20000, 4));
   const Vec3 lo(-1.2, -1.2, -0.2), hi(1.2, 1.2, 1.2);
   const double cap = 0.1;
@@ -164,48 +165,52 @@ TEST(SharedSnapshots, TheNextDistanceFieldIsMadeInPlaceOnAFieldNobodyHolds) {
       return env.octree_field_work().value();
     });
   };
+  auto field_of = [&](const Environment& env) { return env.octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false); };
   auto equals_a_build = [&](const Environment& env) {
-    const auto field = env.octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false);
+    const auto field = field_of(env);
     return field && field->same_values(OctreeDistanceField::build(env.octree(), lo, hi, cap));
   };
   store.modify([&](Environment& env) { env.octree_distance_field(lo, hi, cap); });
-  const std::size_t grid = store.snapshot()->octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false)->cells();
+  const auto first = field_of(*store.snapshot());
+  const std::size_t grid = first->cells(), grid_bytes = first->memory_bytes();
   ASSERT_GT(grid, 1000000u);
-  int in_place = 0;
-  for (int i = 0; i < 6; ++i) {
-    const OctreeDistanceField::UpdateWork work = scan(-0.8f + 0.3f * float(i));
-    ASSERT_TRUE(equals_a_build(*store.snapshot())) << "scan " << i;
-    ASSERT_FALSE(work.rebuilt) << "scan " << i;
-    EXPECT_GT(work.flipped, 0u);
-    EXPECT_LT(work.cells * 8, grid);  // the blocks the scans reached, not the map
-    if (i >= 1) {  // the field before the kept one is free from the second scan on
-      EXPECT_EQ(work.copied_cells, 0u) << "scan " << i;
-      in_place += work.copied_cells == 0;
+  auto scans = [&](int n, float x0, float dx) {
+    for (int i = 0; i < n; ++i) {
+      const OctreeDistanceField::UpdateWork work = scan(x0 + dx * float(i));
+      ASSERT_TRUE(equals_a_build(*store.snapshot())) << "scan " << i;
+      ASSERT_FALSE(work.rebuilt) << "scan " << i;
+      EXPECT_GT(work.flipped, 0u);
+      EXPECT_LT(work.cells * 8, grid);        // the blocks the scans reached, not the map
+      EXPECT_EQ(work.copied_cells, 0u) << "scan " << i;  // in place
     }
-  }
-  EXPECT_EQ(in_place, 5);
+  };
+  scans(6, -0.8f, 0.3f);
 
-  // A reader holds a snapshot and its field over three scans: the fields around it are copies
-  // until it lets go, and its field keeps its tree's values.
+  // A reader holds a snapshot and its field over three scans: the fields after it are still made
+  // in place; its field keeps its tree's values and holds only the pages changed since.
   const auto held = store.snapshot();
-  const auto held_field = held->octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false);
+  const auto held_field = field_of(*held);
   ASSERT_NE(held_field, nullptr);
-  int copied = 0;
-  for (int i = 0; i < 3; ++i) {
-    const OctreeDistanceField::UpdateWork work = scan(0.5f - 0.4f * float(i));
-    copied += work.copied_cells == grid;
-    ASSERT_TRUE(equals_a_build(*store.snapshot()));
-  }
-  EXPECT_GE(copied, 1);  // the second scan: the reader holds one pooled field, the snapshot the other
+  scans(3, 0.5f, -0.4f);
   EXPECT_TRUE(held_field->same_values(OctreeDistanceField::build(held->octree(), lo, hi, cap)));
+  const auto now = field_of(*store.snapshot());
+  const std::size_t own = OctreeDistanceField::distinct_memory_bytes({now.get(), held_field.get()}) - now->memory_bytes();
+  EXPECT_GT(own, 0u);
+  EXPECT_LT(own * 8, grid_bytes);
 
-  // A pinned version holds its field once the map changed: the pin's memory counts it.
+  // A pinned version, over three scans: its memory beyond the current map is the octree pages and
+  // the field pages changed since, far less than a grid (it was a whole grid before).
   const auto t0 = EnvironmentStore::Clock::now();
   const EnvironmentStore::Pin pin = store.pin(std::chrono::seconds(60), t0);
-  const std::size_t before = store.pinned_extra_bytes();  // (the pin shares the current field)
-  EXPECT_LT(before, held_field->memory_bytes());
-  scan(0.0f);
-  EXPECT_GE(store.pinned_extra_bytes(), before + held_field->memory_bytes());
+  const auto pinned_field = field_of(*pin.snapshot);
+  const std::size_t before = store.pinned_extra_bytes();  // (the pin shares the current map and field)
+  EXPECT_LT(before * 100, grid_bytes);
+  scans(3, -0.3f, 0.3f);
+  const std::size_t extra = store.pinned_extra_bytes();
+  EXPECT_GT(extra, before);
+  EXPECT_LT(extra * 4, grid_bytes);
+  RecordProperty("pinned_extra_over_grid", std::to_string(double(extra) / double(grid_bytes)));
+  EXPECT_TRUE(pinned_field->same_values(OctreeDistanceField::build(pin.snapshot->octree(), lo, hi, cap)));
   EXPECT_TRUE(store.release(pin.version));
 }
 

@@ -92,7 +92,9 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
     }
     cells *= std::size_t(field.size_[a]);
   }
-  field.squared_.assign(cells, kFar);
+  // Written in the grid's file before any version of it exists: nothing to keep.
+  const std::shared_ptr<VersionedGrid> grid = VersionedGrid::create(cells, kFar);
+  std::uint32_t* d = grid->head();
   const std::int64_t sx = field.size_[0], sy = field.size_[1], sz = field.size_[2];
   auto at = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return (x * sy + y) * sz + z; };
   // The occupied voxels: every voxel of each occupied leaf (a pruned leaf is a cube of them).
@@ -108,7 +110,7 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
     }
     for (std::int64_t x = b[0]; x < e[0]; ++x) {
       for (std::int64_t y = b[1]; y < e[1]; ++y) {
-        for (std::int64_t z = b[2]; z < e[2]; ++z) field.squared_[at(x, y, z)] = 0;
+        for (std::int64_t z = b[2]; z < e[2]; ++z) d[at(x, y, z)] = 0;
       }
     }
   }
@@ -122,7 +124,6 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
   // Separable: along z, then y, then x (a squared distance sums its axes' squares).
   std::vector<std::int64_t> f, v;
   std::vector<Breakpoint> zs;
-  std::uint32_t* d = field.squared_.data();
   for (std::int64_t x = 0; x < sx; ++x) {
     for (std::int64_t y = 0; y < sy; ++y) transform_line(d + at(x, y, 0), sz, 1, f, v, zs);
   }
@@ -133,7 +134,8 @@ OctreeDistanceField OctreeDistanceField::build(const Octree& tree, const Vec3& l
     for (std::int64_t z = 0; z < sz; ++z) transform_line(d + at(0, y, z), sx, sy * sz, f, v, zs);
   }
   const std::uint32_t clamp = static_cast<std::uint32_t>(field.bound_of_squared_.size() - 1);
-  for (std::uint32_t& x : field.squared_) x = std::min(x, clamp);
+  for (std::size_t i = 0; i < cells; ++i) d[i] = std::min(d[i], clamp);
+  field.adopt(grid);
   return field;
 }
 
@@ -170,7 +172,8 @@ void nearest_along(std::int64_t count, std::int64_t from, std::int64_t to, Occup
 // One block's cells [lo, hi) from the occupancy within `reach` of it (the window): along z to
 // the block's z range, then along y, then x, each pass over the window's lines.
 void OctreeDistanceField::recompute_block(const std::int64_t lo[3], const std::int64_t hi[3], std::int64_t reach,
-                                          UpdateWork& work) {
+                                          VersionedGrid& grid, UpdateWork& work) const {
+  std::uint32_t* const cells = grid.head();
   std::int64_t wlo[3], whi[3], n[3];
   for (int a = 0; a < 3; ++a) {
     wlo[a] = std::max<std::int64_t>(0, lo[a] - reach);
@@ -184,7 +187,7 @@ void OctreeDistanceField::recompute_block(const std::int64_t lo[3], const std::i
   g1.assign(std::size_t(wx * wy * n[2]), kFar);  // [x][y][z] over the window's x, y
   for (std::int64_t x = 0; x < wx; ++x) {
     for (std::int64_t y = 0; y < wy; ++y) {
-      const std::uint32_t* row = squared_.data() + index(wlo[0] + x, wlo[1] + y, 0);
+      const std::uint32_t* row = cells + index(wlo[0] + x, wlo[1] + y, 0);
       // (Window-relative: the column is read over the window only, not from the grid's start.)
       nearest_along(whi[2] - wlo[2], lo[2] - wlo[2], hi[2] - wlo[2], [&](std::int64_t z) { return row[wlo[2] + z] == 0; },
                     &g1[std::size_t((x * wy + y) * n[2])]);
@@ -206,7 +209,13 @@ void OctreeDistanceField::recompute_block(const std::int64_t lo[3], const std::i
       for (std::int64_t x = 0; x < wx; ++x) line[x] = g2[std::size_t((x * n[1] + y) * n[2] + z)];
       transform_line(line.data(), wx, 1, f, v, zs);
       for (std::int64_t x = 0; x < n[0]; ++x) {
-        squared_[index(lo[0] + x, lo[1] + y, lo[2] + z)] = std::min(line[lo[0] + x - wlo[0]], clamp);
+        // Only a changed value is written: a page no value of changes is not kept for older versions.
+        const std::size_t i = std::size_t(index(lo[0] + x, lo[1] + y, lo[2] + z));
+        const std::uint32_t value = std::min(line[lo[0] + x - wlo[0]], clamp);
+        if (cells[i] == value) continue;
+        grid.keep_before_write(i);
+        cells[i] = value;
+        ++work.changed_cells;
       }
     }
   }
@@ -251,7 +260,7 @@ OctreeDistanceField::Change OctreeDistanceField::change_of(const std::vector<con
 // A block's window costs about 25 cell passes a cell, a build about 3 over the grid: past an
 // eighth of the grid, a build is cheaper (the same values).
 bool OctreeDistanceField::build_is_cheaper(const Change& change) const {
-  return change.dirty_blocks * std::size_t(kBlock * kBlock * kBlock) * 8 > squared_.size();
+  return change.dirty_blocks * std::size_t(kBlock * kBlock * kBlock) * 8 > cells_;
 }
 
 OctreeDistanceField OctreeDistanceField::rebuilt(const Octree& tree, std::size_t flipped, UpdateWork* work) const {
@@ -264,18 +273,22 @@ OctreeDistanceField OctreeDistanceField::rebuilt(const Octree& tree, std::size_t
     *work = UpdateWork{};
     work->flipped = flipped;
     work->rebuilt = true;
-    work->cells = squared_.size();
+    work->cells = cells_;
   }
-  return build(tree, lo, hi, cap_, squared_.size());
+  return build(tree, lo, hi, cap_, cells_);
 }
 
 // The changed voxels' new occupancy (0: occupied; a freed one at the clamp, which its block's
 // recomputation replaces), then the blocks.
-void OctreeDistanceField::apply(const Octree& tree, const Change& change, UpdateWork& work) {
+void OctreeDistanceField::apply(const Octree& tree, const Change& change, VersionedGrid& grid, UpdateWork& work) const {
   const std::uint32_t clamp = static_cast<std::uint32_t>(bound_of_squared_.size() - 1);
+  std::uint32_t* const cells = grid.head();
   for (const auto& [cell, key] : change.inside) {
     const auto found = tree.find(*key);
-    squared_[std::size_t(cell)] = found && tree.occupied(found->log_odds) ? 0 : clamp;
+    const std::uint32_t value = found && tree.occupied(found->log_odds) ? 0 : clamp;
+    if (cells[std::size_t(cell)] == value) continue;
+    grid.keep_before_write(std::size_t(cell));
+    cells[std::size_t(cell)] = value;
   }
   const std::int64_t reach = this->reach();
   for (std::int64_t x = 0; x < change.blocks[0]; ++x) {
@@ -284,7 +297,7 @@ void OctreeDistanceField::apply(const Octree& tree, const Change& change, Update
         if (!change.dirty[std::size_t((x * change.blocks[1] + y) * change.blocks[2] + z)]) continue;
         const std::int64_t lo[3] = {x * kBlock, y * kBlock, z * kBlock};
         const std::int64_t hi[3] = {std::min(size_[0], lo[0] + kBlock), std::min(size_[1], lo[1] + kBlock), std::min(size_[2], lo[2] + kBlock)};
-        recompute_block(lo, hi, reach, work);
+        recompute_block(lo, hi, reach, grid, work);
       }
     }
   }
@@ -297,39 +310,64 @@ OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::
 
 OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
                                                  UpdateWork* work) const {
-  if (squared_.empty()) return *this;
+  if (cells_ == 0) return *this;
   const Change change = change_of(flipped);
   if (build_is_cheaper(change)) return rebuilt(tree, change.inside.size(), work);
   UpdateWork counted;
   counted.flipped = change.inside.size();
-  OctreeDistanceField out = *this;
-  counted.copied_cells = squared_.size();
-  out.apply(tree, change, counted);
+  OctreeDistanceField out = *this;  // the bounds; the cells are the next version's
+  const std::shared_ptr<VersionedGrid>& grid = version_->grid();
+  std::unique_lock<std::mutex> writer(grid->writer());
+  if (grid->head_version() == version_->id()) {  // in place: this field and older ones keep their pages
+    const std::size_t kept = grid->kept_pages();
+    apply(tree, change, *grid, counted);
+    counted.kept_pages = grid->kept_pages() - kept;
+    out.adopt(grid);
+  } else {  // a newer field was made over this one's file: a grid of its own
+    writer.unlock();
+    const std::shared_ptr<VersionedGrid> copy = VersionedGrid::create(cells_, 0);
+    std::copy_n(squared_, cells_, copy->head());
+    counted.copied_cells = cells_;
+    apply(tree, change, *copy, counted);
+    out.adopt(copy);
+  }
   if (work != nullptr) *work = counted;
   return out;
 }
 
-void OctreeDistanceField::follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
-                                 UpdateWork* work) {
-  if (squared_.empty()) return;
-  const Change change = change_of(flipped);
-  if (build_is_cheaper(change)) {
-    *this = rebuilt(tree, change.inside.size(), work);
-    return;
+void OctreeDistanceField::adopt(const std::shared_ptr<VersionedGrid>& grid) {
+  version_ = VersionedGrid::take_version(grid);
+  squared_ = version_->cells();
+  cells_ = grid->cells();
+}
+
+std::size_t OctreeDistanceField::memory_bytes() const { return distinct_memory_bytes({this}); }
+
+std::size_t OctreeDistanceField::distinct_memory_bytes(const std::vector<const OctreeDistanceField*>& fields) {
+  std::vector<const VersionedGrid*> grids;
+  std::vector<const GridVersion*> versions;
+  std::size_t bytes = 0;
+  for (const OctreeDistanceField* f : fields) {
+    if (f == nullptr || !f->version_) continue;
+    const GridVersion* v = f->version_.get();
+    if (std::find(versions.begin(), versions.end(), v) != versions.end()) continue;
+    versions.push_back(v);
+    bytes += v->own_bytes();
+    const VersionedGrid* g = v->grid().get();
+    if (std::find(grids.begin(), grids.end(), g) != grids.end()) continue;
+    grids.push_back(g);
+    if (g->shares_pages()) bytes += g->bytes();  // (without a file, a version's copy is its own)
   }
-  UpdateWork counted;
-  counted.flipped = change.inside.size();
-  apply(tree, change, counted);
-  if (work != nullptr) *work = counted;
+  return bytes;
 }
 
 bool OctreeDistanceField::same_values(const OctreeDistanceField& other) const {
-  return squared_ == other.squared_ && bound_of_squared_ == other.bound_of_squared_ && resolution_ == other.resolution_ &&
+  return cells_ == other.cells_ && std::equal(squared_, squared_ + cells_, other.squared_) && bound_of_squared_ == other.bound_of_squared_ && resolution_ == other.resolution_ &&
          cap_ == other.cap_ && std::equal(grid_lo_, grid_lo_ + 3, other.grid_lo_) && std::equal(size_, size_ + 3, other.size_);
 }
 
 double OctreeDistanceField::lower_bound(const Vec3& p) const {
-  if (squared_.empty() || !p.allFinite()) return 0.0;
+  if (cells_ == 0 || !p.allFinite()) return 0.0;
   std::int64_t i[3];
   for (int a = 0; a < 3; ++a) {
     i[a] = voxel_at(p[a], inverse_);
@@ -343,7 +381,7 @@ double OctreeDistanceField::lower_bound(const Vec3& p) const {
 }
 
 std::optional<bool> OctreeDistanceField::ball_meets_occupied(const Vec3& centre, double radius) const {
-  if (squared_.empty() || !centre.allFinite() || !std::isfinite(radius)) return std::nullopt;
+  if (cells_ == 0 || !centre.allFinite() || !std::isfinite(radius)) return std::nullopt;
   std::int64_t lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     // One voxel more on each side than the ball needs: p / res may round across a face.
@@ -360,7 +398,7 @@ std::optional<bool> OctreeDistanceField::ball_meets_occupied(const Vec3& centre,
     for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
       const double cy = centre.y() - std::clamp(centre.y(), double(y + grid_lo_[1]) * resolution_, double(y + grid_lo_[1] + 1) * resolution_);
       if (cx * cx + cy * cy > r2) continue;
-      const std::uint32_t* row = squared_.data() + (x * size_[1] + y) * size_[2];
+      const std::uint32_t* row = squared_ + (x * size_[1] + y) * size_[2];
       for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
         if (row[z] != 0) continue;
         const double cz = centre.z() - std::clamp(centre.z(), double(z + grid_lo_[2]) * resolution_, double(z + grid_lo_[2] + 1) * resolution_);

@@ -125,10 +125,9 @@ Environment& Environment::operator=(const Environment& other) {
   return *this;
 }
 
-// Two notes are enough for a field to be made from the one before the kept one (the kept one is
-// held by the current snapshot); the others cover a snapshot held a little longer.
+// The newest field is made from the one before (the current snapshot's); the other notes cover a
+// snapshot held a little longer.
 constexpr std::size_t kNotesKept = 4;
-constexpr std::size_t kFieldsPooled = 2;
 
 void Environment::note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped) {
   if (!changes_.empty() && changes_.back()->to != from) changes_.clear();  // a change no note covers
@@ -155,18 +154,17 @@ bool Environment::covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, do
   return f.cap >= cap && (f.lo.array() <= lo.array()).all() && (f.hi.array() >= hi.array()).all();
 }
 
-// The newest pooled field that nothing else holds and the notes reach, taken out of the pool.
-std::shared_ptr<Environment::FieldCache> Environment::reusable_field(const Vec3& lo, const Vec3& hi, double cap,
-                                                                     std::vector<const std::vector<OctreeKey>*>& steps) const {
-  std::lock_guard<std::mutex> lock(pool_->mutex);
-  for (std::size_t i = pool_->recent.size(); i-- > 0;) {
-    std::shared_ptr<FieldCache>& f = pool_->recent[i];
-    // use_count 1: no snapshot, checker or query holds it, and none can take it but from here
-    if (f.use_count() != 1 || !covers(*f, lo, hi, cap) || !changes_since(f->revision, steps)) continue;
-    std::atomic_thread_fence(std::memory_order_acquire);  // after the last holder's reads of it
-    std::shared_ptr<FieldCache> out = std::move(f);
-    pool_->recent.erase(pool_->recent.begin() + std::ptrdiff_t(i));
-    return out;
+// The field to make the next one from: the newest any copy made, else this environment's own,
+// when it covers the box and the notes reach from its revision to the current one.
+std::shared_ptr<const Environment::FieldCache> Environment::field_to_follow(
+    const Vec3& lo, const Vec3& hi, double cap, std::vector<const std::vector<OctreeKey>*>& steps) const {
+  std::shared_ptr<const FieldCache> newest;
+  {
+    std::lock_guard<std::mutex> lock(pool_->mutex);
+    newest = pool_->newest;
+  }
+  for (const std::shared_ptr<const FieldCache>& f : {newest, std::atomic_load(&field_)}) {
+    if (f && covers(*f, lo, hi, cap) && changes_since(f->revision, steps)) return f;
   }
   return nullptr;
 }
@@ -179,16 +177,13 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
   }
   if (!build) return nullptr;
   std::vector<const std::vector<OctreeKey>*> steps;
-  std::shared_ptr<FieldCache> fresh = reusable_field(lo, hi, cap, steps);
-  if (fresh) {  // in place: the voxels changed since its revision
-    fresh->work = {};
-    fresh->field.follow(octree_, steps, &fresh->work);
-  } else if (kept && covers(*kept, lo, hi, cap) && changes_since(kept->revision, steps)) {
-    fresh = std::make_shared<FieldCache>();  // the kept field (a snapshot holds it) copied and updated
-    fresh->lo = kept->lo, fresh->hi = kept->hi, fresh->cap = kept->cap;
-    fresh->field = kept->field.updated(octree_, steps, &fresh->work);
+  auto fresh = std::make_shared<FieldCache>();
+  if (const std::shared_ptr<const FieldCache> base = field_to_follow(lo, hi, cap, steps)) {
+    // the voxels changed since its revision: in place on its grid (it, and any older field still
+    // held, keeping the pages that change), or copied when a newer field was made from it already
+    fresh->lo = base->lo, fresh->hi = base->hi, fresh->cap = base->cap;
+    fresh->field = base->field.updated(octree_, steps, &fresh->work);
   } else {
-    fresh = std::make_shared<FieldCache>();
     fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
     try {
       fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
@@ -199,12 +194,11 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
     fresh->work.cells = fresh->field.cells();
   }
   fresh->revision = octree_.revision();
+  std::shared_ptr<const FieldCache> out = std::move(fresh);
   {
     std::lock_guard<std::mutex> lock(pool_->mutex);
-    pool_->recent.push_back(fresh);
-    if (pool_->recent.size() > kFieldsPooled) pool_->recent.erase(pool_->recent.begin());
+    pool_->newest = out;
   }
-  std::shared_ptr<const FieldCache> out = std::move(fresh);
   std::atomic_store(&field_, out);
   return std::shared_ptr<const OctreeDistanceField>(out, &out->field);
 }

@@ -56,25 +56,23 @@ std::size_t EnvironmentStore::pins(Clock::time_point now) {
 std::size_t EnvironmentStore::pinned_extra_bytes() const {
   std::vector<const Octree*> trees;
   std::shared_ptr<const Environment> current = snapshot();
-  {
-    std::lock_guard<std::mutex> pins(pins_mutex_);
-    if (pins_.empty()) return 0;
-    // (The snapshots stay alive while the lock is held: the map holds them.)
-    trees.push_back(&current->octree());
-    // and the distance fields they hold that the current one does not (a field is one grid)
-    // (Held here: a query on a pinned snapshot may replace the field that snapshot keeps.)
-    std::vector<std::shared_ptr<const OctreeDistanceField>> fields{current->held_octree_field()};
-    std::size_t field_bytes = 0;
-    for (const auto& [version, held] : pins_) {
-      trees.push_back(&held.snapshot->octree());
-      std::shared_ptr<const OctreeDistanceField> field = held.snapshot->held_octree_field();
-      if (field != nullptr && std::find(fields.begin(), fields.end(), field) == fields.end()) {
-        field_bytes += field->memory_bytes();
-        fields.push_back(std::move(field));
-      }
-    }
-    return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes() + field_bytes;
+  std::lock_guard<std::mutex> pins(pins_mutex_);
+  if (pins_.empty()) return 0;
+  // (The snapshots stay alive while the lock is held: the map holds them. The fields are held
+  // here: a query on a pinned snapshot may replace the field that snapshot keeps.)
+  trees.push_back(&current->octree());
+  std::vector<std::shared_ptr<const OctreeDistanceField>> held{current->held_octree_field()};
+  for (const auto& [version, pinned] : pins_) {
+    trees.push_back(&pinned.snapshot->octree());
+    held.push_back(pinned.snapshot->held_octree_field());
   }
+  // The octree pages and the field pages the pins hold that the current map does not (copy on
+  // write both: what changed since).
+  std::vector<const OctreeDistanceField*> fields;
+  for (const auto& f : held) fields.push_back(f.get());
+  const std::size_t field_bytes = OctreeDistanceField::distinct_memory_bytes(fields) -
+                                  OctreeDistanceField::distinct_memory_bytes({fields.front()});
+  return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes() + field_bytes;
 }
 
 }  // namespace bvh_collision

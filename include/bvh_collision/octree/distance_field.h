@@ -18,11 +18,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "bvh_collision/geometry/types.h"
 #include "bvh_collision/octree/octree.h"
+#include "bvh_collision/octree/versioned_grid.h"
 
 namespace bvh_collision {
 
@@ -52,32 +54,38 @@ class OctreeDistanceField {
   // reaching that far around it: the work grows with the change, not with the map, until those
   // blocks are an eighth of the grid, where a build costs less and is done instead
   // (docs/performance.md, "A live world"). The counts of the work into `work` when given.
+  //
+  // Made in place: the cells live in a VersionedGrid (octree/versioned_grid.h), and when this field
+  // is its latest version the new values are written over its file, this field (and every other
+  // earlier version still held) first keeping each page about to change. So this field reads as
+  // before, and holds memory of its own only for the pages changed since (a pinned world's field).
+  // When a newer field was already made from this one, the cells are copied instead.
   struct UpdateWork {
     std::size_t flipped = 0;        // flipped voxels inside the grid
     std::size_t blocks = 0;         // blocks recomputed
-    std::size_t cells = 0;          // their cells (written)
+    std::size_t cells = 0;          // their cells (computed)
     std::size_t window_cells = 0;   // cells read: the blocks' windows
-    std::size_t copied_cells = 0;   // cells copied from this field into the new one (updated's copy)
+    std::size_t changed_cells = 0;  // cells whose value changed (written)
+    std::size_t kept_pages = 0;     // pages copied into earlier versions still held, before being written
+    std::size_t copied_cells = 0;   // cells copied into a grid of its own (not made in place)
     bool rebuilt = false;           // the blocks were more than an eighth of the grid: built anew
   };
   OctreeDistanceField updated(const Octree& tree, const std::vector<OctreeKey>& flipped, UpdateWork* work = nullptr) const;
-  // The same over the lists of several changes in a row (their union).
+  // The same over the lists of several changes in a row (their union: each voxel takes the
+  // occupancy `tree` gives it).
   OctreeDistanceField updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
                               UpdateWork* work = nullptr) const;
-
-  // The same, in place and without the copy: this field becomes the field of `tree` when it is the
-  // field of a tree that differs from it only in the occupancy of the voxels of `flipped`, the
-  // lists of one change or of several in a row (their union is recomputed; each voxel takes the
-  // occupancy `tree` gives it). An environment makes a field no snapshot holds any more the next
-  // one this way (Environment::octree_distance_field): the work is that of the changes since it.
-  void follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped, UpdateWork* work = nullptr);
 
   // Equal grids and bounds (a test's comparison of an updated field with a build).
   bool same_values(const OctreeDistanceField& other) const;
 
   double cap() const { return cap_; }
-  std::size_t cells() const { return squared_.size(); }
-  std::size_t memory_bytes() const { return squared_.capacity() * sizeof(std::uint32_t); }
+  std::size_t cells() const { return cells_; }
+  // Memory this field holds: its grid's file and the pages of it kept for this version alone.
+  std::size_t memory_bytes() const;
+  // The same for several fields together, each grid counted once (fields made from one another
+  // share their grid's pages but the ones each kept).
+  static std::size_t distinct_memory_bytes(const std::vector<const OctreeDistanceField*>& fields);
 
  private:
   double resolution_ = 0.0, inverse_ = 0.0, cap_ = 0.0;
@@ -86,15 +94,19 @@ class OctreeDistanceField {
   std::int64_t grid_lo_[3] = {0, 0, 0}, size_[3] = {0, 0, 0};          // the box and the cap
   // per grid voxel, D, at most the first D whose bound is the cap (bound_of_squared_.size() - 1):
   // every larger one reads as the cap, and an update recomputes only what the cap can reach
-  std::vector<std::uint32_t> squared_;
+  std::shared_ptr<const GridVersion> version_;  // shared by copies of this field: it never changes
+  const std::uint32_t* squared_ = nullptr;      // version_'s cells
+  std::size_t cells_ = 0;
+  void adopt(const std::shared_ptr<VersionedGrid>& grid);
   std::int64_t index(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * size_[1] + y) * size_[2] + z; }
-  void recompute_block(const std::int64_t lo[3], const std::int64_t hi[3], std::int64_t reach, UpdateWork& work);
+  void recompute_block(const std::int64_t lo[3], const std::int64_t hi[3], std::int64_t reach, VersionedGrid& grid,
+                       UpdateWork& work) const;
   // An update's parts: the blocks a change reaches, whether a build is cheaper, the build, the blocks.
   struct Change;
   Change change_of(const std::vector<const std::vector<OctreeKey>*>& flipped) const;
   bool build_is_cheaper(const Change& change) const;
   OctreeDistanceField rebuilt(const Octree& tree, std::size_t flipped, UpdateWork* work) const;
-  void apply(const Octree& tree, const Change& change, UpdateWork& work);
+  void apply(const Octree& tree, const Change& change, VersionedGrid& grid, UpdateWork& work) const;
   // how far (in voxels) a changed voxel's effect reaches: past it every value reads as the cap
   std::int64_t reach() const {
     return static_cast<std::int64_t>(std::ceil(std::sqrt(double(bound_of_squared_.size() - 1))));

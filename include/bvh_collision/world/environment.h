@@ -169,11 +169,12 @@ class Environment {
   // Safe to call from several threads on one environment (two may build it; one is kept).
   // With build = false, only a field already kept (else null).
   // A field kept for an earlier revision is updated, not rebuilt, when the octree changed from it
-  // only by the voxels note_octree_changes was told of. The update is made in place on the field
-  // of an earlier revision that no snapshot holds any more (the environment and its copies keep
-  // the last two they made), with the voxels changed since that one: its work is that of the
-  // changes, with no copy of the grid; only when each is still held (a query on an older
-  // snapshot, a pinned version) is the kept field copied and updated (octree_field_work says which).
+  // only by the voxels note_octree_changes was told of: the newest field this environment or a
+  // copy made is updated with the voxels changed since, in place on its grid's file, the fields
+  // still held (a query's snapshot, a pinned version) first keeping the pages that change
+  // (OctreeDistanceField::updated): the work and the memory are those of the change, with no copy
+  // of the grid. Only a field made from one that a newer field was already made from is copied
+  // (octree_field_work says which).
   std::shared_ptr<const OctreeDistanceField> octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
                                                                    std::size_t max_cells = std::size_t(1) << 24,
                                                                    bool build = true) const;
@@ -184,7 +185,7 @@ class Environment {
   void note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped);
 
   // How the field kept for the current octree came to be: built, or updated from an earlier one
-  // (`copied_cells` 0: in place, on a field no snapshot held any more). Empty when none is kept.
+  // (`copied_cells` 0: in place on that one's grid). Empty when none is kept.
   std::optional<OctreeDistanceField::UpdateWork> octree_field_work() const;
   // The distance field this environment holds (for any revision), or null: what it keeps in memory.
   std::shared_ptr<const OctreeDistanceField> held_octree_field() const {
@@ -200,14 +201,13 @@ class Environment {
     OctreeDistanceField field;
     OctreeDistanceField::UpdateWork work;  // how it was made
   };
-  // The fields this environment and its copies made last (the newest at the back): one no
-  // snapshot holds (its only owner is this list) becomes the next field in place.
+  // The field this environment and its copies made last: the next one is made from it.
   struct FieldPool {
     std::mutex mutex;
-    std::vector<std::shared_ptr<FieldCache>> recent;
+    std::shared_ptr<const FieldCache> newest;
   };
-  std::shared_ptr<FieldCache> reusable_field(const Vec3& lo, const Vec3& hi, double cap,
-                                             std::vector<const std::vector<OctreeKey>*>& steps) const;
+  std::shared_ptr<const FieldCache> field_to_follow(const Vec3& lo, const Vec3& hi, double cap,
+                                                    std::vector<const std::vector<OctreeKey>*>& steps) const;
   bool covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, double cap) const;
   bool changes_since(std::uint64_t revision, std::vector<const std::vector<OctreeKey>*>& steps) const;
   Octree octree_;

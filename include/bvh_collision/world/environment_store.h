@@ -59,8 +59,8 @@ class EnvironmentStore {
   // False when the version was not pinned (or had expired).
   bool release(std::uint64_t version);
   // Pins held (expired ones dropped at `now`), and the memory they hold beyond the current
-  // snapshot: the octree pages they do not share with it (copy on write: what changed since), and
-  // the distance fields they hold that it does not (a whole grid each: a field is not paged).
+  // snapshot: the octree pages and the distance field pages they do not share with it (copy on
+  // write both: what changed since; a field built anew since, not updated, is a whole grid).
   std::size_t pins(Clock::time_point now);
   std::size_t pinned_extra_bytes() const;
 
