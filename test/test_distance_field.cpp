@@ -373,6 +373,47 @@ TEST(OctreeDistanceField, SeveralChangesInPlaceEqualABuildAndTheOldFieldKeepsIts
   EXPECT_TRUE(next.same_values(built));
 }
 
+// follow writes a field over in place when nothing else holds its cells (no page kept for it, its
+// cells where they were), while an earlier version of the same grid that a reader holds keeps its
+// values; with its cells shared by a copy of the field it makes a new version instead.
+TEST(OctreeDistanceField, FollowWritesOverAFieldNobodyElseHoldsAndAHeldVersionKeepsItsValues) {
+  Octree tree(0.05);
+  std::mt19937_64 rng(19);
+  std::uniform_int_distribution<int> u(-12, 11), near(-4, 3);
+  for (int i = 0; i < 300; ++i) tree.update(key_at(u(rng), u(rng), u(rng)), true);
+  const Vec3 lo = Vec3::Constant(-2.0), hi = Vec3::Constant(2.0);
+  auto change = [&](std::vector<OctreeKey>& list) {
+    VoxelSet keys;
+    for (int i = 0; i < 20; ++i) keys.insert(key_at(near(rng), near(rng), near(rng)));
+    tree.update_sorted(keys.sorted_keys(), true, &list);
+  };
+  const Octree first_tree = tree;
+  const OctreeDistanceField held = OctreeDistanceField::build(tree, lo, hi, 0.1);
+  std::vector<OctreeKey> one, two, three;
+  change(one);
+  OctreeDistanceField::UpdateWork work;
+  OctreeDistanceField field = held.updated(tree, one, &work);  // in place: `held` keeps its pages
+  ASSERT_EQ(work.copied_cells, 0u);
+  const Octree second_tree = tree;
+  change(two);
+  const OctreeDistanceField before = field;  // a copy shares the cells: a new version is made
+  field.follow(tree, {&two}, &work);
+  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.1)));
+  EXPECT_TRUE(before.same_values(OctreeDistanceField::build(second_tree, lo, hi, 0.1)));
+  change(three);
+  const std::size_t held_bytes = OctreeDistanceField::distinct_memory_bytes({&held, &field}) - field.memory_bytes();
+  field.follow(tree, {&three}, &work);  // nobody else holds its cells now: written over
+  EXPECT_EQ(work.copied_cells, 0u);
+  EXPECT_GT(work.changed_cells, 0u);
+  EXPECT_TRUE(field.same_values(OctreeDistanceField::build(tree, lo, hi, 0.1)));
+  EXPECT_TRUE(held.same_values(OctreeDistanceField::build(first_tree, lo, hi, 0.1)));
+  EXPECT_TRUE(before.same_values(OctreeDistanceField::build(second_tree, lo, hi, 0.1)));
+  // The held versions kept only pages (no grid of their own), and only what the writes reached.
+  const std::size_t after = OctreeDistanceField::distinct_memory_bytes({&held, &before, &field}) - field.memory_bytes();
+  EXPECT_GE(after, held_bytes);
+  EXPECT_LT(after * 4, field.memory_bytes());
+}
+
 // Environment checks with the field answer as without it, state by state (at tolerance 0 the
 // answers are exact, so equal), on the demo arm amid random boxes, with a moved base, and after
 // the octree changes under a kept field.

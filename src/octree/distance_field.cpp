@@ -309,7 +309,7 @@ OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::
 }
 
 OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
-                                                 UpdateWork* work) const {
+                                                 UpdateWork* work, bool in_place) const {
   if (cells_ == 0) return *this;
   const Change change = change_of(flipped);
   if (build_is_cheaper(change)) return rebuilt(tree, change.inside.size(), work);
@@ -318,9 +318,14 @@ OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::
   OctreeDistanceField out = *this;  // the bounds; the cells are the next version's
   const std::shared_ptr<VersionedGrid>& grid = version_->grid();
   std::unique_lock<std::mutex> writer(grid->writer());
-  if (grid->head_version() == version_->id()) {  // in place: this field and older ones keep their pages
+  if (in_place && grid->head_version() == version_->id()) {  // in place: this field and older ones keep their pages
     const std::size_t kept = grid->kept_pages();
-    apply(tree, change, *grid, counted);
+    try {
+      apply(tree, change, *grid, counted);
+    } catch (...) {  // half written: every version kept its pages, but the file is no version's
+      grid->abandon_head();
+      throw;
+    }
     counted.kept_pages = grid->kept_pages() - kept;
     out.adopt(grid);
   } else {  // a newer field was made over this one's file: a grid of its own
@@ -333,6 +338,32 @@ OctreeDistanceField OctreeDistanceField::updated(const Octree& tree, const std::
   }
   if (work != nullptr) *work = counted;
   return out;
+}
+
+void OctreeDistanceField::follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
+                                 UpdateWork* work) {
+  if (cells_ == 0) return;
+  const Change change = change_of(flipped);
+  const std::shared_ptr<VersionedGrid> grid = version_->grid();
+  std::unique_lock<std::mutex> writer(grid->writer());
+  if (build_is_cheaper(change) || !grid->begin_writing_over(version_)) {
+    writer.unlock();
+    *this = updated(tree, flipped, work);
+    return;
+  }
+  UpdateWork counted;
+  counted.flipped = change.inside.size();
+  const std::size_t kept = grid->kept_pages();
+  try {
+    apply(tree, change, *grid, counted);
+  } catch (...) {  // half written: this field reads as empty (nothing known), the grid as no one's
+    grid->abandon_head();
+    *this = OctreeDistanceField();
+    throw;
+  }
+  counted.kept_pages = grid->kept_pages() - kept;
+  grid->end_writing_over();
+  if (work != nullptr) *work = counted;
 }
 
 void OctreeDistanceField::adopt(const std::shared_ptr<VersionedGrid>& grid) {

@@ -91,14 +91,30 @@ std::shared_ptr<const GridVersion> VersionedGrid::take_version(const std::shared
 void VersionedGrid::keep_page(std::size_t page) {
   std::lock_guard<std::mutex> lock(versions_mutex_);
   for (GridVersion* v : versions_) {
-    if (v->kept_[page]) continue;
+    if (v->kept_[page] || v == written_over_) continue;
     // The kernel copies the file's page into the version's mapping (nothing of ours writes it).
     if (madvise(v->cells_ + page * kCellsPerPage, kPageBytes, MADV_POPULATE_WRITE) != 0) throw std::bad_alloc();
     v->kept_[page] = true;
     ++v->kept_pages_;
+    ++kept_pages_total_;  // (a page copied: into one version)
   }
   kept_by_all_[page] = true;
-  ++kept_pages_total_;
+}
+
+bool VersionedGrid::begin_writing_over(const std::shared_ptr<const GridVersion>& version) {
+  if (!version || version->grid_.get() != this || version->id_ != head_id_ || version.use_count() != 1 ||
+      !version->copy_.empty() || file_ < 0) {
+    return false;
+  }
+  written_over_ = version.get();
+  return true;
+}
+
+void VersionedGrid::end_writing_over() {
+  // (The version is this grid's: its id is the grid's to give; no reader holds it.)
+  const_cast<GridVersion*>(written_over_)->id_ = ++head_id_;
+  written_over_ = nullptr;
+  std::fill(kept_by_all_.begin(), kept_by_all_.end(), false);
 }
 
 void VersionedGrid::forget(GridVersion* version) {

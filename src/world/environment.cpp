@@ -125,9 +125,10 @@ Environment& Environment::operator=(const Environment& other) {
   return *this;
 }
 
-// The newest field is made from the one before (the current snapshot's); the other notes cover a
-// snapshot held a little longer.
+// Two notes are enough for a field to be made from the one before the kept one (the kept one is
+// held by the current snapshot); the others cover a snapshot held a little longer.
 constexpr std::size_t kNotesKept = 4;
+constexpr std::size_t kFieldsPooled = 2;
 
 void Environment::note_octree_changes(std::uint64_t from, std::vector<OctreeKey> flipped) {
   if (!changes_.empty() && changes_.back()->to != from) changes_.clear();  // a change no note covers
@@ -154,19 +155,32 @@ bool Environment::covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, do
   return f.cap >= cap && (f.lo.array() <= lo.array()).all() && (f.hi.array() >= hi.array()).all();
 }
 
-// The field to make the next one from: the newest any copy made, else this environment's own,
-// when it covers the box and the notes reach from its revision to the current one.
-std::shared_ptr<const Environment::FieldCache> Environment::field_to_follow(
-    const Vec3& lo, const Vec3& hi, double cap, std::vector<const std::vector<OctreeKey>*>& steps) const {
-  std::shared_ptr<const FieldCache> newest;
-  {
-    std::lock_guard<std::mutex> lock(pool_->mutex);
-    newest = pool_->newest;
+// The field to make the next one from, taken out of the pool when it is to be written over: the
+// newest pooled field nobody else holds (written over in place), else the newest on another grid
+// than the newest field's (a new version on that grid, in place), else the newest or this
+// environment's own, copied into a grid of its own (so the pool's two fields are on two grids and
+// the current snapshot's field never has pages copied into it); each must cover the box, with
+// notes from its revision to the current.
+Environment::FieldSource Environment::field_to_follow(const Vec3& lo, const Vec3& hi, double cap,
+                                                      std::vector<const std::vector<OctreeKey>*>& steps) const {
+  std::lock_guard<std::mutex> lock(pool_->mutex);
+  std::vector<std::shared_ptr<FieldCache>>& recent = pool_->recent;
+  auto usable = [&](const FieldCache& f) { return covers(f, lo, hi, cap) && changes_since(f.revision, steps); };
+  for (std::size_t i = recent.size(); i-- > 0;) {
+    // use_count 1: no snapshot, checker or query holds it, and none can take it but from here
+    if (recent[i].use_count() != 1 || !usable(*recent[i])) continue;
+    std::atomic_thread_fence(std::memory_order_acquire);  // after the last holder's reads of it
+    FieldSource out{std::move(recent[i]), true, true};
+    recent.erase(recent.begin() + std::ptrdiff_t(i));
+    return out;
   }
-  for (const std::shared_ptr<const FieldCache>& f : {newest, std::atomic_load(&field_)}) {
-    if (f && covers(*f, lo, hi, cap) && changes_since(f->revision, steps)) return f;
+  for (std::size_t i = recent.size(); i-- > 1;) {  // (recent.back() is the newest)
+    if (!recent[i - 1]->field.same_grid(recent.back()->field) && usable(*recent[i - 1])) return {recent[i - 1], false, true};
   }
-  return nullptr;
+  if (!recent.empty() && usable(*recent.back())) return {recent.back(), false, false};
+  const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
+  if (kept && usable(*kept)) return {std::const_pointer_cast<FieldCache>(kept), false, false};
+  return {};
 }
 
 std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(const Vec3& lo, const Vec3& hi, double cap,
@@ -177,13 +191,18 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
   }
   if (!build) return nullptr;
   std::vector<const std::vector<OctreeKey>*> steps;
-  auto fresh = std::make_shared<FieldCache>();
-  if (const std::shared_ptr<const FieldCache> base = field_to_follow(lo, hi, cap, steps)) {
-    // the voxels changed since its revision: in place on its grid (it, and any older field still
-    // held, keeping the pages that change), or copied when a newer field was made from it already
-    fresh->lo = base->lo, fresh->hi = base->hi, fresh->cap = base->cap;
-    fresh->field = base->field.updated(octree_, steps, &fresh->work);
+  FieldSource source = field_to_follow(lo, hi, cap, steps);
+  std::shared_ptr<FieldCache> fresh;
+  if (source.field && source.nobody_holds) {  // written over: the voxels changed since its revision
+    fresh = std::move(source.field);
+    fresh->work = {};
+    fresh->field.follow(octree_, steps, &fresh->work);
+  } else if (source.field) {  // a new version: in place on its grid (held ones keeping their pages) or copied
+    fresh = std::make_shared<FieldCache>();
+    fresh->lo = source.field->lo, fresh->hi = source.field->hi, fresh->cap = source.field->cap;
+    fresh->field = source.field->field.updated(octree_, steps, &fresh->work, source.in_place);
   } else {
+    fresh = std::make_shared<FieldCache>();
     fresh->lo = lo, fresh->hi = hi, fresh->cap = cap;
     try {
       fresh->field = OctreeDistanceField::build(octree_, lo, hi, cap, max_cells);
@@ -194,13 +213,21 @@ std::shared_ptr<const OctreeDistanceField> Environment::octree_distance_field(co
     fresh->work.cells = fresh->field.cells();
   }
   fresh->revision = octree_.revision();
-  std::shared_ptr<const FieldCache> out = std::move(fresh);
   {
     std::lock_guard<std::mutex> lock(pool_->mutex);
-    pool_->newest = out;
+    pool_->recent.push_back(fresh);
+    if (pool_->recent.size() > kFieldsPooled) pool_->recent.erase(pool_->recent.begin());
   }
+  std::shared_ptr<const FieldCache> out = std::move(fresh);
   std::atomic_store(&field_, out);
   return std::shared_ptr<const OctreeDistanceField>(out, &out->field);
+}
+
+std::vector<std::shared_ptr<const OctreeDistanceField>> Environment::pooled_octree_fields() const {
+  std::lock_guard<std::mutex> lock(pool_->mutex);
+  std::vector<std::shared_ptr<const OctreeDistanceField>> out;
+  for (const std::shared_ptr<FieldCache>& f : pool_->recent) out.emplace_back(f, &f->field);
+  return out;
 }
 
 std::optional<OctreeDistanceField::UpdateWork> Environment::octree_field_work() const {

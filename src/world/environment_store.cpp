@@ -61,7 +61,10 @@ std::size_t EnvironmentStore::pinned_extra_bytes() const {
   // (The snapshots stay alive while the lock is held: the map holds them. The fields are held
   // here: a query on a pinned snapshot may replace the field that snapshot keeps.)
   trees.push_back(&current->octree());
-  std::vector<std::shared_ptr<const OctreeDistanceField>> held{current->held_octree_field()};
+  // The fields the map keeps anyway: the current one and the pool the next is made from.
+  std::vector<std::shared_ptr<const OctreeDistanceField>> held = current->pooled_octree_fields();
+  held.push_back(current->held_octree_field());
+  const std::size_t map_fields = held.size();
   for (const auto& [version, pinned] : pins_) {
     trees.push_back(&pinned.snapshot->octree());
     held.push_back(pinned.snapshot->held_octree_field());
@@ -70,8 +73,9 @@ std::size_t EnvironmentStore::pinned_extra_bytes() const {
   // write both: what changed since).
   std::vector<const OctreeDistanceField*> fields;
   for (const auto& f : held) fields.push_back(f.get());
-  const std::size_t field_bytes = OctreeDistanceField::distinct_memory_bytes(fields) -
-                                  OctreeDistanceField::distinct_memory_bytes({fields.front()});
+  const std::size_t all = OctreeDistanceField::distinct_memory_bytes(fields);
+  fields.resize(map_fields);
+  const std::size_t field_bytes = all - OctreeDistanceField::distinct_memory_bytes(fields);
   return Octree::distinct_memory_bytes(trees) - current->octree().memory_bytes() + field_bytes;
 }
 

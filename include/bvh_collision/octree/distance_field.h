@@ -72,13 +72,24 @@ class OctreeDistanceField {
   };
   OctreeDistanceField updated(const Octree& tree, const std::vector<OctreeKey>& flipped, UpdateWork* work = nullptr) const;
   // The same over the lists of several changes in a row (their union: each voxel takes the
-  // occupancy `tree` gives it).
+  // occupancy `tree` gives it). With `in_place` false, always into a grid of its own (a copy).
   OctreeDistanceField updated(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped,
-                              UpdateWork* work = nullptr) const;
+                              UpdateWork* work = nullptr, bool in_place = true) const;
+
+  // The same, in place: this field becomes the field of `tree`, its cells written over with no new
+  // version, when it is its grid's latest version and nothing else holds its cells (no reader can
+  // see the writes; the other versions alive keep their pages); otherwise as updated(). An
+  // environment makes a field nobody holds any more the next one this way (no page kept, no
+  // mapping made: Environment::octree_distance_field).
+  void follow(const Octree& tree, const std::vector<const std::vector<OctreeKey>*>& flipped, UpdateWork* work = nullptr);
 
   // Equal grids and bounds (a test's comparison of an updated field with a build).
   bool same_values(const OctreeDistanceField& other) const;
 
+  // Are both fields versions of one grid (one made from the other in place)?
+  bool same_grid(const OctreeDistanceField& other) const {
+    return version_ && other.version_ && version_->grid() == other.version_->grid();
+  }
   double cap() const { return cap_; }
   std::size_t cells() const { return cells_; }
   // Memory this field holds: its grid's file and the pages of it kept for this version alone.

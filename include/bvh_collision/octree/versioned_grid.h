@@ -77,7 +77,20 @@ class VersionedGrid {
   static std::shared_ptr<const GridVersion> take_version(const std::shared_ptr<VersionedGrid>& grid);
   // The version head() matches (the last taken), to tell whether a version may be written over.
   std::uint64_t head_version() const { return head_id_; }
-  // Pages copied into earlier versions since the grid was made (the writer's count).
+  // Writing over `version` itself, with no new mapping and no page kept for it: allowed when it is
+  // the latest version of this grid and `version` is its only holder (no reader can see the
+  // writes). The pages written are kept from the other versions alive; end_writing_over() makes
+  // the version the values written (it stays this grid's latest). False: not allowed, nothing done.
+  bool begin_writing_over(const std::shared_ptr<const GridVersion>& version);
+  void end_writing_over();
+  // A write that did not finish (a page could not be kept): no version is the file's any more, so
+  // none is written over again; the version being written over (if any) is no longer to be read.
+  void abandon_head() {
+    ++head_id_;
+    written_over_ = nullptr;
+  }
+  // Page copies made into earlier versions since the grid was made (a page kept by two versions
+  // counts twice; the writer's count).
   std::size_t kept_pages() const { return kept_pages_total_; }
 
   static constexpr std::size_t kPageBytes = 4096;
@@ -99,6 +112,7 @@ class VersionedGrid {
   std::size_t kept_pages_total_ = 0;
   mutable std::mutex versions_mutex_;   // guards versions_ and their kept pages
   std::vector<GridVersion*> versions_;  // the versions alive (a version's destructor removes it)
+  const GridVersion* written_over_ = nullptr;  // between begin_ and end_writing_over: kept from no write
 };
 
 }  // namespace bvh_collision

@@ -187,6 +187,9 @@ class Environment {
   // How the field kept for the current octree came to be: built, or updated from an earlier one
   // (`copied_cells` 0: in place on that one's grid). Empty when none is kept.
   std::optional<OctreeDistanceField::UpdateWork> octree_field_work() const;
+  // The distance fields this environment and its copies keep to make the next ones from (the
+  // last two made): memory the map holds whoever else holds a field.
+  std::vector<std::shared_ptr<const OctreeDistanceField>> pooled_octree_fields() const;
   // The distance field this environment holds (for any revision), or null: what it keeps in memory.
   std::shared_ptr<const OctreeDistanceField> held_octree_field() const {
     const std::shared_ptr<const FieldCache> kept = std::atomic_load(&field_);
@@ -201,13 +204,19 @@ class Environment {
     OctreeDistanceField field;
     OctreeDistanceField::UpdateWork work;  // how it was made
   };
-  // The field this environment and its copies made last: the next one is made from it.
+  // The fields this environment and its copies made last (the newest at the back): one nobody
+  // else holds is written over to become the next; else the next is a new version made from one.
   struct FieldPool {
     std::mutex mutex;
-    std::shared_ptr<const FieldCache> newest;
+    std::vector<std::shared_ptr<FieldCache>> recent;
   };
-  std::shared_ptr<const FieldCache> field_to_follow(const Vec3& lo, const Vec3& hi, double cap,
-                                                    std::vector<const std::vector<OctreeKey>*>& steps) const;
+  struct FieldSource {
+    std::shared_ptr<FieldCache> field;
+    bool nobody_holds = false;  // taken out of the pool, to be written over
+    bool in_place = false;      // a new version on its grid (else a copy)
+  };
+  FieldSource field_to_follow(const Vec3& lo, const Vec3& hi, double cap,
+                              std::vector<const std::vector<OctreeKey>*>& steps) const;
   bool covers(const FieldCache& f, const Vec3& lo, const Vec3& hi, double cap) const;
   bool changes_since(std::uint64_t revision, std::vector<const std::vector<OctreeKey>*>& steps) const;
   Octree octree_;
