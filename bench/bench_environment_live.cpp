@@ -117,6 +117,9 @@ std::vector<std::pair<std::vector<double>, std::vector<double>>> pillar_problems
 
 // One plan on the store's latest snapshot, as a planner that follows the node's map plans: RRTConnect
 // then OMPL's simplifier, certified motions; its wall time (a failed plan at the limit).
+// The plan's time in seconds (`limit` when unsolved), or a negative number when its start or goal
+// collides in the snapshot it starts on (a live map's noise can grow onto either: no planner
+// solves that, and MoveIt refuses such a request).
 double plan_once(const CollisionChecker& checker, const EnvironmentStore& store, const std::vector<double>& start,
                  const std::vector<double>& goal, double limit) {
   namespace ob = ompl::base;
@@ -133,6 +136,7 @@ double plan_once(const CollisionChecker& checker, const EnvironmentStore& store,
   ob::ScopedState<> s(setup.getStateSpace()), g(setup.getStateSpace());
   for (std::size_t i = 0; i < group.size(); ++i) s[i] = start[i], g[i] = goal[i];
   setup.setStartAndGoalStates(s, g);
+  if (!context->check_state(s.get()) || !context->check_state(g.get())) return -1.0;
   const bool solved = setup.solve(ob::timedPlannerTerminationCondition(limit)) == ob::PlannerStatus::EXACT_SOLUTION;
   if (solved) setup.simplifySolution();
   return solved ? std::chrono::duration<double>(Clock::now() - t0).count() : limit;
@@ -143,7 +147,8 @@ double plan_once(const CollisionChecker& checker, const EnvironmentStore& store,
 void live_plans_table(const CollisionChecker& checker, const Environment& initial, const std::vector<ScanPoint>& pillar,
                       std::size_t problems, const std::string& dir) {
   bench::Table table("live_world_plans", "A live world: planning while a camera's clouds arrive (demo arm, pillar, in-process)",
-                     {"clouds Hz", "problems", "median plan ms", "p90 plan ms", "median / static"});
+                     {"clouds Hz", "problems", "start or goal colliding (left out)", "median plan ms", "p90 plan ms",
+                      "median / static"});
   ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
   const auto cases = pillar_problems(checker, initial, problems);
   double static_median = 0.0;
@@ -154,17 +159,24 @@ void live_plans_table(const CollisionChecker& checker, const Environment& initia
     std::vector<double> cloud_ms, seconds;
     std::thread camera = camera_thread(checker, store, pillar, rate, stop, cloud_ms);
     ompl::RNG::setSeed(3);
-    for (const auto& [a, b] : cases) seconds.push_back(1e3 * plan_once(checker, store, a, b, 5.0));
+    std::size_t left_out = 0;
+    for (const auto& [a, b] : cases) {
+      const double s = plan_once(checker, store, a, b, 5.0);
+      if (s < 0.0) ++left_out;
+      else seconds.push_back(1e3 * s);
+    }
     stop = true;
     camera.join();
     const double median = bench::median(seconds);
     if (rate == 0.0) static_median = median;
-    table.row({rate, double(cases.size()), median, bench::percentile(seconds, 0.9), median / static_median});
+    table.row({rate, double(cases.size()), double(left_out), median, bench::percentile(seconds, 0.9), median / static_median});
   }
   table.note("The demo arm's certified plans (RRTConnect, OMPL's simplifier, tolerance 0, self and environment, 5 s a "
              "problem) between free states whose straight motion meets the pillar, each on the snapshot current when it "
              "starts (CheckerPlanningContext: one world for one plan), with no clouds and with the camera of table "
-             "live_world at 30 Hz on the other core. Issue 58's target: the plan time at most 1.5x the static one.");
+             "live_world at 30 Hz on the other core. A problem whose start or goal collides in the snapshot its plan starts on "
+             "(the noisy clouds grow the pillar's surface over the run, more the longer it lasts) is left out and counted. "
+             "Issue 58's target: the plan time at most 1.5x the static one.");
   table.write(dir);
 }
 

@@ -222,6 +222,61 @@ TEST(SharedSnapshots, TheNextDistanceFieldIsMadeInPlaceAndAHeldOneKeepsOnlyWhatC
   EXPECT_TRUE(store.release(pin.version));
 }
 
+// Scans stream in on one thread (each making the map's field, as the node's cloud thread does)
+// while two readers take snapshots, hold them across scans or not, and check that each held field
+// equals a build of its snapshot's tree: fields written over, new versions and kept pages never
+// show a reader anything but its own map's values.
+TEST(SharedSnapshots, ReadersHoldingFieldsWhileScansStreamInSeeTheirOwnMap) {
+  EnvironmentStore store(scattered_map(20000, 4));
+  const Vec3 lo(-1.2, -1.2, -0.2), hi(1.2, 1.2, 1.2);
+  const double cap = 0.1;
+  store.modify([&](Environment& env) { env.octree_distance_field(lo, hi, cap); });
+  std::atomic<bool> done{false};
+  std::atomic<int> checked{0}, wrong{0};
+  auto reader = [&](int hold_scans) {
+    while (!done) {
+      const auto snapshot = store.snapshot();
+      const auto field = snapshot->octree_distance_field(lo, hi, cap, std::size_t(1) << 24, false);
+      if (field == nullptr) continue;
+      const std::uint64_t version = store.version();
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+      while (!done && store.version() < version + std::uint64_t(hold_scans) && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::yield();
+      }
+      if (!field->same_values(OctreeDistanceField::build(snapshot->octree(), lo, hi, cap))) ++wrong;
+      ++checked;
+    }
+  };
+  std::thread short_reader(reader, 0), long_reader(reader, 3);
+  int in_place = 0;
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<float> u(-0.1f, 0.1f);
+  for (int scan = 0; scan < 40; ++scan) {
+    std::vector<ScanPoint> cloud(100);
+    const float x = -0.3f + 0.015f * float(scan);
+    for (auto& p : cloud) p = ScanPoint(x + u(rng), u(rng), 0.6f + u(rng));
+    store.modify([&](Environment& env) {
+      const std::uint64_t from = env.octree().revision();
+      ScanStats stats = insert_scan(env.octree(), cloud, ScanPoint(0.0f, 0.0f, 0.0f));
+      env.note_octree_changes(from, std::move(stats.flipped));
+      env.octree_distance_field(lo, hi, cap);
+      const auto work = env.octree_field_work().value();
+      in_place += !work.rebuilt && work.copied_cells == 0;
+    });
+    if (scan % 4 == 3) {  // a reader's check between every few scans, however slow the build
+      const int before = checked.load();
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+      while (checked.load() == before && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+    }
+  }
+  done = true;
+  short_reader.join();
+  long_reader.join();
+  EXPECT_GT(checked.load(), 10);
+  EXPECT_GE(in_place, 30);  // (not built anew: the fields were written over or made as new versions)
+  EXPECT_EQ(wrong.load(), 0);
+}
+
 // Four readers each hold a snapshot while scans stream in (each scan re-observes part of the
 // map): the snapshots together hold less than twice one map, and none of them changes.
 TEST(SharedSnapshots, FourOldSnapshotsHoldLessThanTwoMaps) {
