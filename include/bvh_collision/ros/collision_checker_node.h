@@ -313,8 +313,9 @@ class CollisionCheckerNode {
     std::atomic<std::uint64_t> no_return{0};           // rays of NaN pixels cast to max_range
     std::atomic<std::uint64_t> no_return_unplaced{0};  // NaN pixels of a cloud no camera model fits
     std::atomic<double> last_insert_seconds{0.0};
-    // the map's distance field after each: made in place on one no query held any more, copied
-    // (and updated) because every older one was still held, or built anew
+    // the map's distance field after each: made in place (written over one no query holds any
+    // more, or a new version beside one a query or pin holds), copied into a grid of its own
+    // (and updated) because every older one usable was still held, or built anew
     std::atomic<std::uint64_t> fields_in_place{0}, fields_copied{0}, fields_built{0};
   } clouds_;
   std::map<std::string, LatencyStats> latency_;  // keys fixed at start-up: lookups need no lock
