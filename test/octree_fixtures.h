@@ -42,6 +42,12 @@ inline LeafMap theirs(const octomap::OcTree& tree) {
 
 // A depth-camera-like scan: rays from `origin` in a cone, ending on a plane and a box, some
 // beyond `far`.
+// The ray walk's builds this CPU runs (ScanOptions::simd): each must give OctoMap's tree.
+inline std::vector<SimdPath> walks() {
+  if (avx2_available()) return {SimdPath::kGeneric, SimdPath::kAvx2};
+  return {SimdPath::kGeneric};
+}
+
 inline std::vector<ScanPoint> random_scan(const ScanPoint& origin, int n, double far) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.2f, static_cast<float>(far) * 1.3f);
   std::vector<ScanPoint> p;

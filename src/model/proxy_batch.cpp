@@ -17,15 +17,6 @@ namespace bvh_collision {
 
 namespace pb = proxy_batch;
 
-bool avx2_available() {
-#if defined(__x86_64__) || defined(__i386__)
-  static const bool available = __builtin_cpu_supports("avx2");
-  return available;
-#else
-  return false;
-#endif
-}
-
 namespace {
 
 pb::Step flat_step(const KinematicsPlan::Step& step) {
@@ -97,10 +88,7 @@ double clearance_bound(const void* context, std::int32_t index, const double* st
   return static_cast<const PairClearance*>(context)->lower_bound(static_cast<std::size_t>(index), state);
 }
 
-bool use_avx2(SimdPath path) {
-  if (path == SimdPath::kAvx2 && !avx2_available()) throw std::runtime_error("the AVX2 kernel: this CPU has no AVX2");
-  return path == SimdPath::kAvx2 || (path == SimdPath::kAuto && avx2_available());
-}
+bool use_avx2(SimdPath path) { return resolve_simd_path(path, "the AVX2 kernel") == SimdPath::kAvx2; }
 
 }  // namespace
 

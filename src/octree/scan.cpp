@@ -8,199 +8,18 @@
 #include <string>
 #include <thread>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
+#include "bvh_collision/geometry/simd_path.h"
 #include "bvh_collision/geometry/thread_pool.h"
+#include "bvh_collision/octree/detail/ray_walk.h"
 #include "bvh_collision/octree/voxel_set.h"
 
 namespace bvh_collision {
 namespace {
 
-std::optional<OctreeKey> key_of(const OctreeGrid& grid, const ScanPoint& p) { return grid.key(Vec3(p.cast<double>())); }
-
-// OctoMap's Vector3::norm(): float squares summed in float, square root in double.
-double float_norm(const ScanPoint& v) {
-  const float squared = v.x() * v.x() + v.y() * v.y() + v.z() * v.z();
-  return std::sqrt(static_cast<double>(squared));
-}
-
-// Which axis a ray steps along next, as OctoMap decides it (t_max[0] < t_max[1] ? (t_max[0] <
-// t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2)), and that axis's crossing moved on, without a
-// branch: the axis is as good as random from step to step, and the mispredicted branch cost more
-// than the rest of a step (a room's depth image at 5 cm: 12.6 ns a step with the branch and the
-// crossings in memory). The masks are all ones for the axis taken, zero for the others.
-#if defined(__SSE2__)
-struct RayClock {
-  __m128d t[3], delta[3];
-  void set(const double* t_max, const double* t_delta) {
-    for (int i = 0; i < 3; ++i) t[i] = _mm_set_sd(t_max[i]), delta[i] = _mm_set_sd(t_delta[i]);
-  }
-  // Steps one axis; its choice as 0 / -1 masks in `take`.
-  void step(int* take) {
-    const __m128d xy = _mm_cmplt_sd(t[0], t[1]), xz = _mm_cmplt_sd(t[0], t[2]), yz = _mm_cmplt_sd(t[1], t[2]);
-    const __m128d m0 = _mm_and_pd(xy, xz), m1 = _mm_andnot_pd(xy, yz);
-    const __m128d m2 = _mm_andnot_pd(_mm_or_pd(m0, m1), _mm_castsi128_pd(_mm_set1_epi32(-1)));
-    t[0] = _mm_add_sd(t[0], _mm_and_pd(m0, delta[0]));
-    t[1] = _mm_add_sd(t[1], _mm_and_pd(m1, delta[1]));
-    t[2] = _mm_add_sd(t[2], _mm_and_pd(m2, delta[2]));
-    take[0] = -(_mm_movemask_pd(m0) & 1), take[1] = -(_mm_movemask_pd(m1) & 1), take[2] = -(_mm_movemask_pd(m2) & 1);
-  }
-  // OctoMap's std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length.
-  bool beyond(double length) const {
-    return _mm_comigt_sd(_mm_min_sd(_mm_min_sd(t[0], t[1]), t[2]), _mm_set_sd(length)) != 0;
-  }
-};
-#else
-struct RayClock {
-  double t[3], delta[3];
-  void set(const double* t_max, const double* t_delta) {
-    for (int i = 0; i < 3; ++i) t[i] = t_max[i], delta[i] = t_delta[i];
-  }
-  void step(int* take) {
-    const int dim = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
-    t[dim] += delta[dim];
-    for (int i = 0; i < 3; ++i) take[i] = i == dim ? -1 : 0;
-  }
-  bool beyond(double length) const { return std::min(std::min(t[0], t[1]), t[2]) > length; }
-};
-#endif
-
-// One ray's walk as OctoMap's computeRayKeys sets it up: the voxel it is in (16-bit keys as
-// ints), the end's, each axis's step and crossings, how many steps it may still take.
-struct RayWalk {
-  int key[3], end[3], step[3];
-  RayClock clock;
-  double length;
-  int steps_left;
-};
-
-enum class RayStart { kOutside, kNoVoxel, kOriginOnly, kWalk };
-
-// kOutside: an end outside the key range; kNoVoxel: both ends in one voxel; kOriginOnly: the
-// origin's voxel and no step. Amanatides & Woo's traversal with OctoMap's exact mix of float and
-// double arithmetic.
-RayStart start_ray(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, RayWalk& w) {
-  const auto key_origin = key_of(grid, origin), key_end = key_of(grid, end);
-  if (!key_origin || !key_end) return RayStart::kOutside;
-  if (*key_origin == *key_end) return RayStart::kNoVoxel;
-  for (int i = 0; i < 3; ++i) w.key[i] = key_origin->k[i], w.end[i] = key_end->k[i];
-  ScanPoint direction = end - origin;
-  const float length = static_cast<float>(float_norm(direction));
-  // Ends a denormal distance apart in different voxels: the length underflows to 0 and the
-  // direction to infinities and NaN, with which the walk below never ended (found by the
-  // point_cloud fuzz target). Such a ray crosses no voxel between its ends.
-  if (!(length > 0.0f) || !std::isfinite(length)) return RayStart::kOriginOnly;
-  direction /= length;
-  if (!direction.allFinite()) return RayStart::kOriginOnly;
-  double t_max[3], t_delta[3];
-  for (int i = 0; i < 3; ++i) {
-    w.step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
-    if (w.step[i] == 0) {
-      t_max[i] = t_delta[i] = std::numeric_limits<double>::max();
-      continue;
-    }
-    double border = grid.center(key_origin->k[i]);
-    border += static_cast<float>(w.step[i] * grid.resolution() * 0.5);
-    t_max[i] = (border - origin[i]) / direction[i];
-    t_delta[i] = grid.resolution() / std::fabs(direction[i]);
-  }
-  w.clock.set(t_max, t_delta);
-  w.length = length;
-  // Each step moves one voxel along one axis: the walk needs the keys' Manhattan distance, and
-  // rounding that carries it beside the end adds a step or two. The cap makes any other rounding
-  // a short ray, never an endless one.
-  w.steps_left = 8;
-  for (int i = 0; i < 3; ++i) w.steps_left += std::abs(w.end[i] - w.key[i]);
-  return RayStart::kWalk;
-}
-
-// The rest of a walk whose current voxel was entered (and visited): visit(x, y, z) for each voxel
-// it crosses before the end's.
-template <class Visit>
-void walk_on(RayWalk& w, Visit&& visit) {
-  int x = w.key[0], y = w.key[1], z = w.key[2];
-  const int end_x = w.end[0], end_y = w.end[1], end_z = w.end[2];
-  while (w.steps_left-- > 0) {
-    int take[3];
-    w.clock.step(take);
-    x = (x + (w.step[0] & take[0])) & 0xFFFF;  // a key is 16 bits, as OctoMap's
-    y = (y + (w.step[1] & take[1])) & 0xFFFF;
-    z = (z + (w.step[2] & take[2])) & 0xFFFF;
-    if (((x ^ end_x) | (y ^ end_y) | (z ^ end_z)) == 0) break;
-    // Rounding can carry the walk past the end voxel: stop once beyond the ray's length.
-    if (w.clock.beyond(w.length)) break;
-    visit(x, y, z);
-  }
-}
-
-// OctoMap's computeRayKeys: visit(x, y, z) (16-bit keys as ints) for every voxel a ray from
-// `origin` to `end` crosses, without the end's voxel. False when either end lies outside the key
-// range.
-template <class Visit>
-bool walk_ray(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, Visit&& visit) {
-  RayWalk w;
-  const RayStart start = start_ray(grid, origin, end, w);
-  if (start == RayStart::kOutside) return false;
-  if (start == RayStart::kNoVoxel) return true;
-  visit(w.key[0], w.key[1], w.key[2]);
-  if (start == RayStart::kWalk) walk_on(w, visit);
-  return true;
-}
-
-// walk_ray marking the voxels in the bitmap's box there, the others by outside(x, y, z). The
-// same steps as walk_on, with the voxel followed by its bit's index and, per axis, how many steps
-// the walk may still take before it leaves the box (each axis moves one way only: once out, the
-// walk stays out, and walk_on takes the rest).
-template <class Outside>
-bool walk_ray_marking(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, VoxelBitGrid& bits,
-                      Outside&& outside) {
-  RayWalk w;
-  const RayStart start = start_ray(grid, origin, end, w);
-  if (start == RayStart::kOutside) return false;
-  if (start == RayStart::kNoVoxel) return true;
-  std::uint64_t index = 0, end_index = ~std::uint64_t{0};
-  if (!bits.index_of(w.key[0], w.key[1], w.key[2], index)) {
-    outside(w.key[0], w.key[1], w.key[2]);
-    if (start == RayStart::kWalk) walk_on(w, outside);
-    return true;
-  }
-  bits.mark(index);
-  if (start != RayStart::kWalk) return true;
-  bits.index_of(w.end[0], w.end[1], w.end[2], end_index);  // (none: the end lies outside)
-  std::int64_t left[3], stride[3];
-  for (int i = 0; i < 3; ++i) {
-    left[i] = w.step[i] > 0 ? bits.max(i) - w.key[i] : w.step[i] < 0 ? w.key[i] - bits.min(i) : std::numeric_limits<std::int32_t>::max();
-    stride[i] = w.step[i] * static_cast<std::int64_t>(bits.stride(i));
-  }
-  // (Named one by one: as arrays, the compiler kept them in memory.)
-  std::int64_t left_x = left[0], left_y = left[1], left_z = left[2];
-  const std::int64_t stride_x = stride[0], stride_y = stride[1], stride_z = stride[2];
-  std::uint64_t* const words = bits.words();
-  while (w.steps_left-- > 0) {
-    int take[3];
-    w.clock.step(take);
-    const std::int64_t tx = take[0], ty = take[1], tz = take[2];
-    left_x += tx, left_y += ty, left_z += tz;
-    index += static_cast<std::uint64_t>((stride_x & tx) + (stride_y & ty) + (stride_z & tz));
-    if ((left_x | left_y | left_z) < 0) {  // out of the box: the key, then as walk_on
-      left[0] = left_x, left[1] = left_y, left[2] = left_z;
-      for (int i = 0; i < 3; ++i) {
-        if (w.step[i] != 0) w.key[i] = (w.step[i] > 0 ? bits.max(i) - int(left[i]) : bits.min(i) + int(left[i])) & 0xFFFF;
-      }
-      if (w.key[0] == w.end[0] && w.key[1] == w.end[1] && w.key[2] == w.end[2]) return true;
-      if (w.clock.beyond(w.length)) return true;
-      outside(w.key[0], w.key[1], w.key[2]);
-      walk_on(w, outside);
-      return true;
-    }
-    if (index == end_index) break;
-    if (w.clock.beyond(w.length)) break;
-    words[index >> 6] |= std::uint64_t{1} << (index & 63);
-  }
-  return true;
-}
+using ray_walk::float_norm;
+using ray_walk::key_of;
+using ray_walk::walk_ray;
+using ray_walk::walk_ray_marking;
 
 OctreeKey key_at(int x, int y, int z) {
   return OctreeKey{{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), static_cast<std::uint16_t>(z)}};
@@ -244,6 +63,7 @@ bool within_range(const ScanPoint& p, const ScanPoint& origin, const ScanOptions
 
 // OctoMap's bounding-box branch: points outside the box (or beyond max_range) are dropped; a kept
 // ray frees its voxels from the end point back to where it leaves the box.
+template <class Clock>
 void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
                        const ScanOptions& options, const KeyBox& box, ScanPart& part) {
   if (!within_range(p, origin, options) || !options.workspace->contains(p)) {
@@ -256,17 +76,18 @@ void cast_in_workspace(const OctreeGrid& grid, const ScanPoint& p, bool mark_end
     ++part.stats.skipped_outside;
   }
   part.ray.clear();
-  if (!walk_ray(grid, origin, p, [&](int x, int y, int z) { part.ray.push_back(key_at(x, y, z)); })) return;
+  if (!walk_ray<Clock>(grid, origin, p, [&](int x, int y, int z) { part.ray.push_back(key_at(x, y, z)); })) return;
   for (auto it = part.ray.rbegin(); it != part.ray.rend() && box.contains(*it); ++it) part.free_voxel(it->k[0], it->k[1], it->k[2]);
 }
 
 // ScanOptions::clip_rays_to_workspace: an end inside the box and within range as OctoMap has it;
 // any other ray frees the voxels it crosses inside the box, up to max_range (a box is convex: they
 // are one run along the ray).
+template <class Clock>
 void cast_clipped(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
                   const ScanOptions& options, const KeyBox& box, ScanPart& part) {
   const bool within = within_range(p, origin, options);
-  if (within && options.workspace->contains(p) && mark_end) return cast_in_workspace(grid, p, true, origin, options, box, part);
+  if (within && options.workspace->contains(p) && mark_end) return cast_in_workspace<Clock>(grid, p, true, origin, options, box, part);
   ScanPoint end = p;
   if (!within) {
     ScanPoint direction = p - origin;
@@ -274,13 +95,14 @@ void cast_clipped(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, con
     end = origin + direction * static_cast<float>(options.max_range);
   }
   // (The dense box lies inside the workspace's.)
-  if (!walk_ray_marking(grid, origin, end, part.dense, [&](int x, int y, int z) {
+  if (!walk_ray_marking<Clock>(grid, origin, end, part.dense, [&](int x, int y, int z) {
         if (box.contains(key_at(x, y, z))) part.free.insert(key_at(x, y, z));
       })) {
     ++part.stats.skipped_outside;
   }
 }
 
+template <class Clock>
 void cast(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanPoint& origin,
           const ScanOptions& options, ScanPart& part) {
   const bool within = within_range(p, origin, options);
@@ -291,7 +113,7 @@ void cast(const OctreeGrid& grid, const ScanPoint& p, bool mark_end, const ScanP
     direction /= static_cast<float>(float_norm(direction));
     end = origin + direction * static_cast<float>(options.max_range);
   }
-  const bool ray_inside = walk_ray_marking(grid, origin, end, part.dense, [&](int x, int y, int z) { part.free.insert(key_at(x, y, z)); });
+  const bool ray_inside = walk_ray_marking<Clock>(grid, origin, end, part.dense, [&](int x, int y, int z) { part.free.insert(key_at(x, y, z)); });
   if (!within) {
     part.stats.skipped_outside += !ray_inside;
     return;
@@ -312,8 +134,9 @@ struct ScanRays {
   const ScanPoint& operator[](std::size_t i) const { return marks(i) ? points[i] : clear_only[i - points.size()]; }
 };
 
-void cast_all(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, std::size_t last,
-              const ScanPoint& origin, const ScanOptions& options, ScanPart& part) {
+template <class Clock>
+void cast_all_with(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, std::size_t last,
+                   const ScanPoint& origin, const ScanOptions& options, ScanPart& part) {
   std::optional<KeyBox> box;
   if (options.workspace) box = key_box(grid, *options.workspace);
   for (; first != last; ++first) {
@@ -321,13 +144,39 @@ void cast_all(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, s
     if (!p.allFinite()) {
       ++part.stats.skipped_invalid;
     } else if (box && options.clip_rays_to_workspace) {
-      cast_clipped(grid, p, rays.marks(first), origin, options, *box, part);
+      cast_clipped<Clock>(grid, p, rays.marks(first), origin, options, *box, part);
     } else if (box) {
-      cast_in_workspace(grid, p, rays.marks(first), origin, options, *box, part);
+      cast_in_workspace<Clock>(grid, p, rays.marks(first), origin, options, *box, part);
     } else {
-      cast(grid, p, rays.marks(first), origin, options, part);
+      cast<Clock>(grid, p, rays.marks(first), origin, options, part);
     }
   }
+}
+
+// The rays' walks built twice (geometry/simd_path.h), each flattened so that its build holds the
+// walk. With AVX2 a step takes about 0.7 of the default build's time (three-operand forms, no
+// register copies, one blend a select: a room's depth image at 5 cm, docs/performance.md); no
+// fused multiply-add is enabled, so both take the same steps.
+__attribute__((flatten)) void cast_all_generic(const OctreeGrid& grid, const ScanRays& rays, std::size_t first,
+                                               std::size_t last, const ScanPoint& origin, const ScanOptions& options,
+                                               ScanPart& part) {
+  cast_all_with<ray_walk::SelectClock>(grid, rays, first, last, origin, options, part);
+}
+
+#if defined(__x86_64__) && defined(__SSE2__)
+__attribute__((target("avx2"), flatten)) void cast_all_avx2(const OctreeGrid& grid, const ScanRays& rays, std::size_t first,
+                                                            std::size_t last, const ScanPoint& origin,
+                                                            const ScanOptions& options, ScanPart& part) {
+  cast_all_with<ray_walk::BlendClock>(grid, rays, first, last, origin, options, part);
+}
+#endif
+
+void cast_all(const OctreeGrid& grid, const ScanRays& rays, std::size_t first, std::size_t last, const ScanPoint& origin,
+              const ScanOptions& options, SimdPath path, ScanPart& part) {
+#if defined(__x86_64__) && defined(__SSE2__)
+  if (path == SimdPath::kAvx2) return cast_all_avx2(grid, rays, first, last, origin, options, part);
+#endif
+  cast_all_generic(grid, rays, first, last, origin, options, part);
 }
 
 int thread_count(const ScanOptions& options, std::size_t points) {
@@ -381,6 +230,7 @@ std::optional<KeyBox> dense_box(const OctreeGrid& grid, const ScanRays& rays, co
 // blocks of rays as they go: a depth image's far rows have rays many times longer than its near
 // rows, so fixed halves would leave one core idle half the time.
 ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint& origin, const ScanOptions& options) {
+  const SimdPath path = resolve_simd_path(options.simd, "ScanOptions::simd");
   const auto threads = static_cast<unsigned>(thread_count(options, rays.size()));
   std::vector<ScanPart> parts(threads);
   constexpr std::size_t kBlock = 2048;
@@ -391,7 +241,7 @@ ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint
   ThreadPool::shared().run(threads, [&](unsigned t) {
     if (box) parts[t].dense = VoxelBitGrid(box->min, box->max);
     for (std::size_t begin; (begin = next.fetch_add(kBlock)) < rays.size();) {
-      cast_all(grid, rays, begin, std::min(rays.size(), begin + kBlock), origin, options, parts[t]);
+      cast_all(grid, rays, begin, std::min(rays.size(), begin + kBlock), origin, options, path, parts[t]);
     }
   });
   ScanPart& all = parts.front();
@@ -418,9 +268,31 @@ ScanPart cast_scan(const OctreeGrid& grid, const ScanRays& rays, const ScanPoint
 
 }  // namespace
 
-bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys) {
+namespace {
+
+template <class Clock>
+bool walk_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys) {
+  return walk_ray<Clock>(grid, origin, end, [&](int x, int y, int z) { keys.push_back(key_at(x, y, z)); });
+}
+
+#if defined(__x86_64__) && defined(__SSE2__)
+__attribute__((target("avx2"), flatten)) bool walk_keys_avx2(const OctreeGrid& grid, const ScanPoint& origin,
+                                                             const ScanPoint& end, std::vector<OctreeKey>& keys) {
+  return walk_keys<ray_walk::BlendClock>(grid, origin, end, keys);
+}
+#endif
+
+}  // namespace
+
+bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys,
+              SimdPath path) {
   keys.clear();
-  return walk_ray(grid, origin, end, [&](int x, int y, int z) { keys.push_back(key_at(x, y, z)); });
+#if defined(__x86_64__) && defined(__SSE2__)
+  if (resolve_simd_path(path, "ray_keys") == SimdPath::kAvx2) return walk_keys_avx2(grid, origin, end, keys);
+#else
+  resolve_simd_path(path, "ray_keys");
+#endif
+  return walk_keys<ray_walk::SelectClock>(grid, origin, end, keys);
 }
 
 ScanStats insert_scan(Octree& tree, const std::vector<ScanPoint>& points, const ScanPoint& origin,

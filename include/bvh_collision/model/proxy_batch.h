@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "bvh_collision/geometry/simd_path.h"
 #include "bvh_collision/model/detail/proxy_batch_plan.h"
 
 namespace bvh_collision {
@@ -21,12 +22,6 @@ namespace bvh_collision {
 class PairClearance;
 class RobotCollisionModel;
 struct ProxyLevel;
-
-// Which kernel: the best the CPU runs, or one named (tests and benchmarks compare them).
-enum class SimdPath { kAuto, kGeneric, kAvx2 };
-
-// Does this CPU run the AVX2 kernel?
-bool avx2_available();
 
 class ProxyBatch {
  public:

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bvh_collision/geometry/limits.h"
+#include "bvh_collision/geometry/simd_path.h"
 #include "bvh_collision/octree/octree.h"
 
 namespace bvh_collision {
@@ -18,8 +19,10 @@ namespace bvh_collision {
 using ScanPoint = Eigen::Vector3f;
 
 // The voxels a ray from `origin` to `end` crosses, without the end's voxel (OctoMap's 3-D DDA,
-// computeRayKeys). False (and `keys` empty) when either end lies outside the key range.
-bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys);
+// computeRayKeys). False (and `keys` empty) when either end lies outside the key range. `path`:
+// the walk's build (both take the same steps; tests compare them).
+bool ray_keys(const OctreeGrid& grid, const ScanPoint& origin, const ScanPoint& end, std::vector<OctreeKey>& keys,
+              SimdPath path = SimdPath::kAuto);
 
 // OctoMap's bounding-box limit: end points outside the box are dropped (with their rays), and a
 // kept point's ray updates only the voxels inside the box. Compared in float, as OctoMap does.
@@ -44,6 +47,10 @@ struct ScanOptions {
   // about the sensor; the others in a hash set of 8 x 8 x 8 blocks. The tree is the same either
   // way; 0 takes the set for all.
   std::uint64_t max_dense_voxels = std::uint64_t{1} << 26;
+  // The rays' walk: built for plain x86-64 and for AVX2, the CPU's best taken by default (the
+  // same voxels either way; tests and benchmarks name one). kAvx2 on a CPU without AVX2 throws
+  // std::runtime_error before anything changes.
+  SimdPath simd = SimdPath::kAuto;
   // Points per scan (end points and clear-only ones together) and voxels per ray (max_range /
   // resolution, when max_range is given; without it a ray stays inside the 16-bit key range):
   // insert_scan throws LimitExceeded beyond them, before it changes anything.
