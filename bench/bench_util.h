@@ -66,8 +66,8 @@ inline std::string machine_description() {
   std::string simd = has("avx512f") ? "AVX-512F" : has("avx2") ? "AVX2" : has("sse4_2") ? "SSE4.2" : "SSE2";
   std::ostringstream out;
   out << model << " (widest SIMD: " << simd << "), " << std::thread::hardware_concurrency() << " cores, g++ " << __VERSION__
-      << "; chosen at run time: proxy batch kernel " << (avx2_available() ? "AVX2, 4 lanes" : "SSE2, 2 lanes")
-      << ", scans' ray walk " << (avx2_available() ? "AVX2" : "SSE2");
+      << "; proxy batch kernel: " << (avx2_available() ? "AVX2, 4 lanes" : "SSE2, 2 lanes")
+      << "; scans' ray walk: " << (avx2_available() ? "AVX2" : "SSE2") << " (both chosen at run time)";
   return out.str();
 }
 

@@ -84,6 +84,7 @@ TEST_F(BenchReport, ReportHasEverySectionAndEveryPlotItLinks) {
   EXPECT_LT(report.find(" cores, g++ "), report.find("## 1.")) << "the machine's description is on top";
   EXPECT_LT(report.find("widest SIMD: "), report.find("## 1.")) << "the CPU's SIMD, named on top";
   EXPECT_LT(report.find("proxy batch kernel: "), report.find("## 1.")) << "the path the SIMD kernel took, named on top";
+  EXPECT_LT(report.find("scans' ray walk: "), report.find("## 1.")) << "the path the scans' walk took, named on top";
   for (const char* section : {"## 1. Self-collision", "## 2. Distance", "## 3. Volume types", "## 4. Environment",
                               "## 5. Model only what the scene needs", "## 6. Service", "## 7. Planning",
                               "## 8. Numerical stability"}) {
