@@ -34,6 +34,8 @@ SANITIZER_FILTERS = {
     # test_attached_objects, test_allowed_objects and test_ompl_validity; the Release pass keeps them.
     "test_tolerance_policy": "-TolerancePolicy.EachToleranceClassKeepsTheContractOnEveryKindPair",
     "test_scene_checker": "-SceneChecker.CertifiedMotionsHoldOnADenseSweep",
+    # k-DOPs of 18 and 26 directions: the 14-direction one's code with other tables.
+    "test_bvh": "-BvhOracle/4.*:BvhOracle/5.*",
 }
 
 

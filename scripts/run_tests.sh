@@ -99,7 +99,7 @@ if [[ $run_sanitized == 1 ]]; then
     ctest --test-dir "$SAN_BUILD" -j"$JOBS" -R "^_ctest_bvh_collision_gtest_($(IFS='|'; echo "${own_tests[*]}"))\$" \
       --output-on-failure || status=1
     python3 scripts/run_preloaded_tests.py "$BUILD" "$SAN_BUILD/devel/lib" "$SAN_BUILD/test_results/bvh_collision" "$JOBS" \
-      "${own_tests[@]}" test_bench_report || status=1
+      "${own_tests[@]}" test_bench_report test_layers || status=1  # (test_layers reads sources and symbols only)
     catkin_test_results "$SAN_BUILD/test_results" > /dev/null || status=1
     result_dirs+=("$SAN_BUILD/test_results")
   else

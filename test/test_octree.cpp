@@ -23,6 +23,7 @@
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/octree/voxel_set.h"
 #include "octree_fixtures.h"
+#include "robot_data.h"
 
 namespace bvh_collision {
 namespace {
@@ -31,11 +32,13 @@ using test::LeafMap;
 using test::ours;
 using test::random_scan;
 using test::rng;
+using test::sized;
 using test::theirs;
 using test::walks;
 
 // The same scans into OctoMap and into one tree per build of the walk (walks()).
-void expect_same_as_octomap(double resolution, const ScanOptions& options, int scans, int points) {
+void expect_same_as_octomap(double resolution, const ScanOptions& options, int scans, int all_points) {
+  const int points = sized(all_points);  // (a quarter under the sanitizers)
   const double max_range = options.max_range;
   SCOPED_TRACE("resolution " + std::to_string(resolution) + " max_range " + std::to_string(max_range) +
                (options.workspace ? " workspace" : "") + " threads " + std::to_string(options.threads));
@@ -147,7 +150,7 @@ TEST(OctreeAgainstOctomap, BitmapAndSetOfCrossedVoxelsGiveOneTree) {
     for (int s = 0; s < 3; ++s) {
       // Outside the workspace on the last scan: its rays enter the box from outside.
       const ScanPoint origin = s == 2 ? ScanPoint(1.6f, 1.5f, 1.4f) : ScanPoint(0.3f * u(rng()), 0.3f * u(rng()), 0.2f);
-      std::vector<ScanPoint> scan = random_scan(origin, 5000, 1.8), clearing = random_scan(origin, 500, 2.5);
+      std::vector<ScanPoint> scan = random_scan(origin, sized(5000), 1.8), clearing = random_scan(origin, sized(500), 2.5);
       // Ends on voxel planes, the box's extremes among them.
       for (int k = -30; k <= 30; k += 3) scan.push_back(ScanPoint(float(res * k), float(res * (k % 7)), float(res * -30)));
       if (s == 1) scan.push_back(ScanPoint(250.0f, -3.0f, 1.0f));  // far: a box past the bitmap's limit
