@@ -30,14 +30,17 @@ unit_tests() {
 # sanitizers' reports, a third less compile time than -g) and the three tests that link a static project library. The
 # tests themselves are not instrumented (CMakeLists.txt), so every other unit test runs again
 # from the Release build on the sanitized library (scripts/run_preloaded_tests.py), as soon as
-# the library is built: the three tests are built beside that pass (on the CPU its last, longest
-# tests leave) and run after it.
+# the library is built (the file library_built marks it): the three tests are built after the
+# library, beside that pass if it has started, and run after it.
 own_tests=(test_check_tool test_fuzz_replay test_ros_conversions)
 san_build_pid=""
 start_sanitized_build() {
+  rm -f "$SAN_BUILD/library_built"
   ( nice -n 19 cmake -S . -B "$SAN_BUILD" -DBVH_COLLISION_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" > "$SAN_BUILD.configure.log" 2>&1 \
-    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_session bvh_collision_io ) > "$SAN_BUILD.build.log" 2>&1 &
+    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" bvh_collision_session bvh_collision_io \
+    && touch "$SAN_BUILD/library_built" \
+    && nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" "${own_tests[@]}" ) > "$SAN_BUILD.build.log" 2>&1 &
   san_build_pid=$!
 }
 # A failed build, as a failing test case.
@@ -101,18 +104,17 @@ fi
 if [[ $run_sanitized == 1 ]]; then
   echo "== unit tests under ASan + UBSan ($SAN_BUILD) $(date +%T)"
   [[ -z "$san_build_pid" ]] && start_sanitized_build
-  if wait "$san_build_pid"; then
+  while [[ ! -e "$SAN_BUILD/library_built" ]] && kill -0 "$san_build_pid" 2>/dev/null; do sleep 2; done
+  if [[ -e "$SAN_BUILD/library_built" ]]; then
     echo "== sanitized library built $(date +%T)"
     rm -rf "$SAN_BUILD/test_results"
-    nice -n 19 make -C "$SAN_BUILD" -j"$JOBS" "${own_tests[@]}" >> "$SAN_BUILD.build.log" 2>&1 &
-    own_build_pid=$!
     export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
     export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}
     export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
     python3 scripts/run_preloaded_tests.py "$BUILD" "$SAN_BUILD/devel/lib" "$SAN_BUILD/test_results/bvh_collision" "$JOBS" \
       "${own_tests[@]}" test_bench_report test_layers || status=1  # (test_layers reads sources and symbols only)
     echo "== the sanitized build's own tests $(date +%T)"
-    if wait "$own_build_pid"; then
+    if wait "$san_build_pid"; then
       ctest --test-dir "$SAN_BUILD" -j"$JOBS" -R "^_ctest_bvh_collision_gtest_($(IFS='|'; echo "${own_tests[*]}"))\$" \
         --output-on-failure || status=1
     else
