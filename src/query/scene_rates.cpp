@@ -39,7 +39,7 @@ void SceneChecker::relative_pair_rates() {
         if (std::find(above[other].begin(), above[other].end(), j) != above[other].end()) continue;  // moves both alike
         const int v = variable_of(j);
         if (v < 0) {
-          rates.relative = false;
+          rates.relative = rates.path_of_variables = false;
           continue;
         }
         moves[v] = 1;

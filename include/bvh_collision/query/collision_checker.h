@@ -74,6 +74,8 @@ class CollisionChecker {
   const AllowedCollisionMatrix& acm() const { return m_->acm(); }
   // What every query reads: shapes, hierarchies, bounds, kinematics, motion rates (immutable).
   const RobotCollisionModel& collision_model() const { return *m_; }
+  // The model itself, shared: what a cache of its own geometry keys on (SceneChecker's held pairs).
+  const std::shared_ptr<const RobotCollisionModel>& shared_collision_model() const { return m_; }
   // What is built from it to answer faster: proxy levels and clearance grids (immutable).
   const RobotAccelerators& accelerators() const { return *a_; }
   // The link pairs a self-collision query examines: both have geometry and the matrix allows

@@ -57,6 +57,11 @@ struct SceneCheckOptions {
   // Negative: the checker's own (RobotAccelerators::pair_exact_growth, chosen when its levels
   // were built: query/motion_calibration.h). The answers are the same at every value.
   double pair_exact_growth = -1.0;
+  // A self pair that a motion moves by one joint of its kinematic path, the path's other joints
+  // held (a planning group beside a tucked arm), is proven clear along that joint once per thread
+  // and robot model, and read back by every later motion (src/query/held_pair_clearance.h). False:
+  // every interval settles it afresh (for tests and measurements: the answers are the same).
+  bool held_pairs = true;
 };
 
 class SceneChecker {
@@ -148,6 +153,10 @@ class SceneChecker {
   bool worth(const ProxyLevel* level, double growth) const;
   const ProxyLevel* walked_level(double growth) const;
   Answer pair_check(std::size_t pair, const Posed& posed) const;
+  // Over a motion's interval that moves one variable of the pair's kinematic path and holds the
+  // others (from, to: its end states): is the pair proven clear all along by the thread's held
+  // tree for it (held_pair_clearance.h)? `margin`: the pose rounding's, on top of the clearance.
+  bool held_pair_clear(std::size_t pair, const double* from, const double* to, double margin) const;
   Answer link_objects_check(int link, const Posed& posed) const;
   Answer link_octree_check(int link, const Posed& posed) const;
   bool link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const;
@@ -245,6 +254,10 @@ class SceneChecker {
   bool octree_ = false;          // the environment has one
   struct PairRates {
     bool relative = true;  // false: the sum of the two links' own bounds
+    // Every joint on the pair's path is a state variable's: the weights' variables are all that
+    // change the pair's relative pose, each closing it at most at its weight (prismatic joints
+    // too: a link's motion rates bound its points' speed in any state within the limits).
+    bool path_of_variables = true;
     std::vector<std::pair<int, double>> weights;  // (state variable, rate)
   };
   std::vector<PairRates> pair_rates_;  // per checked pair
