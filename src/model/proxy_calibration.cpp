@@ -81,7 +81,8 @@ std::vector<PairCost> measure_pair_costs(const RobotCollisionModel& model, const
   request.tolerance = level;  // the exact path as it runs at the tolerances this level fits
   QueryStats stats;
   for (std::size_t i = 0; i < out.size(); ++i) {
-    const auto [a, b] = pairs[first_pair + i];
+    // (Named, not bound: clang 14's C++17 lets no lambda capture a structured binding.)
+    const int a = pairs[first_pair + i].first, b = pairs[first_pair + i].second;
     const std::vector<std::uint32_t>& near = samples.near[i];
     out[i].samples = static_cast<std::uint32_t>(near.size());
     if (near.empty() || proxies[a].empty() || proxies[b].empty()) continue;

@@ -82,7 +82,7 @@ bool SceneChecker::held_pair_clear(std::size_t p, const double* from, const doub
     held.variable = moving;
     held.tree.reset(joint->lower, joint->upper, rate);
   }
-  const auto [a, b] = m.checked_pairs()[p];
+  const int a = m.checked_pairs()[p].first, b = m.checked_pairs()[p].second;  // (a lambda takes them: not bound)
   thread_local std::vector<double> state;
   thread_local std::vector<Transform> poses;
   state.assign(from, from + checker_.model().variable_count());

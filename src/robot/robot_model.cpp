@@ -429,8 +429,14 @@ void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, std::size_t fi
 // Built twice, the CPU choosing at load time: with AVX's three-operand forms the split columns
 // need no register copies (docs/performance.md), and no fused
 // multiply-add is enabled, so both give the same bits. Flattened: a clone inlines only what it
-// is given.
-__attribute__((target_clones("avx2", "default"), flatten)) void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
+// is given. (clang 14, make fuzz's compiler, names its dispatcher apart from the function,
+// which its callers then miss at link time: one build there.)
+#if defined(__clang__)
+#define BVH_KINEMATICS_BUILDS flatten
+#else
+#define BVH_KINEMATICS_BUILDS target_clones("avx2", "default"), flatten
+#endif
+__attribute__((BVH_KINEMATICS_BUILDS)) void KinematicsPlan::compute(const double* state, std::vector<Transform>& poses,
                              const std::vector<Transform>* free_joint_poses) const {
   poses.resize(links_);
   poses[root_] = Transform();
