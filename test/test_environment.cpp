@@ -286,6 +286,19 @@ TEST(Environment, ObjectsAddMoveRemoveAndBadInput) {
   EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(std::nan("")), Transform::Identity()), std::invalid_argument);
   EXPECT_THROW(env.add_object("bad", ObjectShape::cylinder(-1, 1), Transform::Identity()), std::invalid_argument);
   EXPECT_THROW(env.add_object("bad", ObjectShape::triangles(TriangleMesh{}), Transform::Identity()), std::invalid_argument);
+  // Regression (make fuzz): sizes and places beyond 1e6 m, which overran the convex hull's memory
+  // (a box 1e150 m wide) and the object grid's cell counts, are refused.
+  EXPECT_THROW(env.add_object("bad", ObjectShape::box(Vec3::Constant(1e150)), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(2e6), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::capsule(1, 1e300), Transform::Identity()), std::invalid_argument);
+  EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(1), Transform::Translation(Vec3(0, -1e150, 0))), std::invalid_argument);
+  EXPECT_THROW(env.move_object("ball", Transform::Translation(Vec3(2e6, 0, 0))), std::invalid_argument);
+  TriangleMesh far;
+  far.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1e7, 0)};
+  far.triangles = {{0, 1, 2}};
+  EXPECT_THROW(env.add_object("bad", ObjectShape::triangles(far), Transform::Identity()), std::invalid_argument);
+  env.add_object("large", ObjectShape::box(Vec3::Constant(1e6)), Transform::Translation(Vec3(-1e6, 0, 0)));  // the limit itself
+  EXPECT_TRUE(env.remove_object("large"));
   Transform skewed;
   skewed.R(0, 0) = 2.0;
   EXPECT_THROW(env.add_object("bad", ObjectShape::sphere(1), skewed), std::invalid_argument);

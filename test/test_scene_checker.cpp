@@ -548,5 +548,22 @@ TEST(ObjectGrid, BallsInAPrimitivesFrameAnswerAsInTheWorld) {
   EXPECT_GT(missed, 2000);
 }
 
+// Regression (make fuzz, a check_motion request): an object whose box spans more cells than an
+// int counts (a box of the largest size an object may have over cells of 0.1 mm) is listed in
+// every cell of the grid, not in the first one only (the cell range cast to int was undefined, and
+// on x86 the first cell); one as far away is in none.
+TEST(ObjectGrid, AnObjectSpanningMoreCellsThanAnIntCountsIsInEveryCell) {
+  Environment world(0.05);
+  world.add_object("huge", ObjectShape::box(Vec3::Constant(1e6)), Transform());
+  world.add_object("far", ObjectShape::sphere(1.0), Transform::Translation(Vec3(1e6, -1e6, 1e6)));
+  const ObjectGrid grid(world.objects(), Vec3::Constant(-1e-3), Vec3::Constant(1e-3), 1e-4, 1e-4);
+  for (const Vec3& c : {Vec3(-9e-4, -9e-4, -9e-4), Vec3(0.0, 0.0, 0.0), Vec3(9e-4, 9e-4, 9e-4), Vec3(9e-4, -9e-4, 5e-4)}) {
+    std::vector<int> offered;
+    grid.for_each_near(c, 5e-5, [&](int o) { offered.push_back(o); });
+    EXPECT_EQ(offered, std::vector<int>{0}) << "ball at " << c.transpose();
+    EXPECT_FALSE(grid.clear(c, 5e-5)) << "ball at " << c.transpose();
+  }
+}
+
 }  // namespace
 }  // namespace bvh_collision

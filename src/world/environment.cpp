@@ -10,11 +10,21 @@
 namespace bvh_collision {
 namespace {
 
-bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+// Objects lie within this of the origin and are at most this large (m): a world of kilometres
+// fits many times over, and the geometry, which squares coordinates (hull volumes, areas, a grid's
+// cell counts), keeps its millimetres. Beyond it a box 1e150 m wide overran the convex hull's
+// memory (make fuzz).
+constexpr double kLargest = 1e6;
+
+// Positive, finite and at most kLargest.
+bool positive(double v) { return std::isfinite(v) && v > 0.0 && v <= kLargest; }
 
 void require_rigid(const Transform& pose, const std::string& id) {
   if (!is_rigid(pose)) {
     throw std::invalid_argument("object '" + id + "': the pose must be finite with a rotation matrix");
+  }
+  if (!(pose.t.cwiseAbs().maxCoeff() <= kLargest)) {
+    throw std::invalid_argument("object '" + id + "': the pose must lie within 1e6 m of the origin");
   }
 }
 
@@ -23,13 +33,14 @@ TriangleMesh object_mesh(const ObjectShape& shape, const std::string& id) {
   switch (shape.kind) {
     case ObjectShape::Kind::kBox:
       if (!(positive(shape.size.x()) && positive(shape.size.y()) && positive(shape.size.z()))) {
-        throw std::invalid_argument(what + "box sizes must be positive and finite");
+        throw std::invalid_argument(what + "box sizes must be positive, finite and at most 1e6 m");
       }
       return box_mesh(shape.size);
     case ObjectShape::Kind::kMesh: {
       if (!shape.mesh || shape.mesh->empty()) throw std::invalid_argument(what + "the mesh has no triangles");
       for (const Vec3& v : shape.mesh->vertices) {
         if (!v.allFinite()) throw std::invalid_argument(what + "the mesh has a non-finite vertex");
+        if (!(v.cwiseAbs().maxCoeff() <= kLargest)) throw std::invalid_argument(what + "the mesh has a vertex beyond 1e6 m");
       }
       for (const auto& t : shape.mesh->triangles) {
         for (const std::int32_t i : t) {
@@ -64,24 +75,24 @@ CollisionObject make_collision_object(const std::string& id, const ObjectShape& 
   require_rigid(pose, id);
   CollisionObject o{id, shape, pose, nullptr, nullptr, Primitive{}, Vec3::Zero(), 0.0};
   if (shape.kind == ObjectShape::Kind::kSphere) {
-    if (!positive(shape.radius)) throw std::invalid_argument("object '" + id + "': sphere radius must be positive and finite");
+    if (!positive(shape.radius)) throw std::invalid_argument("object '" + id + "': sphere radius must be positive, finite and at most 1e6 m");
     o.primitive = Primitive::sphere(shape.radius);
   }
   if (shape.kind == ObjectShape::Kind::kCylinder) {
     if (!(positive(shape.radius) && positive(shape.length))) {
-      throw std::invalid_argument("object '" + id + "': cylinder radius and length must be positive and finite");
+      throw std::invalid_argument("object '" + id + "': cylinder radius and length must be positive, finite and at most 1e6 m");
     }
     o.primitive = Primitive::cylinder(shape.radius, shape.length);
   }
   if (shape.kind == ObjectShape::Kind::kCapsule) {
-    if (!(positive(shape.radius) && std::isfinite(shape.length) && shape.length >= 0.0)) {
-      throw std::invalid_argument("object '" + id + "': capsule radius must be positive and its length non-negative, both finite");
+    if (!(positive(shape.radius) && shape.length >= 0.0 && shape.length <= kLargest)) {
+      throw std::invalid_argument("object '" + id + "': capsule radius must be positive and its length non-negative, both finite and at most 1e6 m");
     }
     o.primitive = Primitive::capsule(shape.radius, shape.length);
   }
   if (shape.kind == ObjectShape::Kind::kCone) {
     if (!(positive(shape.radius) && positive(shape.length))) {
-      throw std::invalid_argument("object '" + id + "': cone radius and length must be positive and finite");
+      throw std::invalid_argument("object '" + id + "': cone radius and length must be positive, finite and at most 1e6 m");
     }
     o.primitive = Primitive::cone(shape.radius, shape.length);
   }

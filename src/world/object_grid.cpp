@@ -25,6 +25,12 @@ double squared_box_distance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   return (p.cwiseMax(lo).cwiseMin(hi) - p).squaredNorm();
 }
 
+// The cell (0 to n - 1) a coordinate in cells falls in, clamped as a double: a box wider than an
+// int counts (or not a number) has no int to clamp. (NaN: the first cell for a box's low side,
+// the last for its high side, so the box spans them all.)
+int first_cell(double x, int n) { return x > 0.0 ? static_cast<int>(std::min(std::floor(x), n - 1.0)) : 0; }
+int last_cell(double x, int n) { return x < n - 1.0 ? static_cast<int>(std::max(std::floor(x), 0.0)) : n - 1; }
+
 }  // namespace
 
 ObjectGrid::ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi, double reach,
@@ -58,8 +64,8 @@ ObjectGrid::ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi
     const Solid& s = solids_[o];
     int first[3], last[3];
     for (int i = 0; i < 3; ++i) {
-      first[i] = std::clamp(static_cast<int>(std::floor((s.lo[i] - reach - lo[i]) / cell)), 0, n_[i] - 1);
-      last[i] = std::clamp(static_cast<int>(std::floor((s.hi[i] + reach - lo[i]) / cell)), 0, n_[i] - 1);
+      first[i] = first_cell((s.lo[i] - reach - lo[i]) / cell, n_[i]);
+      last[i] = last_cell((s.hi[i] + reach - lo[i]) / cell, n_[i]);
     }
     for (int z = first[2]; z <= last[2]; ++z) {
       for (int y = first[1]; y <= last[1]; ++y) {
