@@ -127,7 +127,7 @@ TEST(SceneHeldPairs, SweepsOfOneJointAnswerAsAdvancement) {
   std::mt19937_64 rng(57);
   int motions = 0, free = 0;
   const std::size_t pan = robot.variable("r_shoulder_pan_joint");
-  for (int attempt = 0; attempt < 400 && motions < test::sized(10); ++attempt) {
+  for (int attempt = 0; attempt < 400 && motions < test::sized(6); ++attempt) {
     const std::vector<double> a = robot.random_right_arm(rng);
     std::vector<double> b = a;
     const std::size_t v = attempt % 2 == 0 ? pan : robot.right_arm[rng() % robot.right_arm.size()];
