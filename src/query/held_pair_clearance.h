@@ -4,7 +4,7 @@
 // a function of that one value, and the pair sits at the same few millimetres for the whole of
 // its range: every motion of the group, bisected until its growth falls below the gap, paid one
 // exact distance per few milliradians (most of pr2's torso-and-arm plan time:
-// docs/performance.md). Proven once instead, lazily, per stretch of the variable's range.
+// docs/planning.md). Proven once instead, lazily, per stretch of the variable's range.
 //
 // Why a stretch's proof holds: the links tested at the stretch's centre value c and found farther
 // apart than need + rate * h (h its half-width, slightly widened for rounding), and no point of
@@ -44,7 +44,6 @@ class StretchTree {
     while (depth_ < kMaxDepth && std::ldexp(rate * width_, -depth_ - 1) > kLeafClosing) ++depth_;
     node_.assign((std::size_t{2} << depth_) - 1, 0);
   }
-  double rate() const { return rate_; }
 
   // Does every value of [lo, hi] lie in a stretch proven clear? `near(c, h)`: are the links within
   // need + rate * h of each other at value c (the caller's exact test)? Called for untested

@@ -179,7 +179,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   if (s.growth != nullptr) {
     // Beside a link the motion does not move relative to it but by one joint, the pair's clearance
     // along that joint, proven once (held_pair_clearance.h).
-    if (s.from != nullptr && held_pair_clear(p, s.from, s.to, margin)) return Answer::kFree;
+    if (s.from != nullptr && held_pair_clear(p, s.from, s.to)) return Answer::kFree;
     // Proxies cannot tell within their level: the pair's exact distance at the midpoint can.
     if (!exact_distance_pays(s, grow, pair_exact_growth_)) return s.no_free_radius();
     const double limit = grown_radius(pads) + margin;

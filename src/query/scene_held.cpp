@@ -14,7 +14,9 @@ namespace {
 // Exact tests a query may spend on stretches not yet tested: about what the motion's own intervals
 // would spend on a pair held a few millimetres apart over a radian (an exact distance each).
 constexpr int kTestsPerQuery = 256;
-// Taken on top of every test's padding: the rounding of the test and the kinematics.
+// Taken on top of every test's padding: the rounding of the test and of the kinematics, which
+// pose the two links in the root's frame (a proof must not depend on the call that asked for it:
+// it serves every later one).
 constexpr double kTestMargin = 1e-6;
 
 bool same_owner(const std::weak_ptr<const RobotCollisionModel>& a, const std::shared_ptr<const RobotCollisionModel>& b) {
@@ -45,9 +47,18 @@ held_pair::HeldPairs& held_pairs(const std::shared_ptr<const RobotCollisionModel
   return cache;
 }
 
+// May a held variable take this value under the motion rates? Within its joint's limits, or any
+// value for a turning joint without them (a turn's rate does not depend on its angle; a slide's
+// travel lengthens the chains below it, so a slide needs its limits).
+bool held_within_limits(const RobotJoint* j, double value) {
+  if (j == nullptr) return false;
+  if (finite_limits(j)) return value >= j->lower && value <= j->upper;
+  return j->type == JointType::kRevolute || j->type == JointType::kContinuous;
+}
+
 }  // namespace
 
-bool SceneChecker::held_pair_clear(std::size_t p, const double* from, const double* to, double margin) const {
+bool SceneChecker::held_pair_clear(std::size_t p, const double* from, const double* to) const {
   const PairRates& rates = pair_rates_[p];
   if (!options_.held_pairs || !rates.path_of_variables) return false;
   int moving = -1;
@@ -76,7 +87,7 @@ bool SceneChecker::held_pair_clear(std::size_t p, const double* from, const doub
     for (std::size_t k = 0; k < rates.weights.size(); ++k) {
       const int v = rates.weights[k].first;
       const RobotJoint* other = variable_joint(robot, v);
-      if (v != moving && finite_limits(other) && !(from[v] >= other->lower && from[v] <= other->upper)) return false;
+      if (v != moving && !held_within_limits(other, from[v])) return false;
       held.held[k] = v == moving ? 0.0 : from[v];
     }
     held.variable = moving;
@@ -86,7 +97,7 @@ bool SceneChecker::held_pair_clear(std::size_t p, const double* from, const doub
   thread_local std::vector<double> state;
   thread_local std::vector<Transform> poses;
   state.assign(from, from + checker_.model().variable_count());
-  const double need = m.paddings()[a] + m.paddings()[b] + options_.min_clearance + margin + kTestMargin;
+  const double need = m.paddings()[a] + m.paddings()[b] + options_.min_clearance + kTestMargin;
   const CompoundShape ca = m.compound(a), cb = m.compound(b);
   return held.tree.clear(std::min(from[moving], to[moving]), std::max(from[moving], to[moving]), kTestsPerQuery,
                          [&](double c, double h) {

@@ -155,8 +155,8 @@ class SceneChecker {
   Answer pair_check(std::size_t pair, const Posed& posed) const;
   // Over a motion's interval that moves one variable of the pair's kinematic path and holds the
   // others (from, to: its end states): is the pair proven clear all along by the thread's held
-  // tree for it (held_pair_clearance.h)? `margin`: the pose rounding's, on top of the clearance.
-  bool held_pair_clear(std::size_t pair, const double* from, const double* to, double margin) const;
+  // tree for it (held_pair_clearance.h)?
+  bool held_pair_clear(std::size_t pair, const double* from, const double* to) const;
   Answer link_objects_check(int link, const Posed& posed) const;
   Answer link_octree_check(int link, const Posed& posed) const;
   bool link_meets_object_exact(int link, const Transform& pose, int object, double tolerance) const;
