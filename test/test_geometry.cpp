@@ -10,6 +10,7 @@
 #include "bvh_collision/geometry/predicates.h"
 #include "cgal_oracle.h"
 #include "hard_cases.h"
+#include "robot_data.h"
 
 namespace bvh_collision {
 namespace {
@@ -213,7 +214,7 @@ TEST(Distance, TriangleTriangleMatchesCgalOnGridPairsIncludingDegenerate) {
 
 TEST(Distance, TriangleTriangleNearContact) {
   // Gaps from 1e-3 down to 1e-15 along a's normal, including rotated copies.
-  for (int i = 0; i < 3000; ++i) {
+  for (int i = 0; i < test::sized(3000); ++i) {
     const Triangle a = tri(random_point(), random_point(), random_point());
     const Vec3 n = (a[1] - a[0]).cross(a[2] - a[0]).normalized();
     const double gap = std::pow(10.0, -std::uniform_int_distribution<int>(3, 15)(rng()));

@@ -11,6 +11,10 @@
 #include <sensor_msgs/JointState.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
+#include "bvh_collision/CastRay.h"
+#include "bvh_collision/CheckMotion.h"
+#include "bvh_collision/CheckStates.h"
+#include "bvh_collision/SaveOctree.h"
 #include "bvh_collision/ros/conversions.h"
 #include "node_test_client.h"
 
