@@ -283,7 +283,7 @@ TEST(Build, TheDemoBuildCompilesNoTestNorBenchmark) {
     EXPECT_NE(file.rfind("bench/", 0), 0u) << "make demo compiles the benchmark " << file;
     if (file.rfind("src/nodes/", 0) == 0) programs.insert(file);
   }
-  EXPECT_GT(compiled, 40) << "the dry run listed no compilation:\n" << out.substr(0, 2000);
+  EXPECT_GT(compiled, 20) << "the dry run listed no compilation:\n" << out.substr(0, 2000);
   for (const char* program : {"src/nodes/collision_checker.cpp", "src/nodes/demo_scene_publisher.cpp",
                               "src/nodes/demo_client.cpp", "src/nodes/plan_demo.cpp"}) {
     EXPECT_TRUE(programs.count(program)) << program << " is not in make demo's build";
