@@ -29,8 +29,8 @@ TEST(OctreeAgainstOctomap, EveryRayCrossesOctomapsVoxelsInItsOrder) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   std::uniform_int_distribution<int> cell(-40, 40), kind(0, 6);
   int compared = 0, long_walks = 0;
-  // Per resolution; a twentieth under the sanitizers, where the walk of a long ray is 20 times
-  // slower than OctoMap's unsanitized reference beside it (a quarter took 24 s).
+  // Per resolution; a twentieth under the sanitizers, where a quarter took 24 s (all of them take
+  // 1-3 s in the Release pass).
   const int rays = test::sanitized() ? 1000 : 20000;
   for (const double res : {0.01, 0.05, 0.2}) {
     const OctreeGrid grid(res);

@@ -157,7 +157,7 @@ TEST(SceneHeldPairs, SweepsPastATuckedGripperTakeAFewIntervals) {
   std::mt19937_64 rng(58);
   std::vector<std::pair<std::vector<double>, std::vector<double>>> sweeps;
   const std::size_t pan = robot.variable("r_shoulder_pan_joint");
-  while (sweeps.size() < static_cast<std::size_t>(test::sized(12))) {
+  while (sweeps.size() < 12) {
     const std::vector<double> a = robot.random_right_arm(rng);
     std::vector<double> b = a;
     b[pan] = robot.far_value(pan, a[pan], rng);
