@@ -6,6 +6,7 @@
 #include <kdl/treefksolverpos_recursive.hpp>
 #include <kdl_parser/kdl_parser.hpp>
 #include <chrono>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -461,6 +462,52 @@ TEST(KinematicsPlan, StepsEqualTheScalarProductsBitForBit) {
     }
   }
   EXPECT_GT(revolute, 1000);
+}
+
+// A motion that moves a few joints poses only the links below them (SceneChecker's intervals):
+// from the poses of one state, the steps below the joints that changed give the other state's
+// poses bit for bit, and the links no changed joint is above keep theirs. pr2 with one arm moved
+// recomputes a fraction of its steps.
+TEST(KinematicsPlan, ComputeStepsPosesTheLinksBelowTheMovedJointsBitForBit) {
+  BVH_REQUIRE_ROBOTS();
+  std::mt19937_64 rng(11);
+  for (const char* robot : {"panda", "pr2"}) {
+    SCOPED_TRACE(robot);
+    const RobotModel model = RobotModel::from_urdf(*load_robot_description_file(test::robots_dir() + "/" + robot + "/robot.urdf"),
+                                                   PackageResolver({test::robots_dir() + "/" + robot}));
+    const KinematicsPlan plan(model, std::vector<bool>(model.links().size(), true));
+    std::size_t partial_steps = 0, all_steps = 0;
+    for (int sample = 0; sample < 40; ++sample) {
+      const std::vector<double> a = random_configuration(model, rng);
+      std::vector<double> b = random_configuration(model, rng);
+      // Some variables changed, the others as in a.
+      const std::size_t keep = std::uniform_int_distribution<std::size_t>(0, b.size())(rng);
+      for (std::size_t v = 0; v < keep; ++v) b[(v * 7 + static_cast<std::size_t>(sample)) % b.size()] = a[(v * 7 + static_cast<std::size_t>(sample)) % b.size()];
+      std::vector<Transform> from_a, want;
+      plan.compute(a.data(), from_a);
+      plan.compute(b.data(), want);
+      std::vector<char> moves(model.links().size(), 0);
+      std::vector<std::uint32_t> steps;
+      for (std::size_t i = 0; i < plan.step_list().size(); ++i) {
+        const KinematicsPlan::Step& step = plan.step_list()[i];
+        moves[step.link] = moves[step.parent] || (step.variable >= 0 && a[step.variable] != b[step.variable]);
+        if (moves[step.link]) steps.push_back(static_cast<std::uint32_t>(i));
+      }
+      partial_steps += steps.size();
+      all_steps += plan.step_list().size();
+      std::vector<Transform> got = from_a;
+      plan.compute_steps(b.data(), got, steps.data(), steps.size());
+      for (const KinematicsPlan::Step& step : plan.step_list()) {
+        for (int e = 0; e < 12; ++e) {
+          const Transform& w = want[step.link];
+          const Transform& g = got[step.link];
+          ASSERT_EQ(e < 9 ? w.R(e / 3, e % 3) : w.t[e - 9], e < 9 ? g.R(e / 3, e % 3) : g.t[e - 9])
+              << model.links()[step.link].name << " element " << e << (moves[step.link] ? " (moved)" : " (kept)");
+        }
+      }
+    }
+    EXPECT_LT(partial_steps, all_steps);
+  }
 }
 
 }  // namespace

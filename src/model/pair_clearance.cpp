@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 
 #include "bvh_collision/model/robot_collision_model.h"
 #include "bvh_collision/geometry/thread_pool.h"
@@ -160,6 +161,35 @@ class GridFiller {
     for_each_cell(g_, lo, hi, [&](std::size_t c) { g_.bound[c] = f; });
   }
 
+  // Of the filled grid's cells with no bound (up to `samples` of them, spread evenly), the share
+  // whose centre is apart by more than settled + `closing`: the share a grid whose cells close the
+  // pair by `closing` would settle there (about: its cells are not centred on these).
+  double share_apart(double closing, std::size_t samples) {
+    std::vector<std::size_t> open;
+    for (std::size_t c = 0; c < g_.bound.size(); ++c) {
+      if (std::isinf(g_.bound[c])) open.push_back(c);
+    }
+    if (open.empty()) return 1.0;
+    const std::size_t n = std::min(samples, open.size());
+    std::size_t apart = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      std::size_t c = open[i * open.size() / n];
+      for (int k = 0; k < g_.dims; ++k) {
+        state_[g_.variable[k]] = g_.lower[k] + (static_cast<double>(c % static_cast<std::size_t>(g_.cells[k])) + 0.5) * g_.cell[k];
+        c /= static_cast<std::size_t>(g_.cells[k]);
+      }
+      model_.kinematics().compute(state_.data(), poses_);
+      apart += !links_within(model_, a_, b_, poses_, settled_ + closing + kBoundMargin);
+    }
+    return static_cast<double>(apart) / static_cast<double>(n);
+  }
+  // How far the pair can close from a cell's centre to its edge (per variable, half a cell).
+  double cell_closing(const PairClearanceGrid& g) const {
+    double closing = 0.0;
+    for (int k = 0; k < g.dims; ++k) closing += 0.5 * g.cell[k] * rate_[k];
+    return closing;
+  }
+
  private:
   // The bound stored for a settled cell: this above the padding.
   static constexpr double kSettled = 1e-4;
@@ -198,6 +228,45 @@ bool mostly_touching(const RobotCollisionModel& model, int a, int b, const PairC
   return 2 * touching > total;
 }
 
+// The grid's coarser levels (PairClearanceGrid::pyramid), each cell the least of the up to 2^dims
+// cells below it, until every variable has one cell.
+void build_pyramid(PairClearanceGrid& g) {
+  g.pyramid.clear();
+  for (int level = 1;; ++level) {
+    bool top = true;
+    for (int k = 0; k < g.dims; ++k) top = top && g.cells_at(level - 1, k) == 1;
+    if (top) return;
+    const std::vector<float>& below = level == 1 ? g.bound : g.pyramid.back();
+    const Cells n_below{g.cells_at(level - 1, 0), g.cells_at(level - 1, 1), g.cells_at(level - 1, 2)};
+    const Cells n{g.cells_at(level, 0), g.cells_at(level, 1), g.cells_at(level, 2)};
+    std::vector<float> out(static_cast<std::size_t>(n[0]) * n[1] * n[2], std::numeric_limits<float>::infinity());
+    for (int z = 0; z < n_below[2]; ++z) {
+      for (int y = 0; y < n_below[1]; ++y) {
+        for (int x = 0; x < n_below[0]; ++x) {
+          float& least = out[static_cast<std::size_t>(x / 2) + n[0] * (static_cast<std::size_t>(y / 2) + n[1] * static_cast<std::size_t>(z / 2))];
+          least = std::min(least, below[static_cast<std::size_t>(x) + n_below[0] * (static_cast<std::size_t>(y) + n_below[1] * static_cast<std::size_t>(z))]);
+        }
+      }
+    }
+    g.pyramid.push_back(std::move(out));
+  }
+}
+
+// A grid of one or two variables with cells left without a bound is built again with
+// kRefinedCells times the budget when the finer cells would settle most of those (sampled: a pair
+// that touches there gains nothing, and its finer grid would cost seconds on pr2).
+void refine(const RobotCollisionModel& model, int a, int b, PairClearanceGrid& g, GridFiller& filler, std::size_t max_cells) {
+  if (std::none_of(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); })) return;
+  const std::vector<int> moved(g.variable.begin(), g.variable.begin() + g.dims);
+  PairClearanceGrid fine = grid_shape(model, a, b, moved, std::max<std::size_t>(max_cells, 1) * PairClearance::kRefinedCells);
+  if (fine.dims != g.dims || fine.cells[0] * fine.cells[1] <= g.cells[0] * g.cells[1]) return;
+  const auto open = std::count_if(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); });
+  if (!std::getenv("BVH_REFINE_ALL") && (2 * static_cast<std::size_t>(open) > g.bound.size() || filler.share_apart(filler.cell_closing(fine), 256) < 0.5)) return;
+  fine.pair = g.pair;
+  GridFiller(model, a, b, fine).fill({0, 0, 0}, fine.cells);
+  g = std::move(fine);
+}
+
 }  // namespace
 
 PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t max_cells) {
@@ -219,7 +288,10 @@ PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t
     PairClearanceGrid& g = candidates[i];
     const auto [a, b] = model.checked_pairs()[g.pair];
     if (mostly_touching(model, a, b, g)) return;
-    GridFiller(model, a, b, g).fill({0, 0, 0}, g.cells);
+    GridFiller filler(model, a, b, g);
+    filler.fill({0, 0, 0}, g.cells);
+    if (g.dims <= 2) refine(model, a, b, g, filler, max_cells);
+    build_pyramid(g);
     kept[i] = 1;
   });
   PairClearance out;
@@ -248,31 +320,111 @@ double PairClearance::grid_bound(const PairClearanceGrid& g, const double* state
   return g.bound[index];
 }
 
-double PairClearance::lower_bound_over(std::size_t pair, const double* a, const double* b, std::size_t max_cells) const {
-  constexpr double kNone = -std::numeric_limits<double>::infinity();
-  const int id = grid_of_.empty() ? -1 : grid_of_[pair];
-  if (id < 0) return kNone;
-  const PairClearanceGrid& g = grids_[id];
-  Cells first{0, 0, 0}, end{1, 1, 1};
-  std::size_t cells = 1;
-  for (int k = 0; k < g.dims; ++k) {
-    if (g.periodic[k]) return kNone;
-    const double lo = std::min(a[g.variable[k]], b[g.variable[k]]) - g.lower[k];
-    const double hi = std::max(a[g.variable[k]], b[g.variable[k]]) - g.lower[k];
-    if (!(lo >= 0.0 && hi <= g.cell[k] * g.cells[k])) return kNone;
-    first[k] = std::min(static_cast<int>(lo / g.cell[k]), g.cells[k] - 1);
-    end[k] = std::min(static_cast<int>(hi / g.cell[k]), g.cells[k] - 1) + 1;
-    cells *= static_cast<std::size_t>(end[k] - first[k]);
+namespace {
+
+// Points of a segment whose cells are looked up before its proof (and the end).
+constexpr int kProbes = 8;
+
+// The segment's position in units of the finest cells, per grid variable, at fraction t.
+struct SegmentInCells {
+  std::array<double, PairClearanceGrid::kMaxDims> from{}, step{};
+  double at(int k, double t) const { return from[k] + t * step[k]; }
+};
+
+// Proves the part [t0, t1] of the segment clear, from pyramid level `level` down (0: `bound`):
+// the level's cells that the part's box spans, widened by `kEdge` of a cell (a value computed on
+// a cell's edge may round either way), when at most two per variable; when one of those holds
+// no more than `clearance`, the next finer level's, each half of the part on its own.
+class SegmentProof {
+ public:
+  SegmentProof(const PairClearanceGrid& g, const SegmentInCells& s, double clearance, int max_visits)
+      : g_(g), s_(s), clearance_(clearance), visits_left_(max_visits) {}
+
+  bool clear(double t0, double t1, int level) {
+    if (--visits_left_ < 0) return false;
+    Cells lo{0, 0, 0}, hi{0, 0, 0};
+    bool narrow = true;
+    for (int k = 0; k < g_.dims; ++k) {
+      const double u0 = s_.at(k, t0), u1 = s_.at(k, t1);
+      const double scale = std::ldexp(1.0, -level);
+      const int last = g_.cells_at(level, k) - 1;
+      lo[k] = std::clamp(static_cast<int>(std::floor((std::min(u0, u1) - kEdge) * scale)), 0, last);
+      hi[k] = std::clamp(static_cast<int>(std::floor((std::max(u0, u1) + kEdge) * scale)), 0, last);
+      narrow = narrow && hi[k] - lo[k] <= 1;
+    }
+    if (!narrow) {
+      const double mid = 0.5 * (t0 + t1);
+      return clear(t0, mid, level) && clear(mid, t1, level);
+    }
+    if (box_clear(lo, hi, level)) return true;
+    // At the finest level a box of two cells where the part is long may hold a cell it does not
+    // cross (a corner it passes by): halved once more. Short, the cell it cannot avoid decides.
+    double length = 0.0;
+    for (int k = 0; k < g_.dims; ++k) length = std::max(length, std::abs(s_.at(k, t1) - s_.at(k, t0)));
+    if (level == 0 && (lo == hi || length <= 0.5)) return false;
+    const double mid = 0.5 * (t0 + t1);
+    return clear(t0, mid, std::max(level - 1, 0)) && clear(mid, t1, std::max(level - 1, 0));
   }
-  if (cells > max_cells) return kNone;
-  double bound = std::numeric_limits<double>::infinity();
-  for_each_cell(g, first, end, [&](std::size_t c) { bound = std::min(bound, static_cast<double>(g.bound[c])); });
-  return bound;
+
+ private:
+  static constexpr double kEdge = 1e-9;
+
+  bool box_clear(const Cells& lo, const Cells& hi, int level) const {
+    const std::vector<float>& bound = level == 0 ? g_.bound : g_.pyramid[static_cast<std::size_t>(level) - 1];
+    const std::size_t nx = static_cast<std::size_t>(g_.cells_at(level, 0)), ny = static_cast<std::size_t>(g_.cells_at(level, 1));
+    for (int z = lo[2]; z <= hi[2]; ++z) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          if (!(static_cast<double>(bound[static_cast<std::size_t>(x) + nx * (y + ny * static_cast<std::size_t>(z))]) > clearance_)) return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  const PairClearanceGrid& g_;
+  const SegmentInCells& s_;
+  double clearance_;
+  int visits_left_;
+};
+
+}  // namespace
+
+bool PairClearance::clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits) const {
+  const int id = grid_of_.empty() ? -1 : grid_of_[pair];
+  if (id < 0) return false;
+  const PairClearanceGrid& g = grids_[id];
+  SegmentInCells s;
+  for (int k = 0; k < g.dims; ++k) {
+    if (g.periodic[k]) return false;
+    const double span = g.cell[k] * g.cells[k];
+    const double u0 = a[g.variable[k]] - g.lower[k], u1 = b[g.variable[k]] - g.lower[k];
+    if (!(u0 >= 0.0 && u0 <= span && u1 >= 0.0 && u1 <= span)) return false;
+    s.from[k] = u0 / g.cell[k];
+    s.step[k] = u1 / g.cell[k] - s.from[k];
+  }
+  // A segment through a cell with no bound mostly meets it at one of a few points along it: those
+  // cells first, each one lookup (a failed proof that walked the pyramid first took hundreds of
+  // boxes along the cells it could prove).
+  for (int i = 0; i <= kProbes; ++i) {
+    const double t = static_cast<double>(i) / kProbes;
+    std::size_t index = 0, stride = 1;
+    for (int k = 0; k < g.dims; ++k) {
+      const int c = std::clamp(static_cast<int>(s.at(k, t)), 0, g.cells[k] - 1);
+      index += static_cast<std::size_t>(c) * stride;
+      stride *= static_cast<std::size_t>(g.cells[k]);
+    }
+    if (!(static_cast<double>(g.bound[index]) > clearance)) return false;
+  }
+  return SegmentProof(g, s, clearance, max_visits).clear(0.0, 1.0, static_cast<int>(g.pyramid.size()));
 }
 
 std::size_t PairClearance::memory_bytes() const {
   std::size_t bytes = grid_of_.capacity() * sizeof(int);
-  for (const PairClearanceGrid& g : grids_) bytes += sizeof(g) + g.bound.capacity() * sizeof(float);
+  for (const PairClearanceGrid& g : grids_) {
+    bytes += sizeof(g) + g.bound.capacity() * sizeof(float);
+    for (const auto& level : g.pyramid) bytes += level.capacity() * sizeof(float);
+  }
   return bytes;
 }
 

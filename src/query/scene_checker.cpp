@@ -153,6 +153,17 @@ bool SceneChecker::exact_distance_pays(const Posed& s, double growth, double err
   return growth <= error && !s.tolerant();
 }
 
+bool SceneChecker::pair_balls_apart(std::size_t p, const Posed& s) const {
+  const RobotCollisionModel& m = checker_.collision_model();
+  const auto& bounds = m.bounds();
+  const auto [a, b] = m.checked_pairs()[p];
+  const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
+  const double pads = m.paddings()[a] + m.paddings()[b] + grow;
+  const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
+  const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
+  return (s.centres[a] - s.centres[b]).squaredNorm() > reach * reach;
+}
+
 SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const auto& bounds = m.bounds();
@@ -160,16 +171,13 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   // Over an interval, the pair's proven clearance over the whole of it (a grid over the one or
   // two variables that move it) settles it with no growth at all.
   if (s.from != nullptr &&
-      checker_.accelerators().pair_clearance().lower_bound_over(p, s.from, s.to) > m.paddings()[a] + m.paddings()[b] + options_.min_clearance) {
+      checker_.accelerators().pair_clearance().clear_over(p, s.from, s.to, m.paddings()[a] + m.paddings()[b] + options_.min_clearance)) {
     return Answer::kFree;
   }
+  if (pair_balls_apart(p, s)) return Answer::kFree;
   const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
   const double pads = m.paddings()[a] + m.paddings()[b] + grow;
-  const Vec3& ca = s.centres[a];
-  const Vec3& cb = s.centres[b];
   const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
-  const double reach = bounds[a].radius + bounds[b].radius + pads + margin;
-  if ((ca - cb).squaredNorm() > reach * reach) return Answer::kFree;
   const PairClearance& clearance = checker_.accelerators().pair_clearance();
   if (clearance.has_grid(p) && clearance.lower_bound(p, s.state) > pads) return Answer::kFree;
   // Past the balls (and a grid, which puts the pair within a few centimetres when it cannot bound

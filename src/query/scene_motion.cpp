@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
 
 #include "bvh_collision/geometry/safety_margin.h"
+#include "bvh_collision/geometry/split_column.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
 
 namespace bvh_collision {
@@ -87,6 +89,13 @@ struct SceneChecker::MotionScratch {
   Posed midpoint;                                   // check_interval's
   std::array<Posed, 2> ends;                        // check_motion's end states
   std::vector<double> end_growth, end_pair_growth;  // tolerant_component's
+  // moving_links': the kinematic steps and the links with geometry a motion moves (all when the
+  // root pose is not the identity), and the largest centre norm of the others.
+  std::vector<std::uint32_t> moving_steps;
+  std::vector<int> moving;
+  std::vector<char> link_moves;
+  bool partial = false;
+  double still_largest = 0.0;
 };
 
 // (Not inlined: a caller keeps the reference it returns, where a thread_local named in a loop
@@ -104,7 +113,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   s.from.assign(at(lo), at(lo) + s.state.size());
   s.to.assign(at(hi), at(hi) + s.state.size());
-  pose_links(at(mid), posed);
+  pose_moving_links(at(mid), posed);
   std::vector<int>& arena = s.pending;
   IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
                       s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
@@ -141,7 +150,8 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     const bool hopeless = hi - lo == 1.0 && (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) > kFirstPieceGrowth;
     if (hopeless) {
       posed.no_free_radius();
-    } else if (component_check(k, posed) == Answer::kFree) {
+    } else if ((k < pairs && options_.self && pair_balls_apart(static_cast<std::size_t>(k), posed)) ||
+               component_check(k, posed) == Answer::kFree) {
       continue;
     }
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
@@ -235,6 +245,55 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
   }
 }
 
+// With the root at the origin, a link posed from its parent's pose is the same bits whether the
+// parent was posed now or at the motion's start (the same products of the same values), so the
+// links no moving joint is above keep their start poses. (Otherwise every link is posed again:
+// the root pose is applied after the chain.)
+void SceneChecker::moving_links(const double* start, const double* goal, const Posed& at_start) const {
+  MotionScratch& s = motion_scratch();
+  const KinematicsPlan& plan = checker_.collision_model().kinematics();
+  s.partial = root_at_origin_;
+  if (!s.partial) return;
+  s.link_moves.assign(plan.link_count(), 0);
+  s.moving_steps.clear();
+  const auto& steps = plan.step_list();
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const KinematicsPlan::Step& step = steps[i];
+    const bool turns = step.variable >= 0 && start[step.variable] != goal[step.variable];
+    s.link_moves[step.link] = s.link_moves[step.parent] || turns;
+    if (s.link_moves[step.link]) s.moving_steps.push_back(static_cast<std::uint32_t>(i));
+  }
+  s.moving.clear();
+  s.still_largest = 0.0;
+  for (const int l : links_) {
+    if (s.link_moves[l]) {
+      s.moving.push_back(l);
+    } else {
+      s.still_largest = std::max(s.still_largest, at_start.centre_norms[l]);
+    }
+  }
+  Posed& mid = s.midpoint;
+  mid.poses = at_start.poses;
+  mid.centres = at_start.centres;
+  mid.centre_norms = at_start.centre_norms;
+}
+
+void SceneChecker::pose_moving_links(const double* state, Posed& posed) const {
+  const MotionScratch& s = motion_scratch();
+  if (!s.partial) return pose_links(state, posed);
+  const RobotCollisionModel& m = checker_.collision_model();
+  posed.state = state;
+  m.kinematics().compute_steps(state, posed.poses, s.moving_steps.data(), s.moving_steps.size());
+  double largest = s.still_largest;
+  for (const int l : s.moving) {
+    Vec3& c = posed.centres[l];
+    transform_point(posed.poses[l], m.bounds()[l].center.data(), c.data());
+    posed.centre_norms[l] = std::sqrt((c[0] * c[0] + c[1] * c[1]) + c[2] * c[2]);  // as Vec3::norm()
+    largest = std::max(largest, posed.centre_norms[l]);
+  }
+  posed.largest_norm = largest;
+}
+
 // The rates of the interval [lo, hi] of the segment into the scratch's interval speeds (every
 // component).
 void SceneChecker::speeds_over(const double* start, const double* goal, double lo, double hi) const {
@@ -316,6 +375,7 @@ MotionResult SceneChecker::check_motion_once(const double* start, const double* 
   }
   s.tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), tolerance_asked_ ? -1 : 0);
   motion_speeds(start, goal);
+  moving_links(start, goal, ends[0]);
   std::vector<int>& arena = s.pending;
   arena.assign(components_.begin(), components_.end());
   std::vector<Interval>& done = s.done;

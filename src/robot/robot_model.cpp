@@ -411,16 +411,48 @@ bool about_unit_axis(const KinematicsPlan::Step& step) {
   return (step.type == JointType::kRevolute || step.type == JointType::kContinuous) && step.axis >= 0;
 }
 
-// The sines and cosines of steps [first, first + count) that rotate about a unit axis, before
-// the chain of products that needs them: independent of one another, they overlap in the
-// processor instead of waiting on each parent's pose.
-void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, std::size_t first, std::size_t count,
-                  const double* state, double* s, double* c) {
+// The sines and cosines of the steps at `index[0..count)` (`index` null: steps [first, first +
+// count)) that rotate about a unit axis, before the chain of products that needs them:
+// independent of one another, they overlap in the processor instead of waiting on each parent's
+// pose.
+void step_sin_cos(const std::vector<KinematicsPlan::Step>& steps, const std::uint32_t* index, std::size_t first,
+                  std::size_t count, const double* state, double* s, double* c) {
   for (std::size_t i = 0; i < count; ++i) {
-    const KinematicsPlan::Step& step = steps[first + i];
+    const KinematicsPlan::Step& step = steps[index != nullptr ? index[i] : first + i];
     if (!about_unit_axis(step)) continue;
     sin_cos(step.multiplier * state[step.variable] + step.offset, s[i], c[i]);
     s[i] *= step.axis_vector[step.axis];
+  }
+}
+
+// One step: the child's pose from its parent's (sine and cosine given for a unit axis).
+inline void compute_step(const KinematicsPlan::Step& step, const double* state, double sine, double cosine,
+                         std::vector<Transform>& poses, const std::vector<Transform>* free_joint_poses) {
+  const double q = step.variable >= 0 ? step.multiplier * state[step.variable] + step.offset : 0.0;
+  const Transform& parent = poses[step.parent];
+  Transform& child = poses[step.link];
+  switch (step.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      if (step.axis >= 0) {
+        compose_axis_rotation(parent, step.fixed, step.axis, cosine, sine, child);
+      } else {
+        child = compose(compose(parent, step.fixed), Transform{axis_rotation(step.axis_vector, q), Vec3::Zero()});
+      }
+      break;
+    case JointType::kPrismatic:
+      compose_into(parent, step.fixed, child);
+      child.t += child.R * (q * step.axis_vector);
+      break;
+    case JointType::kFloating:
+    case JointType::kPlanar: {
+      const bool given = free_joint_poses != nullptr && static_cast<std::size_t>(step.joint) < free_joint_poses->size();
+      child = given ? compose(compose(parent, step.fixed), (*free_joint_poses)[step.joint]) : compose(parent, step.fixed);
+      break;
+    }
+    case JointType::kFixed:
+      compose_into(parent, step.fixed, child);
+      break;
   }
 }
 
@@ -444,36 +476,19 @@ __attribute__((BVH_KINEMATICS_BUILDS)) void KinematicsPlan::compute(const double
   double sines[kBlock], cosines[kBlock];
   for (std::size_t first = 0; first < steps_.size(); first += kBlock) {
     const std::size_t count = std::min(kBlock, steps_.size() - first);
-    step_sin_cos(steps_, first, count, state, sines, cosines);
-    for (std::size_t i = 0; i < count; ++i) {
-      const Step& step = steps_[first + i];
-      const double q = step.variable >= 0 ? step.multiplier * state[step.variable] + step.offset : 0.0;
-      const Transform& parent = poses[step.parent];
-      Transform& child = poses[step.link];
-      switch (step.type) {
-        case JointType::kRevolute:
-        case JointType::kContinuous:
-          if (step.axis >= 0) {
-            compose_axis_rotation(parent, step.fixed, step.axis, cosines[i], sines[i], child);
-          } else {
-            child = compose(compose(parent, step.fixed), Transform{axis_rotation(step.axis_vector, q), Vec3::Zero()});
-          }
-          break;
-        case JointType::kPrismatic:
-          compose_into(parent, step.fixed, child);
-          child.t += child.R * (q * step.axis_vector);
-          break;
-        case JointType::kFloating:
-        case JointType::kPlanar: {
-          const bool given = free_joint_poses != nullptr && static_cast<std::size_t>(step.joint) < free_joint_poses->size();
-          child = given ? compose(compose(parent, step.fixed), (*free_joint_poses)[step.joint]) : compose(parent, step.fixed);
-          break;
-        }
-        case JointType::kFixed:
-          compose_into(parent, step.fixed, child);
-          break;
-      }
-    }
+    step_sin_cos(steps_, nullptr, first, count, state, sines, cosines);
+    for (std::size_t i = 0; i < count; ++i) compute_step(steps_[first + i], state, sines[i], cosines[i], poses, free_joint_poses);
+  }
+}
+
+__attribute__((BVH_KINEMATICS_BUILDS)) void KinematicsPlan::compute_steps(const double* state, std::vector<Transform>& poses,
+                                                                        const std::uint32_t* steps, std::size_t count) const {
+  constexpr std::size_t kBlock = 32;
+  double sines[kBlock], cosines[kBlock];
+  for (std::size_t first = 0; first < count; first += kBlock) {
+    const std::size_t n = std::min(kBlock, count - first);
+    step_sin_cos(steps_, steps + first, 0, n, state, sines, cosines);
+    for (std::size_t i = 0; i < n; ++i) compute_step(steps_[steps[first + i]], state, sines[i], cosines[i], poses, nullptr);
   }
 }
 

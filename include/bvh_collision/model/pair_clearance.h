@@ -34,6 +34,10 @@ struct PairClearanceGrid {
   std::array<int, kMaxDims> cells{1, 1, 1};
   std::array<bool, kMaxDims> periodic{};  // a continuous joint: values wrap by 2 pi
   std::vector<float> bound;         // per cell (first variable fastest): lower bound on the distance (m)
+  // Coarser grids for segments, coarsest last: pyramid[L - 1]'s cell covers 2^L cells of `bound`
+  // per variable (fewer at the far edges) and holds the least bound among them, down to one cell.
+  std::vector<std::vector<float>> pyramid;
+  int cells_at(int level, int k) const { return ((cells[k] - 1) >> level) + 1; }
 };
 
 class PairClearance {
@@ -41,7 +45,12 @@ class PairClearance {
   PairClearance() = default;
   // Grids for every checked pair of `model` that one or two variables move (three when, with four
   // times the budget, half a cell closes the pair by at most 1 cm per variable), each with at
-  // most about `max_cells` cells (finer where the links move faster per unit of the variable).
+  // most about `max_cells` cells (finer where the links move faster per unit of the variable). A
+  // grid of one or two variables that leaves some cells without a bound is built again with
+  // kRefinedCells times the budget: a pair that comes within a centimetre or two somewhere
+  // without touching (ur5e's forearm and wrist_2_link, 8 mm at the closest) is then settled
+  // everywhere, and the pairs that never come that close keep their small grids.
+  static constexpr std::size_t kRefinedCells = 16;
   static PairClearance build(const RobotCollisionModel& model, std::size_t max_cells = 4096);
 
   // A lower bound on the distance of checked pair `pair` in `state`; -infinity when the pair has
@@ -50,11 +59,14 @@ class PairClearance {
     const int g = grid_of_.empty() ? -1 : grid_of_[pair];
     return g < 0 ? -std::numeric_limits<double>::infinity() : grid_bound(grids_[g], state);
   }
-  // A lower bound on the distance of checked pair `pair` at every state of the straight segment
-  // from `a` to `b`: the smallest cell bound over the box the segment's values of the grid's
-  // variables span (the segment lies in it). -infinity without a grid, a value outside it, a
-  // periodic variable, or a box of more than `max_cells` cells (then cheaper tests serve).
-  double lower_bound_over(std::size_t pair, const double* a, const double* b, std::size_t max_cells = 64) const;
+  // Is checked pair `pair` farther apart than `clearance` at every state of the straight segment
+  // from `a` to `b`? True when every cell the segment's values of the grid's variables cross has
+  // a larger bound: nine cells along it looked up first (most segments that cross an unbounded
+  // cell meet it at one of those), then proven from the coarsest grid of the pyramid down, the
+  // segment cut in halves wherever a coarse cell does not settle it (a long motion through
+  // settled cells costs a few lookups). False without a grid, for a value outside it, a periodic
+  // variable, or beyond `max_visits` boxes looked at (then the other tests serve).
+  bool clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits = 64) const;
   bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
   // The same grids for a model whose first checked pairs are these and which has `pairs` in all
   // (RobotCollisionModel::carrying appends a carried object's pairs): the new ones have none.

@@ -47,7 +47,8 @@ struct CheckerOptions {
   bool calibrate_proxies = true;
   // Grids of proven clearance for the self pairs one or two variables move
   // (model/pair_clearance.h): a boolean self check skips such a pair with one lookup when its
-  // bound clears the padding. 0 cells: none built.
+  // bound clears the padding, and a certified motion an interval (PairClearance::clear_over).
+  // 0 cells: none built.
   std::size_t pair_clearance_cells = 4096;
   // How much one robot and one query may ask for (geometry/limits.h): construction refuses a
   // robot with more links or checked pairs, check_motion a fixed-step motion with more states,

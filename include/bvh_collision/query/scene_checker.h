@@ -153,6 +153,10 @@ class SceneChecker {
   bool worth(const ProxyLevel* level, double growth) const;
   const ProxyLevel* walked_level(double growth) const;
   Answer pair_check(std::size_t pair, const Posed& posed) const;
+  // pair_check's first test: are the pair's bounding balls apart by more than their paddings and
+  // growth? (Most pairs of a two-arm robot end here in most intervals: the interval loop asks it
+  // before the call.)
+  bool pair_balls_apart(std::size_t pair, const Posed& posed) const;
   // Over a motion's interval that moves one variable of the pair's kinematic path and holds the
   // others (from, to: its end states): is the pair proven clear all along by the thread's held
   // tree for it (held_pair_clearance.h)?
@@ -176,6 +180,11 @@ class SceneChecker {
                       Posed* ends) const;
   bool tolerant_component(int k, Posed* ends) const;
   void pose_links(const double* state, Posed& posed) const;
+  // A motion's intervals: `posed` holds the motion's start (pose_links), and only the links below
+  // a joint the motion turns or slides are posed again (moving_links chose them). A two-arm
+  // robot's arm motion poses its arms, not its body, head and sensors at every interval.
+  void moving_links(const double* start, const double* goal, const Posed& at_start) const;
+  void pose_moving_links(const double* state, Posed& posed) const;
   void relative_pair_rates();
   void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;

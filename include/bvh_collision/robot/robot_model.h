@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <cstdint>
 #include <vector>
 
 #include <urdf_model/model.h>
@@ -124,6 +125,11 @@ class KinematicsPlan {
   // Same conventions as forward_kinematics.
   void compute(const double* state, std::vector<Transform>& link_poses,
                const std::vector<Transform>* free_joint_poses = nullptr) const;
+  // Only the steps at `steps[0..count)` (indices into step_list(), a parent's before its
+  // children): the other links' poses are read from `link_poses` as they are (a motion that moves
+  // a few joints of a large robot recomputes only the links below them). No floating joints.
+  void compute_steps(const double* state, std::vector<Transform>& link_poses, const std::uint32_t* steps,
+                     std::size_t count) const;
   std::size_t steps() const { return steps_.size(); }
 
   // One computed link: its pose is parent's * fixed * the joint's motion.
