@@ -346,10 +346,12 @@ class SegmentProof {
     bool narrow = true;
     for (int k = 0; k < g_.dims; ++k) {
       const double u0 = s_.at(k, t0), u1 = s_.at(k, t1);
-      const double scale = std::ldexp(1.0, -level);
+      const double scale = 1.0 / static_cast<double>(1 << level);  // exact
       const int last = g_.cells_at(level, k) - 1;
-      lo[k] = std::clamp(static_cast<int>(std::floor((std::min(u0, u1) - kEdge) * scale)), 0, last);
-      hi[k] = std::clamp(static_cast<int>(std::floor((std::max(u0, u1) + kEdge) * scale)), 0, last);
+      // (Truncation is the floor here: the values are at least -kEdge, and the clamp takes the
+      // rest. std::floor is a library call without SSE4.1.)
+      lo[k] = std::clamp(static_cast<int>((std::min(u0, u1) - kEdge) * scale), 0, last);
+      hi[k] = std::clamp(static_cast<int>((std::max(u0, u1) + kEdge) * scale), 0, last);
       narrow = narrow && hi[k] - lo[k] <= 1;
     }
     if (!narrow) {
@@ -403,6 +405,9 @@ bool PairClearance::clear_over(std::size_t pair, const double* a, const double* 
     s.from[k] = u0 / g.cell[k];
     s.step[k] = u1 / g.cell[k] - s.from[k];
   }
+  // A grid settled everywhere (its coarsest cell) proves any segment within it.
+  const std::vector<float>& top = g.pyramid.empty() ? g.bound : g.pyramid.back();
+  if (top.size() == 1 && static_cast<double>(top[0]) > clearance) return true;
   // A segment through a cell with no bound mostly meets it at one of a few points along it: those
   // cells first, each one lookup (a failed proof that walked the pyramid first took hundreds of
   // boxes along the cells it could prove).

@@ -66,7 +66,7 @@ class PairClearance {
   // segment cut in halves wherever a coarse cell does not settle it (a long motion through
   // settled cells costs a few lookups). False without a grid, for a value outside it, a periodic
   // variable, or beyond `max_visits` boxes looked at (then the other tests serve).
-  bool clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits = 64) const;
+  bool clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits = 32) const;
   bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
   // The same grids for a model whose first checked pairs are these and which has `pairs` in all
   // (RobotCollisionModel::carrying appends a carried object's pairs): the new ones have none.
