@@ -139,6 +139,7 @@ class GridFiller {
     g.bound.assign(static_cast<std::size_t>(g.cells[0]) * g.cells[1] * g.cells[2], 0.0f);
   }
   void fill(const Cells& lo, const Cells& hi) {
+    if (++tests_ > budget_) return;  // over its budget: the caller drops the grid
     double closing = 0.0;  // from the block's centre to any point of it
     int longest = 0;
     for (int k = 0; k < g_.dims; ++k) {
@@ -182,6 +183,10 @@ class GridFiller {
     }
     return static_cast<double>(apart) / static_cast<double>(n);
   }
+  // Exact tests at most (fill stops past them; over_budget() then tells).
+  void set_budget(std::size_t tests) { budget_ = tests; }
+  bool over_budget() const { return tests_ > budget_; }
+  std::size_t tests() const { return tests_; }
   // How far the pair can close from a cell's centre to its edge (per variable, half a cell).
   double cell_closing(const PairClearanceGrid& g) const {
     double closing = 0.0;
@@ -199,6 +204,7 @@ class GridFiller {
   std::vector<Transform> poses_;
   std::array<double, PairClearanceGrid::kMaxDims> rate_{};
   double settled_ = 0.0;
+  std::size_t tests_ = 0, budget_ = std::numeric_limits<std::size_t>::max();
 };
 
 // Worth a grid? Sampled on a coarse lattice (64 points), a pair within its padding in most of
@@ -260,12 +266,17 @@ void refine(const RobotCollisionModel& model, int a, int b, PairClearanceGrid& g
   PairClearanceGrid fine = grid_shape(model, a, b, moved, std::max<std::size_t>(max_cells, 1) * PairClearance::kRefinedCells);
   if (fine.dims != g.dims || fine.cells[0] * fine.cells[1] <= g.cells[0] * g.cells[1]) return;
   const auto open = std::count_if(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); });
-  // More than half the cells open: the pair is close over most of its range, and the finer grid
-  // would cost tests all over it (pr2's shoulders without an SRDF: seconds each).
-  if (2 * static_cast<std::size_t>(open) > g.bound.size() || filler.share_apart(filler.cell_closing(fine), 64) < 0.5) return;
+  // More than a quarter of the cells open: the pair is close over much of its range, and the
+  // finer grid would cost tests all over it (pr2's shoulders without an SRDF, solo's legs: a
+  // second or more each).
+  if (4 * static_cast<std::size_t>(open) > g.bound.size() || filler.share_apart(filler.cell_closing(fine), 64) < 0.5) return;
   fine.pair = g.pair;
-  GridFiller(model, a, b, fine).fill({0, 0, 0}, fine.cells);
-  g = std::move(fine);
+  // Bounded by the coarse grid's work: a pair whose finer cells need far more tests keeps the
+  // coarse grid, at the cost of the tests spent.
+  GridFiller fine_filler(model, a, b, fine);
+  fine_filler.set_budget(filler.tests() + 8192);
+  fine_filler.fill({0, 0, 0}, fine.cells);
+  if (!fine_filler.over_budget()) g = std::move(fine);
 }
 
 }  // namespace
