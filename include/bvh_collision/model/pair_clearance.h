@@ -46,10 +46,12 @@ class PairClearance {
   // Grids for every checked pair of `model` that one or two variables move (three when, with four
   // times the budget, half a cell closes the pair by at most 1 cm per variable), each with at
   // most about `max_cells` cells (finer where the links move faster per unit of the variable). A
-  // grid of one or two variables that leaves some cells without a bound is built again with
-  // kRefinedCells times the budget: a pair that comes within a centimetre or two somewhere
-  // without touching (ur5e's forearm and wrist_2_link, 8 mm at the closest) is then settled
-  // everywhere, and the pairs that never come that close keep their small grids.
+  // grid of one or two variables that leaves some cells without a bound, at most a quarter, is
+  // built again with kRefinedCells times the budget when the finer cells would settle most of
+  // those and take at most the coarse grid's tests plus 8,192: a pair that comes within a
+  // centimetre or two somewhere without touching (ur5e's forearm and wrist_2_link, 8 mm at the
+  // closest) is then settled everywhere, and the pairs that never come that close keep their
+  // small grids.
   static constexpr std::size_t kRefinedCells = 16;
   static PairClearance build(const RobotCollisionModel& model, std::size_t max_cells = 4096);
 
