@@ -84,6 +84,7 @@ struct SceneChecker::MotionScratch {
   std::vector<int> order;  // pieces of a motion cut at once (spread_order)
   std::vector<std::pair<int, int>> runs;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
+  std::vector<int> live;     // an interval's pending components past its bounding-ball sieve
   // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
   std::vector<signed char> tolerant;
   Posed midpoint;                                   // check_interval's
@@ -119,11 +120,26 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
                       s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
   interval_speeds(posed, half, arena.data() + first, count, rates);
   const int pairs = static_cast<int>(pair_rates_.size());
+  // Each pending component's growth; a self pair whose bounding balls, so grown, are apart is
+  // certified at once (most of a two-arm robot's pairs end here: one pass, no call a pair). The
+  // margin is any pair's (the largest centre norm and radius): wider only widens the test.
+  std::vector<int>& live = s.live;
+  live.clear();
+  const double margin = pose_margin(2.0 * (posed.largest_norm + largest_radius_));
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
     const double g = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
     // min_clearance on top: a certified interval stays that far from every collision.
-    (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) = grown_growth(g) + options_.min_clearance;
+    const double grown = grown_growth(g) + options_.min_clearance;
+    if (k >= pairs) {
+      s.growth[k - pairs] = grown;
+    } else {
+      s.pair_growth[k] = grown;
+      const PairBalls& p = pair_balls_[k];
+      const double reach = p.reach + grown + margin;
+      if ((posed.centres[p.a] - posed.centres[p.b]).squaredNorm() > reach * reach) continue;
+    }
+    live.push_back(k);
   }
   posed.growth = s.growth.data();
   posed.pair_growth = s.pair_growth.data();
@@ -138,8 +154,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   posed.checker = this;
   posed.ends = tolerance_asked_ ? ends : nullptr;
   posed.tolerant_flag = false;
-  for (std::size_t j = first; j < first + count; ++j) {
-    const int k = arena[j];
+  for (const int k : live) {
     posed.component = k;
     // Over the whole motion, a component grown by more than a piece's growth is not walked: so
     // grown it meets what is near it (its walk goes deep before it fails) and the pieces will
@@ -150,8 +165,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     const bool hopeless = hi - lo == 1.0 && (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) > kFirstPieceGrowth;
     if (hopeless) {
       posed.no_free_radius();
-    } else if ((k < pairs && options_.self && pair_balls_apart(static_cast<std::size_t>(k), posed)) ||
-               component_check(k, posed) == Answer::kFree) {
+    } else if (component_check(k, posed) == Answer::kFree) {
       continue;
     }
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
