@@ -136,6 +136,41 @@ TEST(MotionRates, BoundHoldsOutsideLimitsAndForMimicSlides) {
   EXPECT_LT(outside, 300);
 }
 
+// A link's speed sums only the variables that move it (RobotCollisionModel::motion_terms): the
+// same bits as the sum over every variable, whose other terms are zeros; pr2's links are moved by
+// a few of its variables each.
+TEST(MotionRates, LinkSpeedSumsOnlyTheVariablesThatMoveTheLink) {
+  BVH_REQUIRE_ROBOTS();
+  for (const char* robot : {"panda", "pr2"}) {
+    SCOPED_TRACE(robot);
+    const CollisionChecker checker = test::load_checker(robot);
+    const RobotCollisionModel& m = checker.collision_model();
+    const std::size_t n = checker.model().variable_count();
+    std::size_t terms = 0;
+    for (const auto& link : m.motion_terms()) terms += link.size();
+    if (std::string(robot) == "pr2") {
+      EXPECT_LT(4 * terms, m.motion_terms().size() * n);
+    }
+    for (int i = 0; i < 200; ++i) {
+      const auto start = random_configuration(checker.model(), rng()), goal = random_configuration(checker.model(), rng());
+      for (std::size_t l = 0; l < m.motion_terms().size(); ++l) {
+        double speed = 0.0, turning = 0.0;
+        for (std::size_t j = 0; j < n; ++j) {
+          const double change = std::abs(goal[j] - start[j]);
+          speed += m.motion_rates()[l][j] * change;
+          turning += m.motion_turns()[l][j] * change;
+        }
+        double excess = 0.0;
+        for (const SlideBound& slide : m.motion_slides()[l]) {
+          const double farthest = std::max(std::abs(start[slide.variable]), std::abs(goal[slide.variable]));
+          excess += slide.multiplier * std::max(0.0, farthest - slide.travel);
+        }
+        ASSERT_EQ(checker.link_speed(static_cast<int>(l), start.data(), goal.data()), speed + excess * turning);
+      }
+    }
+  }
+}
+
 // A scene for motions: a table-top box and a thin plate (2 mm) standing in the arm's way.
 Environment motion_scene(double plate_thickness) {
   Environment env(0.02);

@@ -223,6 +223,14 @@ void RobotCollisionModel::compute_motion_rates() {
     }
     reach_ = std::max(reach_, reach);
   }
+  motion_terms_.assign(links.size(), {});
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    for (std::size_t v = 0; v < motion_rates_[l].size(); ++v) {
+      if (motion_rates_[l][v] != 0.0 || motion_turns_[l][v] != 0.0) {
+        motion_terms_[l].push_back({static_cast<int>(v), motion_rates_[l][v], motion_turns_[l][v]});
+      }
+    }
+  }
 }
 
 }  // namespace bvh_collision

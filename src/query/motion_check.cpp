@@ -17,12 +17,12 @@ namespace bvh_collision {
 // A slide beyond its travel lengthens every lever above it by at most |multiplier| times the
 // excess, which is largest at an end of the segment (|value| is convex along it).
 double CollisionChecker::link_speed(int link, const double* start, const double* goal) const {
-  const auto& rates = m_->motion_rates()[link];
+  // (The variables that do not move the link add zeros: skipped, the sums are the same bits.)
   double speed = 0.0, turning = 0.0;
-  for (std::size_t j = 0; j < rates.size(); ++j) {
-    const double change = std::abs(goal[j] - start[j]);
-    speed += rates[j] * change;
-    turning += m_->motion_turns()[link][j] * change;
+  for (const MotionTerm& term : m_->motion_terms()[link]) {
+    const double change = std::abs(goal[term.variable] - start[term.variable]);
+    speed += term.rate * change;
+    turning += term.turn * change;
   }
   double excess = 0.0;
   for (const SlideBound& slide : m_->motion_slides()[link]) {

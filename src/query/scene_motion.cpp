@@ -76,6 +76,7 @@ struct SceneChecker::MotionScratch {
   // current interval's (at most those); delta: goal - start.
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
   std::vector<double> chain_delta, turning_total;  // chain_deltas' (once a motion)
+  std::vector<int> turning_moving;
   std::vector<TurningAxis> axes;
   std::vector<Interval> done;   // certified intervals (check_motion)
   // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
@@ -117,7 +118,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   pose_moving_links(at(mid), posed);
   std::vector<int>& arena = s.pending;
   IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
-                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
+                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
   interval_speeds(posed, half, arena.data() + first, count, rates);
   const int pairs = static_cast<int>(pair_rates_.size());
   // Each pending component's growth; a self pair whose bounding balls, so grown, are apart is
@@ -243,7 +244,7 @@ void SceneChecker::motion_speeds(const double* start, const double* goal) const 
   for (const int l : links_) s.speed[l] = checker_.link_speed(l, start, goal);
   s.delta.resize(checker_.model().variable_count());
   for (std::size_t j = 0; j < s.delta.size(); ++j) s.delta[j] = goal[j] - start[j];
-  chain_deltas(s.delta.data(), s.chain_delta, s.turning_total);
+  chain_deltas(s.delta.data(), s.chain_delta, s.turning_total, s.turning_moving);
   s.interval_speed.assign(s.speed.size(), 0.0);
   s.interval_pair_speed.assign(pair_rates_.size(), 0.0);
   s.growth.assign(m.shapes().size(), 0.0);
@@ -322,7 +323,7 @@ void SceneChecker::speeds_over(const double* start, const double* goal, double l
   std::iota(every.begin(), every.end(), 0);
   for (const int l : links_) every.push_back(static_cast<int>(pair_rates_.size()) + l);
   const IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
-                            s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes};
+                            s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
   interval_speeds(posed, 0.5 * (hi - lo), every.data(), every.size(), rates);
 }
 

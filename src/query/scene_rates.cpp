@@ -76,7 +76,10 @@ void SceneChecker::interval_chains() {
       if (turns) {
         const auto known = std::find_if(turning_joints_.begin(), turning_joints_.end(), [&](const auto& t) { return t.first == c.child; });
         c.turning = static_cast<int>(known - turning_joints_.begin());
-        if (known == turning_joints_.end()) turning_joints_.emplace_back(c.child, joint.axis);
+        if (known == turning_joints_.end()) {
+          turning_joints_.emplace_back(c.child, joint.axis);
+          turning_sources_.emplace_back(c.variable, c.multiplier);
+        }
       }
       chain_joints_.push_back(c);
     }
@@ -150,11 +153,18 @@ double SceneChecker::chain_speed(int l, const Posed& mid, double half, const Int
   return std::min(rates.link_cap[l], below);
 }
 
-// Per chain joint its change over the motion, per link the sum of its turning joints' (for
-// chain_speed: the same over every interval of a motion).
-void SceneChecker::chain_deltas(const double* delta, std::vector<double>& chain_delta, std::vector<double>& turning_total) const {
+// Per chain joint its change over the motion, per link the sum of its turning joints', and the
+// turning joints that turn (for chain_speed: the same over every interval of a motion; an axis it
+// never reads is not posed: pr2's arm moves a third of its turning joints).
+void SceneChecker::chain_deltas(const double* delta, std::vector<double>& chain_delta, std::vector<double>& turning_total,
+                                std::vector<int>& turning_moving) const {
   chain_delta.resize(chain_joints_.size());
   for (std::size_t i = 0; i < chain_joints_.size(); ++i) chain_delta[i] = chain_joints_[i].multiplier * delta[chain_joints_[i].variable];
+  // (The chain joints of a turning joint have its variable and multiplier: the same product.)
+  turning_moving.clear();
+  for (std::size_t t = 0; t < turning_sources_.size(); ++t) {
+    if (turning_sources_[t].second * delta[turning_sources_[t].first] != 0.0) turning_moving.push_back(static_cast<int>(t));
+  }
   turning_total.assign(chain_first_.size(), 0.0);
   for (const int l : links_) {
     double total = 0.0;
@@ -169,7 +179,7 @@ void SceneChecker::interval_speeds(const Posed& mid, double half, const int* com
                                    const IntervalRates& rates) const {
   rates.sums->resize(chain_joints_.size());
   rates.axes->resize(turning_joints_.size());
-  for (std::size_t t = 0; t < turning_joints_.size(); ++t) {
+  for (const int t : *rates.turning_moving) {
     const Transform& frame = mid.poses[turning_joints_[t].first];
     (*rates.axes)[t] = {frame.R * turning_joints_[t].second, frame.t, pose_margin(frame.t.norm())};
   }

@@ -74,6 +74,13 @@ struct SlideBound {
   double travel = 0.0;      // the largest |value| the rates assumed
 };
 
+// A link's motion rate and turn multiplier for one variable that moves it (the nonzero entries of
+// motion_rates and motion_turns, by variable).
+struct MotionTerm {
+  int variable = -1;
+  double rate = 0.0, turn = 0.0;
+};
+
 class RobotCollisionModel {
  public:
   RobotCollisionModel(RobotModel robot, AllowedCollisionMatrix acm, const CheckerOptions& options);
@@ -104,6 +111,9 @@ class RobotCollisionModel {
   const std::vector<std::vector<double>>& motion_rates() const { return motion_rates_; }
   const std::vector<std::vector<double>>& motion_turns() const { return motion_turns_; }
   const std::vector<std::vector<SlideBound>>& motion_slides() const { return motion_slides_; }
+  // The same, per link only the variables that move it, in variable order (a link speed sums
+  // these: pr2's links are moved by a few of its 40-odd variables).
+  const std::vector<std::vector<MotionTerm>>& motion_terms() const { return motion_terms_; }
   double reach() const { return reach_; }
   const Limits& limits() const { return limits_; }
   // A shape as the narrowphase takes it.
@@ -131,6 +141,7 @@ class RobotCollisionModel {
   std::vector<std::vector<double>> motion_rates_;
   std::vector<std::vector<double>> motion_turns_;
   std::vector<std::vector<SlideBound>> motion_slides_;
+  std::vector<std::vector<MotionTerm>> motion_terms_;
   double reach_ = 0.0;
   Limits limits_;
   double default_padding_ = 0.0;

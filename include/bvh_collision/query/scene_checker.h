@@ -188,7 +188,8 @@ class SceneChecker {
   void relative_pair_rates();
   void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;
-  void chain_deltas(const double* delta, std::vector<double>& chain_delta, std::vector<double>& turning_total) const;
+  void chain_deltas(const double* delta, std::vector<double>& chain_delta, std::vector<double>& turning_total,
+                    std::vector<int>& turning_moving) const;
   void speeds_over(const double* start, const double* goal, double lo, double hi) const;
   // A turning joint at an interval's midpoint: its axis, and the rounding margin of its origin
   // (the same for every link below it: computed once an interval, not once a link).
@@ -209,6 +210,7 @@ class SceneChecker {
     double* pair_speed = nullptr;  // out (per checked pair)
     std::vector<double>* sums = nullptr;  // working memory: per chain joint
     std::vector<TurningAxis>* axes = nullptr;  // working memory: per turning joint, at `mid`
+    const std::vector<int>* turning_moving = nullptr;  // the turning joints the motion turns (chain_speed reads only theirs)
   };
   void interval_speeds(const Posed& mid, double half, const int* components, std::size_t count, const IntervalRates& rates) const;
   double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
@@ -284,6 +286,7 @@ class SceneChecker {
   };
   std::vector<ChainJoint> chain_joints_;
   std::vector<std::pair<int, Vec3>> turning_joints_;  // each turning joint once: (child link, unit axis in its frame)
+  std::vector<std::pair<int, double>> turning_sources_;  // per turning joint: (state variable, multiplier)
   std::vector<std::size_t> chain_first_, chain_count_;  // per link: its run of chain_joints_ (and of sums)
   std::vector<std::array<int, 2>> pair_below_;           // per checked pair: each side's joints below the common part
 };
