@@ -85,6 +85,7 @@ struct SceneChecker::MotionScratch {
   std::vector<int> order;  // pieces of a motion cut at once (spread_order)
   std::vector<std::pair<int, int>> runs;
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
+  std::vector<int> near;     // an interval's pending components its chain-length rates do not certify
   std::vector<int> live;     // an interval's pending components past its bounding-ball sieve
   // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
   std::vector<signed char> tolerant;
@@ -117,18 +118,37 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   s.to.assign(at(hi), at(hi) + s.state.size());
   pose_moving_links(at(mid), posed);
   std::vector<int>& arena = s.pending;
-  IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
-                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
-  interval_speeds(posed, half, arena.data() + first, count, rates);
   const int pairs = static_cast<int>(pair_rates_.size());
-  // Each pending component's growth; a self pair whose bounding balls, so grown, are apart is
-  // certified at once (most of a two-arm robot's pairs end here: one pass, no call a pair). The
-  // margin is any pair's (the largest centre norm and radius): wider only widens the test.
-  std::vector<int>& live = s.live;
-  live.clear();
+  // The margin of a pair's bounding-ball test is any pair's (the largest centre norm and
+  // radius): wider only widens the test.
   const double margin = pose_margin(2.0 * (posed.largest_norm + largest_radius_));
+  // A pending component that its motion's chain-length rate already certifies over the interval
+  // needs no speed from the midpoint's levers (chain_speed, a good part of an interval's work):
+  // a link whose ball, grown by that rate, the object grid's cell proves clear (no octree), a
+  // self pair whose bounding balls, so grown, are apart. The levers' rate is never above it
+  // (chain_speed's cap), so these would pass with it too: the same components certified.
+  std::vector<int>& near = s.near;
+  near.clear();
   for (std::size_t j = first; j < first + count; ++j) {
     const int k = arena[j];
+    const double cap = grown_growth((k < pairs ? s.pair_speed[k] : s.speed[k - pairs]) * half) + options_.min_clearance;
+    if (k >= pairs) {
+      if (!octree_ && grid_.clear(posed.centres[k - pairs], link_reach_[k - pairs] + cap)) continue;
+    } else {
+      const PairBalls& p = pair_balls_[k];
+      const double reach = p.reach + cap + margin;
+      if ((posed.centres[p.a] - posed.centres[p.b]).squaredNorm() > reach * reach) continue;
+    }
+    near.push_back(k);
+  }
+  IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
+                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
+  interval_speeds(posed, half, near.data(), near.size(), rates);
+  // Each pending component's growth; a self pair whose bounding balls, so grown, are apart is
+  // certified at once (most of a two-arm robot's pairs end here: one pass, no call a pair).
+  std::vector<int>& live = s.live;
+  live.clear();
+  for (const int k : near) {
     const double g = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
     // min_clearance on top: a certified interval stays that far from every collision.
     const double grown = grown_growth(g) + options_.min_clearance;
