@@ -97,6 +97,10 @@ struct SceneChecker::MotionScratch {
   std::vector<std::uint32_t> moving_steps;
   std::vector<int> moving;
   std::vector<char> link_moves;
+  // pose_moving_links' for an interval whose pending components read only some links.
+  std::vector<char> link_needed;
+  std::vector<std::uint32_t> needed_steps;
+  std::vector<int> needed_moving;
   bool partial = false;
   double still_largest = 0.0;
 };
@@ -114,9 +118,11 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   MotionScratch& s = motion_scratch();
   Posed& posed = s.midpoint;
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-  s.from.assign(at(lo), at(lo) + s.state.size());
-  s.to.assign(at(hi), at(hi) + s.state.size());
-  pose_moving_links(at(mid), posed);
+  const double* from = at(lo);  // (at() writes one state buffer: each copied before the next)
+  s.from.assign(from, from + s.state.size());
+  const double* to = at(hi);
+  s.to.assign(to, to + s.state.size());
+  pose_moving_links(at(mid), posed, s.pending.data() + first, count);
   std::vector<int>& arena = s.pending;
   const int pairs = static_cast<int>(pair_rates_.size());
   // The margin of a pair's bounding-ball test is any pair's (the largest centre norm and
@@ -313,14 +319,52 @@ void SceneChecker::moving_links(const double* start, const double* goal, const P
   mid.centre_norms = at_start.centre_norms;
 }
 
-void SceneChecker::pose_moving_links(const double* state, Posed& posed) const {
-  const MotionScratch& s = motion_scratch();
+// The steps and links with geometry that `count` pending components read: their links and the
+// links those hang from, among the moving ones (into needed_steps and needed_moving).
+void SceneChecker::needed_links(const int* components, std::size_t count) const {
+  MotionScratch& s = motion_scratch();
+  const KinematicsPlan& plan = checker_.collision_model().kinematics();
+  const auto& pairs = checker_.collision_model().checked_pairs();
+  const int pair_count = static_cast<int>(pairs.size());
+  s.link_needed.assign(plan.link_count(), 0);
+  for (std::size_t i = 0; i < count; ++i) {
+    const int k = components[i];
+    if (k < pair_count) {
+      s.link_needed[pairs[k].first] = s.link_needed[pairs[k].second] = 1;
+    } else {
+      s.link_needed[k - pair_count] = 1;
+    }
+  }
+  s.needed_moving.clear();
+  for (const int l : s.moving) {
+    if (s.link_needed[l]) s.needed_moving.push_back(l);
+  }
+  // From the leaves up (a parent's step comes before its children's), each needed link's parent.
+  const auto& steps = plan.step_list();
+  s.needed_steps.clear();
+  for (auto it = s.moving_steps.rbegin(); it != s.moving_steps.rend(); ++it) {
+    const KinematicsPlan::Step& step = steps[*it];
+    if (!s.link_needed[step.link]) continue;
+    if (step.parent >= 0) s.link_needed[step.parent] = 1;
+    s.needed_steps.push_back(*it);
+  }
+  std::reverse(s.needed_steps.begin(), s.needed_steps.end());
+}
+
+void SceneChecker::pose_moving_links(const double* state, Posed& posed, const int* components, std::size_t count) const {
+  MotionScratch& s = motion_scratch();
   if (!s.partial) return pose_links(state, posed);
   const RobotCollisionModel& m = checker_.collision_model();
+  // With some components certified, only the links the others read are posed (a two-arm robot's
+  // last intervals of a motion ask one arm's forearm against a shelf): the rest keep poses no
+  // test reads.
+  const bool some = count < components_.size();
+  if (some) needed_links(components, count);
+  const std::vector<std::uint32_t>& steps = some ? s.needed_steps : s.moving_steps;
   posed.state = state;
-  m.kinematics().compute_steps(state, posed.poses, s.moving_steps.data(), s.moving_steps.size());
+  m.kinematics().compute_steps(state, posed.poses, steps.data(), steps.size());
   double largest = s.still_largest;
-  for (const int l : s.moving) {
+  for (const int l : some ? s.needed_moving : s.moving) {
     Vec3& c = posed.centres[l];
     transform_point(posed.poses[l], m.bounds()[l].center.data(), c.data());
     posed.centre_norms[l] = std::sqrt((c[0] * c[0] + c[1] * c[1]) + c[2] * c[2]);  // as Vec3::norm()

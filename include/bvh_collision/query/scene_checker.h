@@ -184,7 +184,10 @@ class SceneChecker {
   // a joint the motion turns or slides are posed again (moving_links chose them). A two-arm
   // robot's arm motion poses its arms, not its body, head and sensors at every interval.
   void moving_links(const double* start, const double* goal, const Posed& at_start) const;
-  void pose_moving_links(const double* state, Posed& posed) const;
+  // (Of those, only the links that the `count` pending components read and the links they hang
+  // from, when some components are certified: the others keep poses no test of the interval reads.)
+  void pose_moving_links(const double* state, Posed& posed, const int* components, std::size_t count) const;
+  void needed_links(const int* components, std::size_t count) const;
   void relative_pair_rates();
   void interval_chains();
   void motion_speeds(const double* start, const double* goal) const;
