@@ -38,9 +38,12 @@ constexpr double kOnSegment = 1e-13;
 // segment's at one fraction in [0, 1] (found from the variable that changes most)? When it does
 // and `offset` is given, each difference (with the rounding of computing it) raises its variable's
 // entry there.
+// The variables are taken from `longest` on (a planning group's are mostly next to each other,
+// and a state off the segment differs in those: the variables before it, outside the group, all
+// agree).
 bool on_segment(const double* start, const double* delta, int longest, const double* state, std::size_t n, double* offset) {
   const double t = std::clamp((state[longest] - start[longest]) / delta[longest], 0.0, 1.0);
-  for (std::size_t j = 0; j < n; ++j) {
+  for (std::size_t i = 0, j = static_cast<std::size_t>(longest); i < n; ++i, j = j + 1 == n ? 0 : j + 1) {
     const double d = std::abs(start[j] + t * delta[j] - state[j]);
     if (!(d <= kOnSegment)) return false;
     // (The product, the sums and delta's own rounding: a few units of 1.1e-16 of these values.)

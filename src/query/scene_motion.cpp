@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -84,6 +85,7 @@ struct SceneChecker::MotionScratch {
   std::vector<Interval> todo;
   std::vector<int> order;  // pieces of a motion cut at once (spread_order)
   std::vector<std::pair<int, int>> runs;
+  std::vector<int> changing;  // the variables a motion changes (check_motion_once)
   std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
   std::vector<int> near;     // an interval's pending components its chain-length rates do not certify
   std::vector<int> live;     // an interval's pending components past its bounding-ball sieve
@@ -91,6 +93,8 @@ struct SceneChecker::MotionScratch {
   std::vector<signed char> tolerant;
   Posed midpoint;                                   // check_interval's
   std::array<Posed, 2> ends;                        // check_motion's end states
+  const double* goal = nullptr;                     // the motion's goal, posed into ends[1] once read
+  bool goal_posed = false;
   std::vector<double> end_growth, end_pair_growth;  // tolerant_component's
   // moving_links': the kinematic steps and the links with geometry a motion moves (all when the
   // root pose is not the identity), and the largest centre norm of the others.
@@ -101,6 +105,9 @@ struct SceneChecker::MotionScratch {
   std::vector<char> link_needed;
   std::vector<std::uint32_t> needed_steps;
   std::vector<int> needed_moving;
+  // The pending list (pending[first, first + count)) they were found for: the halves of an
+  // interval, and the pieces of a motion, share their parent's list (none before a motion's first).
+  std::size_t needed_first = 0, needed_count = 0;
   bool partial = false;
   double still_largest = 0.0;
 };
@@ -118,11 +125,10 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   MotionScratch& s = motion_scratch();
   Posed& posed = s.midpoint;
   const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-  const double* from = at(lo);  // (at() writes one state buffer: each copied before the next)
-  s.from.assign(from, from + s.state.size());
-  const double* to = at(hi);
-  s.to.assign(to, to + s.state.size());
-  pose_moving_links(at(mid), posed, s.pending.data() + first, count);
+  // (at() writes the motion's moving variables only: the buffers hold the others' values.)
+  at(lo, s.from.data());
+  at(hi, s.to.data());
+  pose_moving_links(at(mid, s.state.data()), posed, s.pending.data() + first, count);
   std::vector<int>& arena = s.pending;
   const int pairs = static_cast<int>(pair_rates_.size());
   // The margin of a pair's bounding-ball test is any pair's (the largest centre norm and
@@ -233,6 +239,14 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   return split;
 }
 
+// The motion's goal into ends[1], the first time a test reads it.
+void SceneChecker::pose_goal(Posed* ends) const {
+  MotionScratch& s = motion_scratch();
+  if (s.goal_posed) return;
+  pose_links(s.goal, ends[1]);
+  s.goal_posed = true;
+}
+
 // At a tolerance, a motion may count as colliding where a component (a self pair, a link against
 // the environment) comes within the tolerance, unless that component already is at one of its
 // ends: a planner must be able to leave a state it accepted. (A failing interval is taken as
@@ -249,6 +263,7 @@ bool SceneChecker::tolerant_component(int k, Posed* ends) const {
   growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
   pair_growth.assign(pair_rates_.size(), options_.tolerance);
   known = 1;
+  pose_goal(ends);
   for (int e = 0; e < 2 && known; ++e) {
     Posed& end = ends[e];  // check_motion's own posed ends
     end.growth = growth.data();
@@ -305,6 +320,7 @@ void SceneChecker::moving_links(const double* start, const double* goal, const P
     if (s.link_moves[step.link]) s.moving_steps.push_back(static_cast<std::uint32_t>(i));
   }
   s.moving.clear();
+  s.needed_count = 0;
   s.still_largest = 0.0;
   for (const int l : links_) {
     if (s.link_moves[l]) {
@@ -359,7 +375,12 @@ void SceneChecker::pose_moving_links(const double* state, Posed& posed, const in
   // last intervals of a motion ask one arm's forearm against a shelf): the rest keep poses no
   // test reads.
   const bool some = count < components_.size();
-  if (some) needed_links(components, count);
+  const std::size_t first = static_cast<std::size_t>(components - s.pending.data());
+  if (some && !(count == s.needed_count && first == s.needed_first && first + count <= s.pending.size())) {
+    needed_links(components, count);
+    s.needed_first = first <= s.pending.size() ? first : s.pending.size() + 1;
+    s.needed_count = first <= s.pending.size() ? count : 0;
+  }
   const std::vector<std::uint32_t>& steps = some ? s.needed_steps : s.moving_steps;
   posed.state = state;
   m.kinematics().compute_steps(state, posed.poses, steps.data(), steps.size());
@@ -423,25 +444,39 @@ MotionResult SceneChecker::check_motion_once(const double* start, const double* 
   const std::size_t n = checker_.model().variable_count();
   MotionResult result;
   MotionScratch& s = motion_scratch();
-  s.state.resize(n);
-  auto at = [&](double f) {
-    for (std::size_t j = 0; j < n; ++j) s.state[j] = f >= 1.0 ? goal[j] : start[j] + f * (goal[j] - start[j]);
-    return s.state.data();
+  // The state at fraction f of the motion, into `out` (which holds the start's values): only the
+  // variables that change are written (a two-arm robot's 14 of its 45).
+  std::vector<int>& changing = s.changing;
+  changing.clear();
+  for (std::size_t j = 0; j < n; ++j) {
+    if (std::memcmp(start + j, goal + j, sizeof(double)) != 0) changing.push_back(static_cast<int>(j));
+  }
+  s.state.assign(start, start + n);
+  s.from.assign(start, start + n);
+  s.to.assign(start, start + n);
+  auto at = [&](double f, double* out) {
+    for (const int j : changing) out[j] = f >= 1.0 ? goal[j] : start[j] + f * (goal[j] - start[j]);
+    return out;
   };
   // The ends first (a planner's goal state is often the colliding one); the start's collision is
   // the earliest there is.
   result.states_checked = 2;
   Posed* ends = s.ends.data();
   for (int e = 0; e < 2; ++e) {
-    pose_links(e == 0 ? start : goal, ends[e]);
     ends[e].growth = ends[e].pair_growth = nullptr;
     ends[e].tolerant_flag = options_.states_at_tolerance;
     ends[e].ends = nullptr;
   }
+  // The start is posed now (the intervals take its still links' poses); the goal when a test
+  // reads it: its check, unless it is known free, or the tolerance's end checks.
+  pose_links(start, ends[0]);
+  s.goal = goal;
+  s.goal_posed = false;
   // (An end this thread found free with this checker, as the state it is, is not checked again.)
   auto end_collides = [&](int e) {
     const double* q = e == 0 ? start : goal;
     if (known_free(q)) return false;
+    if (e == 1) pose_goal(ends);
     if (check_posed(ends[e]) != Answer::kFree) return true;
     remember_free(q);
     return false;
