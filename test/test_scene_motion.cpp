@@ -517,7 +517,7 @@ TEST(SceneChecker, AStretchFreedByOneObjectDoesNotFreeAnother) {
 // from a shelf) must be answered as at tolerance 0: the tolerance may not take its first
 // interval as colliding, or the planner could never leave the goal. (The ends' clearance was
 // judged by the tolerant state check, whose "free" only means beyond the padding: motions
-// leaving a goal 2.6 mm from an object were refused at 1 cm and found free at 0.)
+// leaving a goal 2.6 mm from an object were refused at 1 cm and found free at 0.) The same towards it.
 TEST(SceneChecker, MotionsFromAStateWithinTheToleranceAnswerAsExact) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker& checker = panda();
@@ -546,13 +546,17 @@ TEST(SceneChecker, MotionsFromAStateWithinTheToleranceAnswerAsExact) {
     if (clearance > 0.008 || clearance < 0.001) continue;
     ++near;
     for (int i = 0; i < 30; ++i) {
-      std::vector<double> b = random_configuration(checker.model(), rng);
-      for (std::size_t j = 0; j < b.size(); ++j) b[j] = lo[j] + 0.03 * (b[j] - lo[j]);
-      if (exact.collides(b.data())) continue;
+      std::vector<double> b = random_configuration(checker.model(), rng), c = random_configuration(checker.model(), rng);
+      for (std::size_t j = 0; j < b.size(); ++j) b[j] = lo[j] + 0.03 * (b[j] - lo[j]), c[j] = lo[j] + 0.03 * (c[j] - lo[j]);
+      if (exact.collides(b.data()) || exact.collides(c.data())) continue;
       ++compared;
-      const bool truth = exact.check_motion(lo.data(), b.data()).valid;
+      const bool truth = exact.check_motion(lo.data(), b.data()).valid, back = exact.check_motion(c.data(), lo.data()).valid;
       free += truth;
       EXPECT_EQ(coarse.check_motion(lo.data(), b.data()).valid, truth) << "near state " << near << " motion " << i;
+      // Towards it from elsewhere, known free (checked first, as a planner does): the goal is posed
+      // only when the tolerance asks, and must then be its own poses, not the last goal's (b).
+      EXPECT_FALSE(coarse.collides(lo.data()));
+      EXPECT_EQ(coarse.check_motion(c.data(), lo.data()).valid, back) << "to near state " << near << " motion " << i;
     }
   }
   std::cout << compared << " motions from 4 states 1 to 8 mm from a collision, " << free << " free\n";

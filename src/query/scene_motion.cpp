@@ -320,7 +320,7 @@ void SceneChecker::moving_links(const double* start, const double* goal, const P
     if (s.link_moves[step.link]) s.moving_steps.push_back(static_cast<std::uint32_t>(i));
   }
   s.moving.clear();
-  s.needed_count = 0;
+  s.needed_first = std::numeric_limits<std::size_t>::max();  // (none found for this motion yet)
   s.still_largest = 0.0;
   for (const int l : links_) {
     if (s.link_moves[l]) {
@@ -375,11 +375,12 @@ void SceneChecker::pose_moving_links(const double* state, Posed& posed, const in
   // last intervals of a motion ask one arm's forearm against a shelf): the rest keep poses no
   // test reads.
   const bool some = count < components_.size();
+  // (The components lie in the pending list, which only grows within a motion: a sibling's list
+  // is at the same place.)
   const std::size_t first = static_cast<std::size_t>(components - s.pending.data());
-  if (some && !(count == s.needed_count && first == s.needed_first && first + count <= s.pending.size())) {
+  if (some && (first != s.needed_first || count != s.needed_count)) {
     needed_links(components, count);
-    s.needed_first = first <= s.pending.size() ? first : s.pending.size() + 1;
-    s.needed_count = first <= s.pending.size() ? count : 0;
+    s.needed_first = first, s.needed_count = count;
   }
   const std::vector<std::uint32_t>& steps = some ? s.needed_steps : s.moving_steps;
   posed.state = state;
