@@ -140,7 +140,7 @@ struct GjkEnd {
 // other.
 template <class SupportA, class SupportB>
 GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& start, double scale, double decide_at,
-           double margin, double slack = 0.0) {
+           double margin, double slack = 0.0, bool decide_near = true) {
   GjkEnd end;
   Simplex spare;
   Simplex* s = &end.s;
@@ -199,7 +199,7 @@ GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& sta
     reduce(*s, r, *next_s);
     std::swap(s, next_s);
     v = next;
-    if (deciding && vv <= decide_at * decide_at) break;  // this close: decided
+    if (deciding && decide_near && vv <= decide_at * decide_at) break;  // this close: decided
   }
   if (s != &end.s) end.s = *s;
   return end;
@@ -403,7 +403,7 @@ double extent(const ConvexShape& s) {
 }
 
 ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a, double decide_at,
-                               double slack) {
+                               double slack, bool far_only) {
   ConvexDistance out;
   auto empty = [](const ConvexShape& s) { return s.kind == ConvexShape::Kind::kHull && s.hull->empty(); };
   if (empty(a) || empty(b)) {
@@ -434,7 +434,7 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
   };
   const Vec3 start = b_in_a.t.norm() > 0 ? Vec3(-b_in_a.t) : Vec3(Vec3::UnitX());
   slack = std::isfinite(slack) ? std::max(slack, 0.0) : 0.0;
-  const GjkEnd end = gjk(support_a, support_b, start, scale, decide_at, margin, slack);
+  const GjkEnd end = gjk(support_a, support_b, start, scale, decide_at, margin, slack, !far_only);
   if (end.separated) {
     // Farther than asked along v: the gap along v is the certified answer; the support points
     // are a pair of points of the sets, so their distance bounds the true one from above.
@@ -467,14 +467,16 @@ ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const
   Vec3 faces[3];
   for (int k = 0, n = face_directions(a, Mat3::Identity(), faces); k < n; ++k) consider(faces[k]);
   for (int k = 0, n = face_directions(b, b_in_a.R, faces); k < n; ++k) consider(faces[k]);
-  const bool decided = (std::isfinite(decide_at) && (bound > decide_at || out.distance <= decide_at)) ||
+  const bool decided = (std::isfinite(decide_at) && (bound > decide_at || (!far_only && out.distance <= decide_at))) ||
                        out.distance - bound <= slack;
   const double loose = out.distance - bound;
   if (!decided && (curved(a) || curved(b)) && loose > 1e-13 * scale + 1e-9 * out.distance) {
     // The direction error behind the loss: about sqrt(loss / curvature radius) for a curved face.
     const double step = std::clamp(std::sqrt(loose / std::max(scale, 1e-300)), 1e-10, 0.1);
     const double tight = out.distance - std::max(1e-13 * scale + 1e-9 * out.distance, slack);
-    bound = refine_direction(gap_along, best_n, bound, step, std::isfinite(decide_at) ? decide_at : tight);
+    // (Far only: above decide_at, or within the slack, whichever comes first.)
+    const double enough = !std::isfinite(decide_at) ? tight : far_only ? std::min(decide_at, tight) : decide_at;
+    bound = refine_direction(gap_along, best_n, bound, step, enough);
   }
   if ((curved(a) || curved(b)) && out.distance - bound > std::max(1e-15 * scale, slack)) {
     polish_witnesses(a, b, b_in_a, 1e-15 * scale, out);

@@ -174,11 +174,10 @@ double mesh_primitive_distance(const ShapeRef& mesh, const Transform& pm, const 
                                double best, bool solids, Vec3& wa, Vec3& wb, QueryStats& stats, double tolerance) {
   const Transform p_in_mesh = relative_transform(pm, pp);
   const ConvexShape hull_shape = ConvexShape::of(*mesh.hull), primitive = ConvexShape::of(p.primitive);
-  ConvexDistance hull = convex_distance(hull_shape, primitive, p_in_mesh, best - tolerance);
+  // Stopped once it is known not nearer than `best`; nearer, on to the closest points that the
+  // surface test needs (one search: restarting it there took a fifth of pr2's exact distances).
+  const ConvexDistance hull = convex_distance(hull_shape, primitive, p_in_mesh, best - tolerance, tolerance, true);
   if (hull.lower_bound >= best - tolerance) return std::max(hull.lower_bound, best);
-  // Nearer than `best`: the search may have stopped there, before the closest points that the
-  // surface test needs.
-  hull = convex_distance(hull_shape, primitive, p_in_mesh, std::numeric_limits<double>::quiet_NaN(), tolerance);
   double upper = best;
   Vec3 upper_a = Vec3::Zero(), upper_b = Vec3::Zero();
   if (hull.lower_bound > 0.0) {

@@ -44,9 +44,12 @@ double extent(const ConvexShape& s);
 // with padding decide_at. With a positive `slack` it may stop once distance - lower_bound <= slack
 // (a distance wanted within the slack, not to the last digit: GJK creeps towards a curved surface
 // for dozens of steps, and the refinement above takes hundreds more). Every result holds
-// lower_bound <= true distance <= distance (rounding aside) whenever it stops.
+// lower_bound <= true distance <= distance (rounding aside) whenever it stops. With `far_only`,
+// decide_at stops the search only when the distance is above it: nearer, it goes on to within the
+// slack (one search where a caller wants the distance only when it is near).
 ConvexDistance convex_distance(const ConvexShape& a, const ConvexShape& b, const Transform& b_in_a,
-                               double decide_at = std::numeric_limits<double>::quiet_NaN(), double slack = 0.0);
+                               double decide_at = std::numeric_limits<double>::quiet_NaN(), double slack = 0.0,
+                               bool far_only = false);
 
 // The collision decision of docs/design.md for two convex sets with padding: true when the
 // distance may be at most `padding` (the certified lower bound does not exceed it).
