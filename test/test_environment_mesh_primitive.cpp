@@ -1,6 +1,6 @@
 // A mesh against an exact primitive (narrowphase/shape_pairs.h): a dented mesh near a box by
-// distance and boolean against CGAL's triangle distances, and the booleans the convex hulls settle
-// without walking the mesh's tree. One binary with test_environment.cpp.
+// distance and boolean against CGAL's triangle distances, the booleans the convex hulls settle
+// without walking the mesh's tree, and the one hull search a distance takes. One binary with test_environment.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -148,6 +148,62 @@ TEST(MeshAgainstPrimitive, ABooleanTheHullsSettleWalksNoTree) {
   EXPECT_GE(walked, near_contact / 5);
   EXPECT_GE(pairs_settled, near_contact / 10);
   EXPECT_GT(near_contact, test::sized(300) / 10);
+}
+
+// One hull search asked for the distance only when it is near (convex_distance's far_only, as a
+// mesh's distance to a primitive asks it): above `decide_at` it may stop at once, with a bound
+// above it; below, it goes on to within the slack. Against CGAL's exact distance between the
+// hull's vertices and a box's corners (or a sphere's centre, less its radius: a curved surface),
+// and with fewer support queries than the two searches it replaces (decide, then start again).
+TEST(MeshAgainstPrimitive, AFarOnlySearchDecidesAboveAndConvergesBelow) {
+  std::mt19937_64 r(27);
+  const DentedMeshAndBox shapes(r);
+  const ConvexHull& hull = shapes.hull;
+  const Vec3 half = shapes.half;
+  std::uniform_real_distribution<double> u(-0.25, 0.25), factor(0.5, 1.5);
+  const double slack = 1e-5;
+  int near = 0, far = 0;
+  long one_search = 0, two_searches = 0;
+  for (int i = 0; i < test::sized(200); ++i) {
+    const bool sphere = i % 2 == 1;
+    const Primitive p = sphere ? Primitive::sphere(0.04) : Primitive::box(2.0 * half);
+    const Transform mesh_pose = test::random_rotation(r, Vec3(u(r), u(r), u(r)));
+    const Transform p_pose = Transform::Translation(Vec3(u(r), u(r), u(r)));
+    const Transform p_in_mesh = relative_transform(mesh_pose, p_pose);
+    std::vector<Vec3> in_p;
+    for (const Vec3& v : hull.vertices) in_p.push_back(p_pose.inverse() * (mesh_pose * v));
+    std::vector<Vec3> corners;
+    if (sphere) {
+      corners.push_back(Vec3::Zero());
+    } else {
+      for (int c = 0; c < 8; ++c) corners.emplace_back(c & 1 ? half.x() : -half.x(), c & 2 ? half.y() : -half.y(), c & 4 ? half.z() : -half.z());
+    }
+    const double truth = std::max(0.0, test::cgal_polytope_distance(in_p, corners) - (sphere ? 0.04 : 0.0));
+    if (truth < 1e-4) continue;  // (touching is the booleans' test)
+    const double decide_at = truth * factor(r);
+    const ConvexShape a = ConvexShape::of(hull), b = ConvexShape::of(p);
+    const ConvexDistance d = convex_distance(a, b, p_in_mesh, decide_at, slack, true);
+    ASSERT_LE(d.lower_bound, truth + 1e-12) << i;
+    ASSERT_GE(d.distance, truth - 1e-12) << i;
+    if (d.lower_bound > decide_at) {
+      ++far;
+    } else {
+      ++near;
+      ASSERT_LE(truth, decide_at + slack + 1e-12) << i;  // not stopped while far above it
+      ASSERT_LE(d.distance - d.lower_bound, slack + 1e-12) << i;
+    }
+    one_search += static_cast<long>(d.support_queries);
+    const ConvexDistance first = convex_distance(a, b, p_in_mesh, decide_at);
+    two_searches += static_cast<long>(first.support_queries);
+    if (first.lower_bound <= decide_at) {
+      two_searches += static_cast<long>(convex_distance(a, b, p_in_mesh, std::numeric_limits<double>::quiet_NaN(), slack).support_queries);
+    }
+  }
+  std::cout << near << " near, " << far << " far; support queries " << one_search << " in one search, " << two_searches
+            << " in two\n";
+  EXPECT_GT(near, test::sized(200) / 8);
+  EXPECT_GT(far, test::sized(200) / 8);
+  EXPECT_LT(one_search, two_searches);
 }
 
 }  // namespace
