@@ -249,7 +249,11 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
     auto done = [&] { return answer == Answer::kHit || (answer == Answer::kNear && !(s.free_radius > 0.0)); };
     const ProxyLevel* walked = walked_level(s.grow(l));
     grid_.for_each_near(c, r, [&](int o) {
-      if (done() || (!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
+      if (done()) {
+        s.gaps = 0;  // (an object left unexamined: the midpoint's own check must look)
+        return;
+      }
+      if ((!allowed_.empty() && allowed_[l * env_->objects().size() + o]) || !grid_.ball_meets(o, c, r)) return;
       // A leaf whose centre lies deeper inside the object than the leaf's proven distance from
       // the link (its level's Hausdorff bound) proves a point of the link inside: a hit with no
       // exact test (the state itself only).
@@ -363,7 +367,10 @@ SceneChecker::Answer SceneChecker::component_check(int k, const Posed& s) const 
   const Answer objects = link_objects_check(link, s);
   if (objects == Answer::kHit || !octree_) return objects;
   // Failed on exact distances to objects (free_radius > 0): the octree must free the stretch too.
-  if (objects == Answer::kNear && !(s.free_radius > 0.0)) return objects;
+  if (objects == Answer::kNear && !(s.free_radius > 0.0)) {
+    s.gaps = 0;  // (the octree left unexamined)
+    return objects;
+  }
   const Answer tree = link_octree_check(link, s);
   return tree == Answer::kFree ? objects : tree == Answer::kHit ? tree : Answer::kNear;
 }

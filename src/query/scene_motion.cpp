@@ -196,20 +196,26 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     // AStretchFreedByOneLinkDoesNotFreeAFasterOne). (The same answers, fewer instructions; the
     // same skip in every interval costs more: docs/performance.md.)
     const bool hopeless = hi - lo == 1.0 && (k < pairs ? s.pair_growth[k] : s.growth[k - pairs]) > kFirstPieceGrowth;
+    posed.clear_gaps();
     if (hopeless) {
       posed.no_free_radius();
     } else if (component_check(k, posed) == Answer::kFree) {
       continue;
     }
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
-    // collide, and mostly where the intervals first fail: that ends the motion at once.)
-    posed.growth = posed.pair_growth = nullptr;
-    posed.from = posed.to = nullptr;
-    const Answer now = component_check(k, posed);
-    posed.growth = s.growth.data(), posed.pair_growth = s.pair_growth.data();
-    posed.from = s.from.data(), posed.to = s.to.data();
-    // (What follows it inherits the whole pending list: the rest was not looked at.)
-    if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
+    // collide, and mostly where the intervals first fail: that ends the motion at once.) Not
+    // where it failed only on exact distances there beyond its padding: those were taken at the
+    // exact answer (with proxies, exact_distance_pays takes none where the tolerance may count),
+    // which the midpoint's own check would give again.
+    if (!(posed.gaps == 1 && !proxies_.empty())) {
+      posed.growth = posed.pair_growth = nullptr;
+      posed.from = posed.to = nullptr;
+      const Answer now = component_check(k, posed);
+      posed.growth = s.growth.data(), posed.pair_growth = s.pair_growth.data();
+      posed.from = s.from.data(), posed.to = s.to.data();
+      // (What follows it inherits the whole pending list: the rest was not looked at.)
+      if (now != Answer::kFree) return {Step::kCollides, mid, first, count};
+    }
     arena.push_back(k);
     largest = std::max(largest, (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half);
   }

@@ -131,11 +131,18 @@ class SceneChecker {
     // frees nothing (0).
     double half = 0.0;
     mutable double free_radius = 0.0;
+    // Since the last clear_gaps: did every failure of a component come from an exact distance at
+    // the midpoint beyond its padding (1), another failure (0), or none yet (-1)? All beyond: the
+    // midpoint itself is free of that component.
+    mutable signed char gaps = -1;
+    void clear_gaps() const { gaps = -1; }
     void note_free_radius(double gap, double growth_now) const {
       free_radius = std::min(free_radius, gap > 0.0 && growth_now > 0.0 ? half * gap / growth_now : 0.0);
+      gaps = gap > 0.0 && gaps != 0 ? 1 : 0;
     }
     Answer no_free_radius() const {
       free_radius = 0.0;
+      gaps = 0;
       return Answer::kNear;
     }
   };
