@@ -174,7 +174,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
       checker_.accelerators().pair_clearance().clear_over(p, s.from, s.to, m.paddings()[a] + m.paddings()[b] + options_.min_clearance)) {
     return Answer::kFree;
   }
-  if (pair_balls_apart(p, s)) return Answer::kFree;
+  if (!s.balls_sieved && pair_balls_apart(p, s)) return Answer::kFree;
   const double grow = s.pair_growth != nullptr ? s.pair_growth[p] : s.grow(a) + s.grow(b);
   const double pads = m.paddings()[a] + m.paddings()[b] + grow;
   const double margin = pose_margin(s.centre_norms[a] + s.centre_norms[b] + bounds[a].radius + bounds[b].radius);
@@ -413,11 +413,14 @@ SceneChecker::Answer SceneChecker::check_still(const Posed& s) const {
   // pair_check's margin for any pair (its links' centre norms and radii at their largest): a
   // wider margin only widens the test.
   const double margin = pose_margin(2.0 * (s.largest_norm + largest_radius_));
-  return sieve(link_end, components_.size(), [&](int k) {
+  s.balls_sieved = true;
+  const Answer pairs_answer = sieve(link_end, components_.size(), [&](int k) {
     const PairBalls& p = pair_balls_[k];
     const double reach = p.reach + margin;
     return !((s.centres[p.a] - s.centres[p.b]).squaredNorm() > reach * reach);
   });
+  s.balls_sieved = false;
+  return pairs_answer;
 }
 
 bool SceneChecker::collides(const double* state) const {

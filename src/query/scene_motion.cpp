@@ -199,8 +199,11 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     posed.clear_gaps();
     if (hopeless) {
       posed.no_free_radius();
-    } else if (component_check(k, posed) == Answer::kFree) {
-      continue;
+    } else {
+      posed.balls_sieved = true;  // (live: its pairs' balls, grown, were not apart)
+      const Answer over = component_check(k, posed);
+      posed.balls_sieved = false;
+      if (over == Answer::kFree) continue;
     }
     // Not certified: does it collide at the midpoint itself? (A planner's motions mostly
     // collide, and mostly where the intervals first fail: that ends the motion at once.) Not

@@ -120,6 +120,9 @@ class SceneChecker {
     // proxies could not prove the component apart; on a motion's interval it is asked of the
     // motion's ends then, once per component (`ends` set: SceneChecker::tolerant_component).
     bool tolerant_flag = false;
+    // The caller has already tested each pair's bounding balls with this growth (an interval's
+    // sieve, a state's): pair_check does not test them again.
+    mutable bool balls_sieved = false;
     const SceneChecker* checker = nullptr;
     Posed* ends = nullptr;
     int component = -1;
