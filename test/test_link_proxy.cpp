@@ -214,29 +214,37 @@ TEST(LinkProxy, BuildWorkGrowsAsNLogNOfTheLeaves) {
   EXPECT_LE(growth, 1.5 * leaves * std::log2(static_cast<double>(work[1].leaves)) / std::log2(static_cast<double>(work[0].leaves)));
 }
 
+// Over the same tree on both sides and over trees of different sizes (the walk opens the larger
+// sphere of a pair: both sides get opened, and a leaf meets an inner sphere).
 TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
   const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
   const Bvh<Obb> finger = Bvh<Obb>::build(test::robot_mesh(dir + "finger.stl"));
-  const LinkProxy proxy = LinkProxy::build({BodyShape{ShapeRef{&finger, nullptr, Primitive{}}, Transform()}}, 0.01);
-  const std::vector<ProxySphere> ls = leaves(proxy);
-  std::mt19937_64 rng(9);
-  std::uniform_real_distribution<double> u(-0.06, 0.06);
-  int overlaps = 0;
-  for (int i = 0; i < test::sized(400); ++i) {
-    const Transform pa = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
-    const Transform pb = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
-    const double padding = i % 3 == 0 ? 0.005 : 0.0;
-    bool brute = false;
-    for (const ProxySphere& a : ls) {
-      for (const ProxySphere& b : ls) {
-        brute = brute || ((pa * a.center) - (pb * b.center)).norm() <= a.radius + b.radius + padding;
+  const Bvh<Obb> hand = Bvh<Obb>::build(test::robot_mesh(dir + "hand.stl"));
+  const LinkProxy finger_proxy = LinkProxy::build({BodyShape{ShapeRef{&finger, nullptr, Primitive{}}, Transform()}}, 0.01);
+  const LinkProxy hand_proxy = LinkProxy::build({BodyShape{ShapeRef{&hand, nullptr, Primitive{}}, Transform()}}, 0.02);
+  for (const LinkProxy* other : {&finger_proxy, &hand_proxy}) {
+    const std::vector<ProxySphere> la = leaves(finger_proxy), lb = leaves(*other);
+    std::mt19937_64 rng(9);
+    const double extent = other == &hand_proxy ? 0.15 : 0.06;
+    std::uniform_real_distribution<double> u(-extent, extent);
+    int overlaps = 0;
+    for (int i = 0; i < test::sized(400); ++i) {
+      const Transform pa = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
+      const Transform pb = test::random_rotation(rng, Vec3(u(rng), u(rng), u(rng)));
+      const double padding = i % 3 == 0 ? 0.005 : 0.0;
+      bool brute = false;
+      for (const ProxySphere& a : la) {
+        for (const ProxySphere& b : lb) {
+          brute = brute || ((pa * a.center) - (pb * b.center)).norm() <= a.radius + b.radius + padding;
+        }
       }
+      EXPECT_EQ(proxies_overlap(finger_proxy, pa, *other, pb, padding), brute) << i;
+      EXPECT_EQ(proxies_overlap(*other, pb, finger_proxy, pa, padding), brute) << i;
+      overlaps += brute;
     }
-    EXPECT_EQ(proxies_overlap(proxy, pa, proxy, pb, padding), brute) << i;
-    overlaps += brute;
+    EXPECT_GT(overlaps, 0);
+    EXPECT_LT(overlaps, test::sized(400));
   }
-  EXPECT_GT(overlaps, 0);
-  EXPECT_LT(overlaps, test::sized(400));
 }
 
 // The self check through the proxies keeps docs/design.md's contract against the exact check, on

@@ -59,6 +59,10 @@ void open_larger(const SphereTreeView& a, std::int32_t i, const SphereTreeView& 
 
 }  // namespace
 
+// The pair walk with each pair tested before it is pushed, not after it is popped: when a's
+// sphere is opened, b's centre is carried into a's frame once for all its children, and the
+// pairs that are apart never reach the stack (the same tests, the same bits, as a walk by
+// depth_first_pair_walk; pr2's arm past its tucked arm walks hundreds of sphere pairs a test).
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
                      double padding) {
   if (a.empty() || b.empty()) return false;
@@ -68,18 +72,37 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
   const Mat3 r = frame.r;
   const Vec3 t = frame.t;
   const double slack = padding + frame.margin;
-  bool hit = false;
-  // The callbacks take their inputs by value: the walk's stack may spill to the heap, and values
-  // held by reference would be reloaded after every push.
-  depth_first_pair_walk(
-      SphereTreeView{sa}, SphereTreeView{sb}, 0, 0,
-      [sa, sb, r, t, slack](std::int32_t i, std::int32_t j) {
-        const double reach = sa[i].radius + sb[j].radius + slack;
-        return (sa[i].center - apply(r, t, sb[j].center)).squaredNorm() > reach * reach ? Visit::kSkip : Visit::kEnter;
-      },
-      [&hit](std::int32_t, std::int32_t) { return hit = true; },
-      [sa, sb](std::int32_t i, std::int32_t j, auto&& push) { open_larger(SphereTreeView{sa}, i, SphereTreeView{sb}, j, push); });
-  return hit;
+  // (Not "apart" is not "meets": a NaN stays in.)
+  auto meets = [sa, slack](std::int32_t i, const Vec3& cb, double rb) {
+    const double reach = sa[i].radius + rb + slack;
+    return !((sa[i].center - cb).squaredNorm() > reach * reach);
+  };
+  auto leaf = [](const ProxySphere* s, std::int32_t i) { return s[i].skip == i + 1; };
+  if (!meets(0, apply(r, t, sb[0].center), sb[0].radius)) return false;
+  if (leaf(sa, 0) && leaf(sb, 0)) return true;
+  TraversalStack<NodePair<std::int32_t, std::int32_t>> stack;
+  stack.push({0, 0});
+  while (!stack.empty()) {
+    const auto [i, j] = stack.pop();
+    // Open a's sphere unless it is a leaf or b's (not a leaf) is larger (open_larger's rule).
+    if (!leaf(sa, i) && (leaf(sb, j) || sa[i].radius >= sb[j].radius)) {
+      const Vec3 cb = apply(r, t, sb[j].center);
+      const bool b_leaf = leaf(sb, j);
+      for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) {
+        if (!meets(k, cb, sb[j].radius)) continue;
+        if (b_leaf && leaf(sa, k)) return true;
+        stack.push({k, j});
+      }
+    } else {
+      const bool a_leaf = leaf(sa, i);
+      for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) {
+        if (!meets(i, apply(r, t, sb[k].center), sb[k].radius)) continue;
+        if (a_leaf && leaf(sb, k)) return true;
+        stack.push({i, k});
+      }
+    }
+  }
+  return false;
 }
 
 double proxies_distance(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
