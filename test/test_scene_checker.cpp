@@ -242,7 +242,8 @@ TEST(SceneChecker, AMotionAskedAgainIsAnsweredFromMemory) {
 // segment this thread certified free with this checker is free, answered from memory. Within
 // means both ends on the segment to within rounding (kOnSegment, 1e-13 a variable); beyond that,
 // past an end, from another checker, or within a colliding motion, the motion is checked. Every
-// answer from memory is checked free by a checker that never saw the segment.
+// answer from memory is checked free by a checker that never saw the segment. A motion from or to
+// a state on the segment (that end answered free by it) answers as that checker does.
 TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker& checker = panda();
@@ -299,6 +300,14 @@ TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
       EXPECT_GT(beside.states_checked, 0u);
       EXPECT_TRUE(same_answer(beside, fresh.check_motion(p.data(), off.data())));
       EXPECT_GT(other.check_motion(half.data(), q.data()).states_checked, 0u);
+      // From a state on the segment (its end check answered by the segment) to anywhere: the
+      // answer a checker that never saw the segment gives.
+      const std::vector<double> on = along(p, q, unit(rng)), elsewhere = random_configuration(checker.model(), rng);
+      for (const bool earliest : {false, true}) {
+        EXPECT_TRUE(same_answer(scene.check_motion(on.data(), elsewhere.data(), earliest), fresh.check_motion(on.data(), elsewhere.data(), earliest)));
+        EXPECT_TRUE(same_answer(scene.check_motion(elsewhere.data(), on.data(), earliest), fresh.check_motion(elsewhere.data(), on.data(), earliest)));
+      }
+      EXPECT_FALSE(scene.collides(on.data()));
     }
     std::cout << "tolerance " << tolerance << ": " << within << " motions within " << free << " free ones answered from memory; "
               << colliding << " colliding motions' pieces checked\n";

@@ -482,10 +482,16 @@ MotionResult SceneChecker::check_motion_once(const double* start, const double* 
   pose_links(start, ends[0]);
   s.goal = goal;
   s.goal_posed = false;
-  // (An end this thread found free with this checker, as the state it is, is not checked again.)
+  // (An end this thread found free with this checker, as the state it is, is not checked again;
+  // nor one on a segment it certified free: the simplifier's shortcuts start and end on the
+  // path's segments, between vertices the memory of states no longer holds.)
   auto end_collides = [&](int e) {
     const double* q = e == 0 ? start : goal;
     if (known_free(q)) return false;
+    if (within_free_motion(q, q)) {
+      remember_free(q);
+      return false;
+    }
     if (e == 1) pose_goal(ends);
     if (check_posed(ends[e]) != Answer::kFree) return true;
     remember_free(q);
