@@ -261,7 +261,7 @@ TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
     options.tolerance = tolerance;
     const SceneChecker scene(checker, env, options), fresh(checker, env, options), other(checker, env, options);
     const std::size_t wanted_free = static_cast<std::size_t>(test::sized(24)), wanted_colliding = static_cast<std::size_t>(test::sized(8));
-    std::size_t free = 0, colliding = 0, within = 0;
+    std::size_t free = 0, colliding = 0, within = 0, colliding_ends = 0;
     while (free < wanted_free || colliding < wanted_colliding) {
       const std::vector<double> p = random_configuration(checker.model(), rng);
       const std::vector<double> q = along(p, random_configuration(checker.model(), rng), 0.2);
@@ -303,14 +303,30 @@ TEST(SceneChecker, AMotionWithinOneFoundFreeIsAnsweredFromMemory) {
       // From a state on the segment (its end check answered by the segment) to anywhere: the
       // answer a checker that never saw the segment gives.
       const std::vector<double> on = along(p, q, unit(rng)), elsewhere = random_configuration(checker.model(), rng);
+      // (Both checkers run the same code: a motion from a colliding state must also collide at
+      // its start, and a free one be free by conservative advancement.)
+      const bool elsewhere_collides = fresh.collides(elsewhere.data());
+      colliding_ends += elsewhere_collides;
       for (const bool earliest : {false, true}) {
-        EXPECT_TRUE(same_answer(scene.check_motion(on.data(), elsewhere.data(), earliest), fresh.check_motion(on.data(), elsewhere.data(), earliest)));
-        EXPECT_TRUE(same_answer(scene.check_motion(elsewhere.data(), on.data(), earliest), fresh.check_motion(elsewhere.data(), on.data(), earliest)));
+        const MotionResult away = scene.check_motion(on.data(), elsewhere.data(), earliest);
+        const MotionResult back = scene.check_motion(elsewhere.data(), on.data(), earliest);
+        EXPECT_TRUE(same_answer(away, fresh.check_motion(on.data(), elsewhere.data(), earliest)));
+        EXPECT_TRUE(same_answer(back, fresh.check_motion(elsewhere.data(), on.data(), earliest)));
+        if (elsewhere_collides) {
+          EXPECT_FALSE(back.valid);
+          EXPECT_EQ(back.colliding_fraction, 0.0);
+        }
+        if (away.valid) {
+          MotionRequest exact;
+          exact.max_states = 200000;
+          EXPECT_TRUE(test::advancement_motion(checker, on.data(), elsewhere.data(), *env, exact).valid);
+        }
       }
       EXPECT_FALSE(scene.collides(on.data()));
     }
     std::cout << "tolerance " << tolerance << ": " << within << " motions within " << free << " free ones answered from memory; "
               << colliding << " colliding motions' pieces checked\n";
+    EXPECT_GT(colliding_ends, 0u);
   }
 }
 
