@@ -2,8 +2,8 @@
 // queries as the oracle: the interval growth holds every vertex of every link over sampled motion
 // (a self pair's in the frame of its common ancestor); a motion answered free is free at every
 // state of a dense sweep, and one answered colliding collides (at the tolerance) where it says; a
-// stretch freed by one exact distance frees no other link or object; motions from a state within
-// the tolerance answer as exact. One binary with test_scene_checker.cpp.
+// stretch freed by one exact distance frees no other link or object. (A motion's tolerance:
+// test_scene_tolerance.cpp.) One binary with test_scene_checker.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -511,86 +511,6 @@ TEST(SceneChecker, AStretchFreedByOneObjectDoesNotFreeAnother) {
           << order << ": last valid " << e.last_valid_fraction;
     }
   }
-}
-
-// A motion that starts within the tolerance of an obstacle (a planner's goal a few millimetres
-// from a shelf) must be answered as at tolerance 0: the tolerance may not take its first
-// interval as colliding, or the planner could never leave the goal. (The ends' clearance was
-// judged by the tolerant state check, whose "free" only means beyond the padding: motions
-// leaving a goal 2.6 mm from an object were refused at 1 cm and found free at 0.) The same towards it.
-TEST(SceneChecker, MotionsFromAStateWithinTheToleranceAnswerAsExact) {
-  BVH_REQUIRE_ROBOTS();
-  const CollisionChecker& checker = panda();
-  const auto env = std::make_shared<const Environment>(test::generate_scene(11, 3).environment());
-  const SceneChecker exact(checker, env);
-  SceneCheckOptions at_1cm;
-  at_1cm.tolerance = 0.01;
-  const SceneChecker coarse(checker, env, at_1cm);
-  std::mt19937_64 rng(37);
-  int near = 0, compared = 0, free = 0;
-  while (near < 4) {
-    // A free state moved towards a colliding one until it lies within 1 cm of the collision.
-    std::vector<double> lo = random_configuration(checker.model(), rng), hi = random_configuration(checker.model(), rng);
-    if (exact.collides(lo.data()) || !exact.collides(hi.data())) continue;
-    double clearance = exact_clearance(checker, lo.data(), *env);
-    for (int k = 0; k < 40 && clearance > 0.008; ++k) {
-      std::vector<double> mid(lo.size());
-      for (std::size_t j = 0; j < mid.size(); ++j) mid[j] = 0.5 * (lo[j] + hi[j]);
-      if (exact.collides(mid.data())) {
-        hi = mid;
-      } else {
-        lo = mid;
-        clearance = exact_clearance(checker, lo.data(), *env);
-      }
-    }
-    if (clearance > 0.008 || clearance < 0.001) continue;
-    ++near;
-    for (int i = 0; i < 30; ++i) {
-      std::vector<double> b = random_configuration(checker.model(), rng), c = random_configuration(checker.model(), rng);
-      for (std::size_t j = 0; j < b.size(); ++j) b[j] = lo[j] + 0.03 * (b[j] - lo[j]), c[j] = lo[j] + 0.03 * (c[j] - lo[j]);
-      if (exact.collides(b.data()) || exact.collides(c.data())) continue;
-      ++compared;
-      const bool truth = exact.check_motion(lo.data(), b.data()).valid, back = exact.check_motion(c.data(), lo.data()).valid;
-      free += truth;
-      EXPECT_EQ(coarse.check_motion(lo.data(), b.data()).valid, truth) << "near state " << near << " motion " << i;
-      // Towards it from elsewhere, known free (checked first, as a planner does): the goal is posed
-      // only when the tolerance asks, and must then be its own poses, not the last goal's (b).
-      EXPECT_FALSE(coarse.collides(lo.data()));
-      EXPECT_EQ(coarse.check_motion(c.data(), lo.data()).valid, back) << "to near state " << near << " motion " << i;
-    }
-  }
-  std::cout << compared << " motions from 4 states 1 to 8 mm from a collision, " << free << " free\n";
-  EXPECT_GT(free, 0);
-}
-
-// A proxy level coarser than half the tolerance leaves an interval's growth no room within the
-// tolerance: such motions are settled by exact distances, not bisected down to min_clearance
-// (they were: 36 ms a motion on panda with a 20 mm level at 10 mm).
-TEST(SceneChecker, ALevelCoarserThanTheToleranceStillCertifiesQuickly) {
-  CheckerOptions options;
-  options.proxy_levels = {0.02};
-  const CollisionChecker checker = test::demo_arm_checker(options);
-  Environment world(0.05);
-  world.add_object("box", ObjectShape::box({0.2, 0.2, 0.2}), Transform::Translation(Vec3(0.45, 0.0, 0.5)));
-  const auto env = std::make_shared<const Environment>(world);
-  SceneCheckOptions at_1cm;
-  at_1cm.tolerance = 0.01;
-  const SceneChecker scene(checker, env, at_1cm);
-  std::mt19937_64 rng(31);
-  int free = 0;
-  std::size_t most = 0, total = 0, motions = 0;
-  for (int i = 0; i < 40; ++i) {
-    const std::vector<double> a = random_configuration(checker.model(), rng), b = random_configuration(checker.model(), rng);
-    if (scene.collides(a.data()) || scene.collides(b.data())) continue;
-    const MotionResult r = scene.check_motion(a.data(), b.data());
-    ASSERT_TRUE(r.certified) << r.message;
-    most = std::max(most, r.states_checked);
-    total += r.states_checked, ++motions;
-    free += r.valid;
-  }
-  std::cout << motions << " motions, " << total << " intervals, at most " << most << " for one\n";
-  EXPECT_LT(total, 1500 * motions);  // 640 a motion here; bisected to min_clearance: 5,100
-  EXPECT_GT(free, 0);
 }
 
 }  // namespace

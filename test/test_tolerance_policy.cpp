@@ -73,10 +73,10 @@ TEST(TolerancePolicy, TheTable) {
 }
 
 // A certified motion's interval that still fails counts as colliding only when the level's error
-// (against a link, the larger) and twice the growth fit the tolerance: never at tolerance 0, at a
-// level of half the tolerance a growth up to a quarter of it, and at the level a motion walks down
-// to by default (the tolerance itself) no growth at all: there the tolerance answers the midpoints
-// only (a component clear of it at both ends).
+// against the counterpart (e against a link's proxies, e/2 against an obstacle) and the growth fit
+// the tolerance: never at tolerance 0; at the level a motion walks down to by default (the
+// tolerance itself) a growth up to half the tolerance against an obstacle and none against a link;
+// at half the tolerance, half of it against a link.
 TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
   for (const double t : {0.0, 1e-4, 0.003, 0.01, 0.05}) {
     ToleranceQuestion q{t, Counterpart::kLink};
@@ -84,19 +84,23 @@ TEST(TolerancePolicy, AFailingIntervalCountsAsCollidingOnlyWithinTheTolerance) {
     const double preferred = proxy_use(q).decide_up_to;
     for (const double level : {0.0, preferred, 0.002, 0.005, 0.01, 0.02}) {
       for (const double growth : {0.0, 1e-6, t / 4, t / 2, t}) {
-        const bool fits = level + 2.0 * growth <= t;
-        EXPECT_EQ(interval_within_tolerance(level, growth, t), fits) << t << " " << level << " " << growth;
-        if (t == 0.0 && (level > 0.0 || growth > 0.0)) {
-          EXPECT_FALSE(interval_within_tolerance(level, growth, t));
+        for (const Counterpart other : {Counterpart::kLink, Counterpart::kObject}) {
+          const double error = other == Counterpart::kLink ? level : level / 2;
+          EXPECT_EQ(interval_within_tolerance(level, other, growth, t), error + growth <= t) << t << " " << level << " " << growth;
+          if (t == 0.0 && (level > 0.0 || growth > 0.0)) {
+            EXPECT_FALSE(interval_within_tolerance(level, other, growth, t));
+          }
         }
       }
     }
     if (t > 0.0) {
-      EXPECT_TRUE(interval_within_tolerance(t / 2, t / 4, t));
-      EXPECT_FALSE(interval_within_tolerance(t / 2, t / 4 * (1 + 1e-9), t));
       EXPECT_EQ(preferred, t);
-      EXPECT_TRUE(interval_within_tolerance(preferred, 0.0, t));
-      EXPECT_FALSE(interval_within_tolerance(preferred, 1e-12, t));
+      EXPECT_TRUE(interval_within_tolerance(preferred, Counterpart::kObject, t / 2, t));
+      EXPECT_FALSE(interval_within_tolerance(preferred, Counterpart::kObject, t / 2 * (1 + 1e-9), t));
+      EXPECT_TRUE(interval_within_tolerance(preferred, Counterpart::kLink, 0.0, t));
+      EXPECT_FALSE(interval_within_tolerance(preferred, Counterpart::kLink, 1e-12, t));
+      EXPECT_TRUE(interval_within_tolerance(t / 2, Counterpart::kLink, t / 2, t));
+      EXPECT_FALSE(interval_within_tolerance(t / 2, Counterpart::kLink, t / 2 * (1 + 1e-9), t));
     }
   }
 }

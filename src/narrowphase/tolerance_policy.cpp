@@ -14,8 +14,8 @@ ProxyUse proxy_use(const ToleranceQuestion& q) {
   return use;
 }
 
-bool interval_within_tolerance(double level, double growth, double tolerance) {
-  return proxy_error(level, Counterpart::kLink) + 2.0 * growth <= tolerance;
+bool interval_within_tolerance(double level, Counterpart other, double growth, double tolerance) {
+  return proxy_error(level, other) + growth <= tolerance;
 }
 
 }  // namespace bvh_collision

@@ -57,8 +57,9 @@ SceneChecker::SceneChecker(CollisionChecker checker, std::shared_ptr<const Envir
   proxies_decide_self_ = !proxies_.empty() && proxy_error(level_, Counterpart::kLink) <= options.tolerance;
   proxies_decide_objects_ = !proxies_.empty() && proxy_error(level_, Counterpart::kObject) <= options.tolerance;
   // The tolerance answers a component's midpoint where it is clear of it at both ends (a level
-  // that fits decides there); a failing interval is taken as colliding only where the level leaves
-  // room for twice its growth (interval_within_tolerance: never at a level of the tolerance itself).
+  // that fits decides there); a failing interval is taken as colliding only where the level's error
+  // leaves room for its growth (interval_within_tolerance: at a level of the tolerance itself,
+  // against an obstacle only).
   tolerance_asked_ = !proxies_.empty() && level_ <= motion_use(options.tolerance).decide_up_to;
   double reach = 0.0;
   for (std::size_t l = 0; l < m.shapes().size(); ++l) {

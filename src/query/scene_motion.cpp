@@ -224,11 +224,13 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   }
   const std::size_t left = arena.size() - failing;
   if (left == 0) return {Step::kCertified};
-  // Proxies within the level of the links, grown by at most `largest`: a failed interval puts a
-  // link within level + 2 largest (a self pair) of a collision at its midpoint.
-  // (The room first: whether every failing component may take the shortcut costs end checks.)
-  if (tolerance_asked_ && interval_within_tolerance(level_, largest + options_.min_clearance, options_.tolerance) &&
-      std::all_of(arena.begin() + static_cast<std::ptrdiff_t>(failing), arena.end(), [&](int k) { return tolerant_component(k, ends); })) {
+  // Each failing component came within its proxies' error and its growth of a collision at the
+  // midpoint (failure_within_tolerance): where every one fits the tolerance and may take its
+  // shortcut on this motion, the motion counts as colliding there. (The room first: whether a
+  // component may take the shortcut costs end checks.)
+  const auto failed = arena.begin() + static_cast<std::ptrdiff_t>(failing);
+  if (tolerance_asked_ && std::all_of(failed, arena.end(), [&](int k) { return failure_within_tolerance(k, posed); }) &&
+      std::all_of(failed, arena.end(), [&](int k) { return tolerant_component(k, ends); })) {
     return {Step::kCollides, mid, failing, left};
   }
   // Growth below the level is tested by exact distances: a failure with the motion's own growth
@@ -248,6 +250,29 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   return split;
 }
 
+// Component k failed an interval whose midpoint is `mid`: its proxies at the level it walked
+// (walked_level of its growth), grown by its growth, met a counterpart's (a pair) or an object,
+// which puts the link within the level's error, the growth and twice the test's rounding margin
+// (posing, then the balls' test) of a collision at the midpoint. Does that fit the tolerance? Not
+// for a link with an octree: a grown leaf larger than a few voxels counts as meeting it untested
+// (link_octree_check), so a failure there puts the link nowhere in particular.
+bool SceneChecker::failure_within_tolerance(int k, const Posed& mid) const {
+  const RobotCollisionModel& m = checker_.collision_model();
+  const int pairs = static_cast<int>(pair_rates_.size());
+  if (k >= pairs) {
+    if (octree_) return false;
+    const int l = k - pairs;
+    const ProxyLevel* walked = walked_level(mid.growth[l]);
+    const double margin = 2.0 * proxy_pose_margin(walked->links[l], mid.poses[l]);
+    return interval_within_tolerance(walked->level, Counterpart::kObject, mid.growth[l] + margin, options_.tolerance);
+  }
+  const auto [a, b] = m.checked_pairs()[k];
+  const double grown = mid.pair_growth[k];
+  const ProxyLevel* walked = walked_level(grown);
+  const double margin = 2.0 * (proxy_pose_margin(walked->links[a], mid.poses[a]) + proxy_pose_margin(walked->links[b], mid.poses[b]));
+  return interval_within_tolerance(walked->level, Counterpart::kLink, grown + margin, options_.tolerance);
+}
+
 // The motion's goal into ends[1], the first time a test reads it.
 void SceneChecker::pose_goal(Posed* ends) const {
   MotionScratch& s = motion_scratch();
@@ -259,10 +284,11 @@ void SceneChecker::pose_goal(Posed* ends) const {
 // At a tolerance, a motion may count as colliding where a component (a self pair, a link against
 // the environment) comes within the tolerance, unless that component already is at one of its
 // ends: a planner must be able to leave a state it accepted. (A failing interval is taken as
-// colliding only where the finest level leaves room for twice its growth within the tolerance:
-// with a level below the tolerance; the midpoints are answered at the tolerance with any level.) May the shortcut take component k on this motion? Asked only
-// of components that fail somewhere, and answered once per motion: the proxies grown by the
-// tolerance at both ends (`ends`, posed) must prove it clear of the tolerance there.
+// colliding only where its level's error leaves room for its growth within the tolerance:
+// failure_within_tolerance; the midpoints are answered at the tolerance with any level.) May the
+// shortcut take component k on this motion? Asked only of components that fail somewhere, and
+// answered once per motion: the proxies grown by the tolerance at both ends (`ends`, posed) must
+// prove it clear of the tolerance there.
 bool SceneChecker::tolerant_component(int k, Posed* ends) const {
   MotionScratch& s = motion_scratch();
   signed char& known = s.tolerant[k];

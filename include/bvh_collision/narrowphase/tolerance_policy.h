@@ -59,10 +59,14 @@ struct ProxyUse {
 };
 ProxyUse proxy_use(const ToleranceQuestion& question);
 
-// A certified motion's interval that a component still fails at proxy level `level`, each link
-// moving (each pair closing) at most `growth` over half of it: the component comes within
-// level + 2 growth of a collision somewhere in the interval (a self pair's error, the larger). May
-// the tolerance take it as colliding? When that fits the tolerance.
-bool interval_within_tolerance(double level, double growth, double tolerance);
+// A certified motion's interval that a component still fails at proxy level `level` against
+// `other`, its proxies grown by `growth` (how far its link moves, or its pair closes, over half the
+// interval, with any rounding margin of the test): at the interval's midpoint the link's proxies
+// came within the growth of the counterpart (its proxies grown once, not on both sides), so the
+// link came within the level's error and the growth of a collision there, on the motion. May the
+// tolerance take the motion as colliding there? When that fits the tolerance: against an obstacle
+// a growth up to half the tolerance at a level of the tolerance itself (the level a motion walks
+// down to), against a link none.
+bool interval_within_tolerance(double level, Counterpart other, double growth, double tolerance);
 
 }  // namespace bvh_collision

@@ -189,6 +189,7 @@ class SceneChecker {
   Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
                       Posed* ends) const;
   bool tolerant_component(int k, Posed* ends) const;
+  bool failure_within_tolerance(int k, const Posed& mid) const;
   void pose_goal(Posed* ends) const;
   void pose_links(const double* state, Posed& posed) const;
   // A motion's intervals: `posed` holds the motion's start (pose_links), and only the links below
