@@ -85,6 +85,16 @@ class FakeRobot {
     clouds_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacle_cloud", 1);
     timer_ = nh_.createWallTimer(ros::WallDuration(0.05), [this](const ros::WallTimerEvent&) { tick(); });
   }
+  // A tick that the spinner runs while the test's scope ends must not publish on a topic being
+  // unadvertised (a clean-clone run aborted there, in roscpp's TopicManager::publish, after the
+  // test had passed): the timer stopped and the ticks told to stop before the publishers go.
+  ~FakeRobot() {
+    timer_.stop();
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopped_ = true;
+  }
+  FakeRobot(const FakeRobot&) = delete;
+  FakeRobot& operator=(const FakeRobot&) = delete;
   void move_to(const std::vector<double>& q) {
     std::lock_guard<std::mutex> lock(mutex_);
     q_ = q;
@@ -98,6 +108,7 @@ class FakeRobot {
  private:
   void tick() {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (stopped_) return;
     const sensor_msgs::JointState js = joint_state(checker_.model().variable_names(), q_);
     joints_.publish(js);
     if (!cloud_.empty() && tick_++ % 4 == 0) {
@@ -114,6 +125,7 @@ class FakeRobot {
   std::vector<double> q_;
   std::vector<ScanPoint> cloud_;
   int tick_ = 0;
+  bool stopped_ = false;
   std::atomic<std::uint64_t> sent_{0};
   ros::WallTimer timer_;
 };
