@@ -20,6 +20,10 @@
 // BENCH_PLANNING_ROBOTS=panda,pr2_both_arms (say) plans only those robots; BENCH_PLANNING_PROBLEMS=N sets
 // the problems per robot; BENCH_PLANNING_CHECKERS=01 only those rows (0 ours exact, 1 ours 10 mm,
 // 2 FCL), to profile one; BENCH_PLANNING_OMPL_SEED=N another seed for OMPL (1 by default).
+// BENCH_PLANNING_LOG=file writes every state and motion call our rows make (full states, in order);
+// BENCH_PLANNING_REPLAY=file then asks a checker the same calls on the same problems instead of
+// planning (function replay_calls, for callgrind: two builds compared on the same calls, where
+// changed answers would otherwise change the plans), and prints what they answered.
 #include <fcl/fcl.h>
 
 #include <ompl/base/DiscreteMotionValidator.h>
@@ -150,11 +154,35 @@ class TimedValidity : public ob::StateValidityChecker {
   CallTimes* times_;
 };
 
+// A call log (BENCH_PLANNING_LOG): one line a call, "<problem> <row> S <state>" or "<problem> <row>
+// M <earliest> <start> <goal>", full states at 17 digits.
+struct CallLog {
+  std::FILE* file = nullptr;
+  int problem = 0, row = 0;
+  void state(const std::vector<double>& q) const {
+    std::fprintf(file, "%d %d S", problem, row);
+    values(q);
+    std::fputc('\n', file);
+  }
+  void motion(const std::vector<double>& a, const std::vector<double>& b, bool earliest) const {
+    std::fprintf(file, "%d %d M %d", problem, row, earliest ? 1 : 0);
+    values(a);
+    values(b);
+    std::fputc('\n', file);
+  }
+  void values(const std::vector<double>& q) const {
+    for (const double v : q) std::fprintf(file, " %.17g", v);
+  }
+};
+CallLog call_log;
+
 class TimedMotions : public ob::MotionValidator {
  public:
-  TimedMotions(const ob::SpaceInformationPtr& si, std::shared_ptr<ob::MotionValidator> inner, CallTimes* times)
-      : ob::MotionValidator(si), inner_(std::move(inner)), times_(times) {}
+  using Hook = std::function<void(const ob::State*, const ob::State*, bool)>;
+  TimedMotions(const ob::SpaceInformationPtr& si, std::shared_ptr<ob::MotionValidator> inner, CallTimes* times, Hook hook = {})
+      : ob::MotionValidator(si), inner_(std::move(inner)), times_(times), hook_(std::move(hook)) {}
   bool checkMotion(const ob::State* a, const ob::State* b) const override {
+    if (hook_) hook_(a, b, false);
     const double t0 = now_us();
     ++motion_depth;
     const bool v = inner_->checkMotion(a, b);
@@ -163,6 +191,7 @@ class TimedMotions : public ob::MotionValidator {
     return v;
   }
   bool checkMotion(const ob::State* a, const ob::State* b, std::pair<ob::State*, double>& last) const override {
+    if (hook_) hook_(a, b, true);
     const double t0 = now_us();
     ++motion_depth;
     const bool v = inner_->checkMotion(a, b, last);
@@ -174,6 +203,7 @@ class TimedMotions : public ob::MotionValidator {
  private:
   std::shared_ptr<ob::MotionValidator> inner_;
   CallTimes* times_;
+  Hook hook_;
 };
 
 // ---- Problems ----------------------------------------------------------------------------------
@@ -355,6 +385,57 @@ void record(Tally& tally, const Run& run, double limit, const CollisionChecker& 
   tally.fcl_colliding += theirs;
 }
 
+// ---- Replay (BENCH_PLANNING_REPLAY) ---------------------------------------------------------------
+
+struct LoggedCall {
+  bool motion = false, earliest = false;
+  std::vector<double> a, b;
+};
+// Per problem and row, the calls in the order the planner made them.
+std::map<std::pair<int, int>, std::vector<LoggedCall>> logged_calls;
+
+void read_call_log(const char* path, std::size_t variables) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(std::string("cannot read ") + path);
+  int problem = 0, row = 0;
+  char kind = 0;
+  while (in >> problem >> row >> kind) {
+    LoggedCall c;
+    c.motion = kind == 'M';
+    if (c.motion) {
+      int earliest = 0;
+      in >> earliest;
+      c.earliest = earliest != 0;
+    }
+    for (auto* q : c.motion ? std::vector<std::vector<double>*>{&c.a, &c.b} : std::vector<std::vector<double>*>{&c.a}) {
+      q->resize(variables);
+      for (double& v : *q) in >> v;
+    }
+    if (!in) throw std::runtime_error(std::string("malformed call log ") + path);
+    logged_calls[{problem, row}].push_back(std::move(c));
+  }
+}
+
+struct ReplayCount {
+  std::size_t states = 0, free_states = 0, motions = 0, free_motions = 0;
+  double fractions = 0.0;  // the sum of the colliding motions' last valid fractions
+};
+
+// The logged calls asked again of one checker, in order (callgrind: --toggle-collect=*replay_calls*).
+[[gnu::noinline]] void replay_calls(const SceneChecker& scene, const std::vector<LoggedCall>& calls, ReplayCount& count) {
+  for (const LoggedCall& c : calls) {
+    if (!c.motion) {
+      ++count.states;
+      count.free_states += !scene.collides(c.a.data());
+      continue;
+    }
+    const MotionResult r = scene.check_motion(c.a.data(), c.b.data(), c.earliest);
+    ++count.motions;
+    count.free_motions += r.valid;
+    if (!r.valid) count.fractions += r.last_valid_fraction;
+  }
+}
+
 // One problem planned by one of our configurations (tolerance 0 or 10 mm).
 void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
                const planning::JointGroup& group, const Problem& p, double tolerance, double limit, FclRobot& fcl) {
@@ -364,8 +445,16 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
   og::SimpleSetup setup(group.make_space());
   const auto si = setup.getSpaceInformation();
   auto states = std::make_shared<planning::CheckerStateValidityChecker>(si, context);
-  setup.setStateValidityChecker(std::make_shared<TimedValidity>(si, [states](const ob::State* s) { return states->isValid(s); }, &tally.calls));
-  si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<planning::CheckerMotionValidator>(si, context), &tally.calls));
+  const bool logged = call_log.file != nullptr;
+  setup.setStateValidityChecker(std::make_shared<TimedValidity>(si, [states, context, logged](const ob::State* s) {
+    if (logged) call_log.state(context->full_state(s));
+    return states->isValid(s);
+  }, &tally.calls));
+  TimedMotions::Hook hook;
+  if (logged) hook = [context](const ob::State* a, const ob::State* b, bool earliest) {
+    call_log.motion(context->full_state(a), context->full_state(b), earliest);
+  };
+  si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<planning::CheckerMotionValidator>(si, context), &tally.calls, hook));
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
   const std::size_t states0 = tally.calls.states.size(), motions0 = tally.calls.motions.size();
@@ -496,6 +585,8 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
   const char* only = std::getenv("BENCH_PLANNING_CHECKERS");
   const auto runs = [&](char row) { return only == nullptr || std::string(only).find(row) != std::string::npos; };
   std::filesystem::create_directories(out_dir + "/scenes");
+  if (const char* replay = std::getenv("BENCH_PLANNING_REPLAY")) read_call_log(replay, checker.model().variable_count());
+  ReplayCount replayed[2];
   for (int k = 0; k < count; ++k) {
     const test::PlanningScene scene = robot.scene(seed, k, space.target);
     const auto env = std::make_shared<const Environment>(scene.environment());
@@ -510,12 +601,38 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
                        {"goal_within_5mm", p.near}, {"goal_clearance", p.goal_clearance}});
     FclRobot fcl(checker, fcl_models, scene);
     auto& t = out.tallies;
+    if (!logged_calls.empty()) {
+      for (const int row : {0, 1}) {
+        if (!runs(static_cast<char>('0' + row))) continue;
+        // As the planning context builds it; BENCH_PLANNING_PAIR_GROWTH fixes the self pairs' exact
+        // growth, which the checker times at load (under callgrind it may choose another).
+        SceneCheckOptions options;
+        options.tolerance = row == 0 ? 0.0 : 0.01;
+        if (const char* growth = std::getenv("BENCH_PLANNING_PAIR_GROWTH")) options.pair_exact_growth = std::atof(growth);
+        const SceneChecker scene(checker, env, options);
+        const auto calls = logged_calls.find({k, row});
+        if (calls != logged_calls.end()) replay_calls(scene, calls->second, replayed[row]);
+      }
+      continue;
+    }
+    call_log.problem = k;
+    call_log.row = 0;
     if (runs('0')) plan_ours(t[0], checker, env, group, p, 0.0, limit, fcl);
+    call_log.row = 1;
     if (runs('1')) plan_ours(t[1], checker, env, group, p, 0.01, limit, fcl);
     if (runs('2')) plan_fcl(t[2], checker, env, group, p, limit, fcl);
     std::printf("%s problem %d (%zu shapes%s): solved %d/%d/%d so far\n", robot.name.c_str(), k, scene.shape_count(),
                 p.near ? ", goal near" : "", t[0].solved, t[1].solved, t[2].solved);
     std::fflush(stdout);
+  }
+  for (int row = 0; row < 2; ++row) {
+    const ReplayCount& r = replayed[row];
+    if (r.states + r.motions == 0) continue;
+    std::printf("%s replayed, %s: %zu states (%zu free), %zu motions (%zu free; colliding ones' last valid fractions sum to %.9g; "
+                "self pairs' exact growth %g m, timed at load, %s)\n",
+                robot.name.c_str(), out.tallies[static_cast<std::size_t>(row)].name.c_str(), r.states, r.free_states, r.motions,
+                r.free_motions, r.fractions, checker.accelerators().pair_exact_growth(),
+                std::getenv("BENCH_PLANNING_PAIR_GROWTH") ? "replaced by BENCH_PLANNING_PAIR_GROWTH" : "kept");
   }
   return out;
 }
@@ -535,6 +652,10 @@ int main(int argc, char** argv) {
   const char* ompl_seed = std::getenv("BENCH_PLANNING_OMPL_SEED");  // another draw of the planner's randomness
   ompl::RNG::setSeed(ompl_seed != nullptr ? std::strtoul(ompl_seed, nullptr, 10) : 1);
   const char* only = std::getenv("BENCH_PLANNING_ROBOTS");
+  if (const char* log = std::getenv("BENCH_PLANNING_LOG")) {
+    call_log.file = std::fopen(log, "w");
+    if (call_log.file == nullptr) throw std::runtime_error(std::string("cannot write ") + log);
+  }
   std::vector<RobotRun> runs;
   nlohmann::json written = nlohmann::json::array();
   for (const PlanningRobot& robot : planning_robots()) {
@@ -542,6 +663,8 @@ int main(int argc, char** argv) {
     runs.push_back(run_robot(robot, out_dir, count, limit, seed, written));
   }
   std::ofstream(out_dir + "/scenes/problems.json") << written.dump(1) << "\n";
+  if (call_log.file != nullptr) std::fclose(call_log.file);
+  if (!logged_calls.empty()) return 0;  // a replay plans nothing to report
   report(out_dir, runs, limit);
   return 0;
 }
