@@ -417,7 +417,7 @@ void read_call_log(const char* path, std::size_t variables) {
 }
 
 struct ReplayCount {
-  std::size_t states = 0, free_states = 0, motions = 0, free_motions = 0;
+  std::size_t states = 0, free_states = 0, motions = 0, free_motions = 0, intervals = 0;
   double fractions = 0.0;  // the sum of the colliding motions' last valid fractions
 };
 
@@ -432,6 +432,7 @@ struct ReplayCount {
     const MotionResult r = scene.check_motion(c.a.data(), c.b.data(), c.earliest);
     ++count.motions;
     count.free_motions += r.valid;
+    count.intervals += r.states_checked;
     if (!r.valid) count.fractions += r.last_valid_fraction;
   }
 }
@@ -628,10 +629,10 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
   for (int row = 0; row < 2; ++row) {
     const ReplayCount& r = replayed[row];
     if (r.states + r.motions == 0) continue;
-    std::printf("%s replayed, %s: %zu states (%zu free), %zu motions (%zu free; colliding ones' last valid fractions sum to %.9g; "
+    std::printf("%s replayed, %s: %zu states (%zu free), %zu motions (%zu free, %zu intervals; colliding ones' last valid fractions sum to %.17g; "
                 "self pairs' exact growth %g m, timed at load, %s)\n",
                 robot.name.c_str(), out.tallies[static_cast<std::size_t>(row)].name.c_str(), r.states, r.free_states, r.motions,
-                r.free_motions, r.fractions, checker.accelerators().pair_exact_growth(),
+                r.free_motions, r.intervals, r.fractions, checker.accelerators().pair_exact_growth(),
                 std::getenv("BENCH_PLANNING_PAIR_GROWTH") ? "replaced by BENCH_PLANNING_PAIR_GROWTH" : "kept");
   }
   return out;
