@@ -49,6 +49,7 @@ struct FreeSegments {
   std::array<std::uint64_t, kSlots> serial{};  // 0: empty
   std::array<std::uint64_t, kSlots> used{};    // when last found or stored (clock)
   std::array<int, kSlots> longest{};           // the variable that changes most along it
+  std::array<int, kSlots> second{};            // the one that changes next most (the longest again with one variable)
   std::vector<double> rows;                    // kSlots rows of 2n values: the start, then goal - start
   std::uint64_t clock = 0;
   std::size_t n = 0;
