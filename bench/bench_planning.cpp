@@ -48,6 +48,7 @@
 #include "bvh_collision/robot/robot_description.h"
 #include "fcl_oracle.h"
 #include "fcl_planning_robot.h"
+#include "planning_calls.h"
 #include "planning_scenes.h"
 #include "advancement_oracle.h"
 
@@ -154,27 +155,8 @@ class TimedValidity : public ob::StateValidityChecker {
   CallTimes* times_;
 };
 
-// A call log (BENCH_PLANNING_LOG): one line a call, "<problem> <row> S <state>" or "<problem> <row>
-// M <earliest> <start> <goal>", full states at 17 digits.
-struct CallLog {
-  std::FILE* file = nullptr;
-  int problem = 0, row = 0;
-  void state(const std::vector<double>& q) const {
-    std::fprintf(file, "%d %d S", problem, row);
-    values(q);
-    std::fputc('\n', file);
-  }
-  void motion(const std::vector<double>& a, const std::vector<double>& b, bool earliest) const {
-    std::fprintf(file, "%d %d M %d", problem, row, earliest ? 1 : 0);
-    values(a);
-    values(b);
-    std::fputc('\n', file);
-  }
-  void values(const std::vector<double>& q) const {
-    for (const double v : q) std::fprintf(file, " %.17g", v);
-  }
-};
-CallLog call_log;
+bench::CallLog call_log;         // BENCH_PLANNING_LOG
+bench::LoggedCalls logged_calls;  // BENCH_PLANNING_REPLAY
 
 class TimedMotions : public ob::MotionValidator {
  public:
@@ -385,58 +367,6 @@ void record(Tally& tally, const Run& run, double limit, const CollisionChecker& 
   tally.fcl_colliding += theirs;
 }
 
-// ---- Replay (BENCH_PLANNING_REPLAY) ---------------------------------------------------------------
-
-struct LoggedCall {
-  bool motion = false, earliest = false;
-  std::vector<double> a, b;
-};
-// Per problem and row, the calls in the order the planner made them.
-std::map<std::pair<int, int>, std::vector<LoggedCall>> logged_calls;
-
-void read_call_log(const char* path, std::size_t variables) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(std::string("cannot read ") + path);
-  int problem = 0, row = 0;
-  char kind = 0;
-  while (in >> problem >> row >> kind) {
-    LoggedCall c;
-    c.motion = kind == 'M';
-    if (c.motion) {
-      int earliest = 0;
-      in >> earliest;
-      c.earliest = earliest != 0;
-    }
-    for (auto* q : c.motion ? std::vector<std::vector<double>*>{&c.a, &c.b} : std::vector<std::vector<double>*>{&c.a}) {
-      q->resize(variables);
-      for (double& v : *q) in >> v;
-    }
-    if (!in) throw std::runtime_error(std::string("malformed call log ") + path);
-    logged_calls[{problem, row}].push_back(std::move(c));
-  }
-}
-
-struct ReplayCount {
-  std::size_t states = 0, free_states = 0, motions = 0, free_motions = 0, intervals = 0;
-  double fractions = 0.0;  // the sum of the colliding motions' last valid fractions
-};
-
-// The logged calls asked again of one checker, in order (callgrind: --toggle-collect=*replay_calls*).
-[[gnu::noinline]] void replay_calls(const SceneChecker& scene, const std::vector<LoggedCall>& calls, ReplayCount& count) {
-  for (const LoggedCall& c : calls) {
-    if (!c.motion) {
-      ++count.states;
-      count.free_states += !scene.collides(c.a.data());
-      continue;
-    }
-    const MotionResult r = scene.check_motion(c.a.data(), c.b.data(), c.earliest);
-    ++count.motions;
-    count.free_motions += r.valid;
-    count.intervals += r.states_checked;
-    if (!r.valid) count.fractions += r.last_valid_fraction;
-  }
-}
-
 // One problem planned by one of our configurations (tolerance 0 or 10 mm).
 void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
                const planning::JointGroup& group, const Problem& p, double tolerance, double limit, FclRobot& fcl) {
@@ -586,8 +516,8 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
   const char* only = std::getenv("BENCH_PLANNING_CHECKERS");
   const auto runs = [&](char row) { return only == nullptr || std::string(only).find(row) != std::string::npos; };
   std::filesystem::create_directories(out_dir + "/scenes");
-  if (const char* replay = std::getenv("BENCH_PLANNING_REPLAY")) read_call_log(replay, checker.model().variable_count());
-  ReplayCount replayed[2];
+  if (const char* replay = std::getenv("BENCH_PLANNING_REPLAY")) logged_calls = bench::read_call_log(replay, checker.model().variable_count());
+  bench::ReplayCount replayed[2];
   for (int k = 0; k < count; ++k) {
     const test::PlanningScene scene = robot.scene(seed, k, space.target);
     const auto env = std::make_shared<const Environment>(scene.environment());
@@ -604,15 +534,7 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
     auto& t = out.tallies;
     if (!logged_calls.empty()) {
       for (const int row : {0, 1}) {
-        if (!runs(static_cast<char>('0' + row))) continue;
-        // As the planning context builds it; BENCH_PLANNING_PAIR_GROWTH fixes the self pairs' exact
-        // growth, which the checker times at load (under callgrind it may choose another).
-        SceneCheckOptions options;
-        options.tolerance = row == 0 ? 0.0 : 0.01;
-        if (const char* growth = std::getenv("BENCH_PLANNING_PAIR_GROWTH")) options.pair_exact_growth = std::atof(growth);
-        const SceneChecker scene(checker, env, options);
-        const auto calls = logged_calls.find({k, row});
-        if (calls != logged_calls.end()) replay_calls(scene, calls->second, replayed[row]);
+        if (runs(static_cast<char>('0' + row))) bench::replay_problem(checker, env, logged_calls, k, row, replayed[row]);
       }
       continue;
     }
@@ -626,15 +548,7 @@ RobotRun run_robot(const PlanningRobot& robot, const std::string& out_dir, int c
                 p.near ? ", goal near" : "", t[0].solved, t[1].solved, t[2].solved);
     std::fflush(stdout);
   }
-  for (int row = 0; row < 2; ++row) {
-    const ReplayCount& r = replayed[row];
-    if (r.states + r.motions == 0) continue;
-    std::printf("%s replayed, %s: %zu states (%zu free), %zu motions (%zu free, %zu intervals; colliding ones' last valid fractions sum to %.17g; "
-                "self pairs' exact growth %g m, timed at load, %s)\n",
-                robot.name.c_str(), out.tallies[static_cast<std::size_t>(row)].name.c_str(), r.states, r.free_states, r.motions,
-                r.free_motions, r.intervals, r.fractions, checker.accelerators().pair_exact_growth(),
-                std::getenv("BENCH_PLANNING_PAIR_GROWTH") ? "replaced by BENCH_PLANNING_PAIR_GROWTH" : "kept");
-  }
+  for (int row = 0; row < 2; ++row) bench::print_replay(robot.name, out.tallies[static_cast<std::size_t>(row)].name, checker, replayed[row]);
   return out;
 }
 
