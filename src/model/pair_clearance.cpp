@@ -404,6 +404,11 @@ class SegmentProof {
 
 }  // namespace
 
+namespace {
+constexpr double kBoxesPerCellCrossed = 8.0;
+constexpr double kMaxBoxes = 4096.0;
+}  // namespace
+
 bool PairClearance::clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits) const {
   const int id = grid_of_.empty() ? -1 : grid_of_[pair];
   if (id < 0) return false;
@@ -433,6 +438,12 @@ bool PairClearance::clear_over(std::size_t pair, const double* a, const double* 
     }
     if (!(static_cast<double>(g.bound[index]) > clearance)) return false;
   }
+  // A segment through many cells needs boxes in proportion where the coarse levels cannot settle
+  // it: its budget grows with the finest cells it crosses (a fixed 32 gave up on long segments
+  // that a few more boxes prove: docs/performance.md).
+  double crossed = 1.0;
+  for (int k = 0; k < g.dims; ++k) crossed += std::abs(s.step[k]);
+  max_visits = std::max(max_visits, static_cast<int>(std::min(kMaxBoxes, kBoxesPerCellCrossed * crossed)));
   return SegmentProof(g, s, clearance, max_visits).clear(0.0, 1.0, static_cast<int>(g.pyramid.size()));
 }
 

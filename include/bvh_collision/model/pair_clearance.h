@@ -67,7 +67,8 @@ class PairClearance {
   // cell meet it at one of those), then proven from the coarsest grid of the pyramid down, the
   // segment cut in halves wherever a coarse cell does not settle it (a long motion through
   // settled cells costs a few lookups). False without a grid, for a value outside it, a periodic
-  // variable, or beyond `max_visits` boxes looked at (then the other tests serve).
+  // variable, or beyond its budget of boxes looked at (then the other tests serve): `max_visits`,
+  // or 8 a finest cell the segment crosses (at most 4,096) where that is more.
   bool clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits = 32) const;
   bool has_grid(std::size_t pair) const { return !grid_of_.empty() && grid_of_[pair] >= 0; }
   // The same grids for a model whose first checked pairs are these and which has `pairs` in all
