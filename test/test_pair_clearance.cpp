@@ -185,8 +185,8 @@ TEST_P(PairClearanceOnRobot, ProofOverASegmentAgreesWithTheCellsItCrosses) {
 
 // A long segment needs more boxes than a short one: the proof's budget grows with the cells the
 // segment crosses, so that a segment across the whole grid through settled cells is proven with
-// the default budget too (a fixed 32 boxes gave up on most of panda's and settled them by sphere
-// walks and halved intervals instead; docs/performance.md).
+// the default budget too (a fixed 32 boxes proved 160 of ur5e's 192 such segments; in planning it
+// gave up on many of panda's, which sphere walks and halved intervals then settled: docs/performance.md).
 TEST_P(PairClearanceOnRobot, ALongSegmentThroughSettledCellsIsProvenWithTheDefaultBudget) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker(GetParam());
@@ -213,7 +213,7 @@ TEST_P(PairClearanceOnRobot, ALongSegmentThroughSettledCellsIsProvenWithTheDefau
       proven += grids.clear_over(g.pair, a.data(), b.data(), 0.0);
     }
   }
-  if (all_clear == 0) GTEST_SKIP() << GetParam() << ": no grid settled along a whole segment";
+  EXPECT_GT(all_clear, 0) << GetParam() << ": no grid settled along a whole segment";
   EXPECT_GE(proven, all_clear * 95 / 100) << "proofs found for " << proven << " of " << all_clear << " long segments through settled cells";
 }
 

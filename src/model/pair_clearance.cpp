@@ -402,11 +402,10 @@ class SegmentProof {
   int visits_left_;
 };
 
-}  // namespace
-
-namespace {
+// A segment proof's budget of boxes: this many a finest cell the segment crosses, at most kMaxBoxes.
 constexpr double kBoxesPerCellCrossed = 8.0;
 constexpr double kMaxBoxes = 4096.0;
+
 }  // namespace
 
 bool PairClearance::clear_over(std::size_t pair, const double* a, const double* b, double clearance, int max_visits) const {
