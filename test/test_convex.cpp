@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 
@@ -344,6 +345,48 @@ TEST(ConvexDistance, RobotMeshesAtRandomPoses) {
   for (int i = 0; i < 200; ++i) expect_certified({a.vertices, b.vertices, random_pose(0.3)}, tight, total);
   EXPECT_GT(total, 50);
   EXPECT_EQ(tight, total);
+}
+
+// A self pair's exact distance is asked at an interval's midpoint and then at its halves': the
+// same two hulls at nearby poses. Each answer stays CGAL's exact distance, and a pair asked again
+// starts from where it ended (its simplex and support vertices): a fraction of the support queries
+// of the same distance asked cold (the hulls copied to addresses never asked before).
+TEST(ConvexDistance, APairAskedAgainAtANearbyPoseStartsWhereItEnded) {
+  BVH_REQUIRE_ROBOTS();
+  const ConvexHull a = convex_hull(test::robot_mesh("ur5e/ur_description/meshes/ur5e/collision/forearm.stl").vertices);
+  const ConvexHull b = convex_hull(test::robot_mesh("ur5e/ur_description/meshes/ur5e/collision/wrist3.stl").vertices);
+  std::vector<std::unique_ptr<ConvexHull>> cold_copies;  // kept: each cold call's hulls at a fresh address
+  long warm_queries = 0, cold_queries = 0;
+  int asked = 0;
+  for (int motion = 0; motion < 8; ++motion) {
+    // A sweep of b past a: turning about an axis through a point beside a, 200 poses 1 mrad apart.
+    const Transform base = random_pose(0.05) * Transform::Translation(Vec3(0.0, 0.0, 0.35));
+    const Vec3 axis = Vec3(random_pose(1.0).t).normalized();
+    for (int step = 0; step < 200; ++step) {
+      const Transform b_in_a = {Eigen::AngleAxisd(1e-3 * step, axis).toRotationMatrix() * base.R, base.t};
+      std::vector<Vec3> placed;
+      for (const Vec3& p : b.vertices) placed.push_back(b_in_a * p);
+      const double truth = exact_distance(a.vertices, placed);
+      if (!(truth > 1e-6)) continue;
+      const ConvexDistance warm = convex_distance(a, b, b_in_a);
+      cold_copies.push_back(std::make_unique<ConvexHull>(a));
+      const ConvexDistance cold = convex_distance(*cold_copies.back(), b, b_in_a);
+      for (const ConvexDistance& d : {warm, cold}) {
+        ASSERT_FALSE(d.intersecting);
+        EXPECT_LE(d.lower_bound, truth * (1 + 1e-15));
+        EXPECT_NEAR(d.lower_bound, truth, 1e-12 + 1e-9 * truth);
+        EXPECT_NEAR(d.distance, truth, 1e-12 + 1e-9 * truth);
+      }
+      // The same bits either way: an answer never depends on what the thread asked before.
+      EXPECT_EQ(warm.distance, cold.distance);
+      EXPECT_EQ(warm.lower_bound, cold.lower_bound);
+      EXPECT_EQ(warm.on_a, cold.on_a);
+      EXPECT_EQ(warm.on_b, cold.on_b);
+      if (step > 0) warm_queries += warm.support_queries, cold_queries += cold.support_queries, ++asked;
+    }
+  }
+  ASSERT_GT(asked, 200);
+  EXPECT_LT(2 * warm_queries, cold_queries) << "warm " << warm_queries << ", cold " << cold_queries << " over " << asked;
 }
 
 TEST(ConvexDistance, EmptyHullsAreInfinitelyFar) {

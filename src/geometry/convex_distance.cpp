@@ -1,234 +1,121 @@
 // GJK distance between convex sets: vertex sets (convex_hull.h) and primitives, triangles and
 // hulls (convex_distance.h).
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 
 #include "bvh_collision/geometry/convex_distance.h"
 #include "bvh_collision/geometry/distance.h"
+#include "gjk.h"
 
 namespace bvh_collision {
 namespace {
 
-// A GJK simplex: points w = a - b of the Minkowski difference with where they came from, and the
-// barycentric weights of the point of the simplex closest to the origin.
-struct Simplex {
-  int n = 0;
-  Vec3 w[4], a[4], b[4];
-  int ia[4], ib[4];
-  double weight[4];
+using namespace gjk_detail;  // src/geometry/gjk.h
 
-  Vec3 point() const {
-    Vec3 v = Vec3::Zero();
-    for (int k = 0; k < n; ++k) v += weight[k] * w[k];
-    return v;
-  }
+// Where the last distance between two hulls ended, per thread (a small table by the hulls'
+// addresses): a pair asked again at a nearby pose (an interval's midpoint after its parent's)
+// starts GJK from its last direction and climbs from its last support vertices. Any start gives
+// the same answer (a stale entry, where another hull took a freed one's address, only costs
+// steps: hull_support takes any vertex index, or none, as its start).
+struct HullPairStart {
+  const ConvexHull* a = nullptr;
+  const ConvexHull* b = nullptr;
+  int vertex_a = -1, vertex_b = -1;
+  Vec3 direction = Vec3::Zero();
+  int simplex = 0;  // the final simplex's vertex pairs
+  int simplex_a[3] = {0, 0, 0}, simplex_b[3] = {0, 0, 0};
 };
 
-// The sub-simplex whose point is closest to the origin, as the vertices it keeps (in increasing
-// order) and their weights: computed without touching the simplex, so that the faces of a
-// tetrahedron are compared, and the simplex GJK had before a step is kept, with no copy.
-struct Reduction {
-  int n = 0;
-  int keep[4] = {0, 0, 0, 0};
-  double weight[4] = {0, 0, 0, 0};
+[[gnu::noinline]] HullPairStart& hull_pair_start(const ConvexHull& a, const ConvexHull& b) {
+  thread_local std::array<HullPairStart, 64> table;
+  const auto key = reinterpret_cast<std::uintptr_t>(&a) * 31 + reinterpret_cast<std::uintptr_t>(&b);
+  return table[(key >> 4) % table.size()];
+}
 
-  Reduction() = default;
-  Reduction(std::initializer_list<int> which, std::initializer_list<double> weights) {
-    auto wt = weights.begin();
-    for (const int k : which) keep[n] = k, weight[n++] = *wt++;
-  }
-  // The same sums in the same order as Simplex::point() of the reduced simplex: the same bits.
-  Vec3 point(const Simplex& s) const {
-    Vec3 v = Vec3::Zero();
-    for (int k = 0; k < n; ++k) v += weight[k] * s.w[keep[k]];
-    return v;
-  }
+
+// The features a GJK run ended on, each hull's vertex indices in increasing order: where two runs
+// from different starts end on the same closest features, the answers below are the same bits.
+struct Features {
+  int na = 0, nb = 0;
+  int a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
 };
 
-// `from` reduced to `r`, into `to` (another simplex).
-void reduce(const Simplex& from, const Reduction& r, Simplex& to) {
-  to.n = r.n;
-  for (int k = 0; k < r.n; ++k) {
-    const int i = r.keep[k];
-    to.w[k] = from.w[i], to.a[k] = from.a[i], to.b[k] = from.b[i], to.ia[k] = from.ia[i], to.ib[k] = from.ib[i];
-    to.weight[k] = r.weight[k];
-  }
-}
-
-Reduction closest_on_segment(const Simplex& s, int i, int j) {
-  const Vec3 d = s.w[j] - s.w[i];
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0 ? -s.w[i].dot(d) / len2 : 0.0;
-  if (t <= 0) return {{i}, {1.0}};
-  if (t >= 1) return {{j}, {1.0}};
-  return {{i, j}, {1 - t, t}};
-}
-
-// The Voronoi-region walk of the closest point of triangle (i, j, k) to the origin.
-Reduction closest_on_triangle(const Simplex& s, int i, int j, int k) {
-  const Vec3 &A = s.w[i], &B = s.w[j], &C = s.w[k];
-  const Vec3 ab = B - A, ac = C - A;
-  const double d1 = -ab.dot(A), d2 = -ac.dot(A);
-  if (d1 <= 0 && d2 <= 0) return {{i}, {1.0}};
-  const double d3 = -ab.dot(B), d4 = -ac.dot(B);
-  if (d3 >= 0 && d4 <= d3) return {{j}, {1.0}};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double t = d1 / (d1 - d3);
-    return {{i, j}, {1 - t, t}};
-  }
-  const double d5 = -ab.dot(C), d6 = -ac.dot(C);
-  if (d6 >= 0 && d5 <= d6) return {{k}, {1.0}};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double t = d2 / (d2 - d6);
-    return {{i, k}, {1 - t, t}};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {{j, k}, {1 - t, t}};
-  }
-  const double sum = va + vb + vc;
-  if (!(sum > 0)) return closest_on_segment(s, i, j);  // degenerate triangle
-  const double v = vb / sum, w = vc / sum;
-  return {{i, j, k}, {1 - v - w, v, w}};
-}
-
-// Closest point of the tetrahedron to the origin: the best over the faces the origin is outside
-// of. Returns false when the origin is inside (the sets intersect).
-bool closest_on_tetrahedron(const Simplex& s, Reduction& best) {
-  static const int kFaces[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
-  double best_d = std::numeric_limits<double>::infinity();
-  bool outside_any = false;
-  for (const auto& f : kFaces) {
-    const Vec3 normal = (s.w[f[1]] - s.w[f[0]]).cross(s.w[f[2]] - s.w[f[0]]);
-    const double side_origin = -normal.dot(s.w[f[0]]), side_other = normal.dot(s.w[f[3]] - s.w[f[0]]);
-    // Outside this face, or the tetrahedron is too flat to tell: try the face.
-    if (side_origin * side_other > 0) continue;
-    outside_any = true;
-    const Reduction t = closest_on_triangle(s, f[0], f[1], f[2]);
-    if (const double d = t.point(s).squaredNorm(); d < best_d) best_d = d, best = t;
-  }
-  return outside_any;
-}
-
-
-// A support point: the point, and its vertex index when the set is a vertex list (-1 otherwise).
-struct SupportPoint {
-  Vec3 p;
-  int index;
-};
-
-// What GJK ends with: the simplex, and whether the origin was found inside it.
-struct GjkEnd {
-  Simplex s;
-  bool intersecting = false;
-  bool separated = false;  // stopped because the gap along `v` exceeds decide_at
-  Vec3 v = Vec3::Zero();   // the last search direction
-  Vec3 support_a = Vec3::Zero(), support_b = Vec3::Zero();  // its support points
-};
-
-// GJK on the Minkowski difference a - b. `support_a(d)` and `support_b(d)` give the farthest
-// points along d, both in a's frame. With a finite `decide_at`, stops once |v| <= decide_at (the
-// sets are that close) or the gap along v exceeds decide_at + margin (they are farther). With a
-// positive `slack`, stops once |v| exceeds the gap along v by at most the slack: the simplex's
-// point is then within it of the distance.
-// Two simplices take turns: a step appends w to the current one (its first n points stay what
-// they were, so dropping w again gives back the simplex before the step) and reduces it into the
-// other.
-template <class SupportA, class SupportB>
-GjkEnd gjk(const SupportA& support_a, const SupportB& support_b, const Vec3& start, double scale, double decide_at,
-           double margin, double slack = 0.0, bool decide_near = true) {
-  GjkEnd end;
-  Simplex spare;
-  Simplex* s = &end.s;
-  Simplex* next_s = &spare;
-  Vec3 v = start;
-  const bool deciding = std::isfinite(decide_at);
-  for (int iteration = 0; iteration < 128; ++iteration) {
-    const SupportPoint pa = support_a(-v), pb = support_b(v);
-    const Vec3 w = pa.p - pb.p;
-    const double vv = v.squaredNorm();
-    if (deciding && vv > 0.0 && v.dot(w) / std::sqrt(vv) - margin > decide_at) {  // farther: decided
-      end.separated = true;
-      end.v = v;
-      end.support_a = pa.p;
-      end.support_b = pb.p;
-      break;
+Features features_of(const Simplex& s) {
+  Features f;
+  auto add = [](int* list, int& n, int index) {
+    if (std::find(list, list + n, index) == list + n) list[n++] = index;
+  };
+  auto sort = [](int* list, int n) {  // (three at most)
+    for (int i = 1; i < n; ++i) {
+      for (int k = i; k > 0 && list[k] < list[k - 1]; --k) std::swap(list[k], list[k - 1]);
     }
-    if (s->n > 0 && vv - v.dot(w) <= 1e-15 * vv) break;  // w brings v no closer: converged
-    if (slack > 0.0 && s->n > 0 && std::sqrt(vv) - (v.dot(w) / std::sqrt(vv) - margin) <= slack) break;  // close enough
-    bool repeated = false;
-    for (int k = 0; k < s->n; ++k) {
-      // Vertex sets repeat by index; a continuous support point only by value.
-      const bool indexed = pa.index >= 0 && pb.index >= 0;
-      repeated = repeated || (indexed ? s->ia[k] == pa.index && s->ib[k] == pb.index : s->w[k] == w);
-    }
-    if (repeated) break;
-    const int before = s->n;  // s with its first `before` points: the simplex that gave v
-    s->w[before] = w, s->a[before] = pa.p, s->b[before] = pb.p, s->ia[before] = pa.index, s->ib[before] = pb.index;
-    s->weight[before] = 0.0;
-    s->n = before + 1;
-    Reduction r;
-    if (s->n == 1) r = {{0}, {1.0}};
-    if (s->n == 2) r = closest_on_segment(*s, 0, 1);
-    if (s->n == 3) r = closest_on_triangle(*s, 0, 1, 2);
-    if (s->n == 4 && !closest_on_tetrahedron(*s, r)) {
-      // The origin in the tetrahedron, unless rounding flattened it: a w that is still on the far
-      // side of v separates the sets, so that is convergence on a curved surface, not contact.
-      if (vv > 0.0 && v.dot(w) > margin * std::sqrt(vv)) {
-        s->n = before;
-        break;
-      }
-      end.intersecting = true;  // (with the four points, w's weight 0)
-      break;
-    }
-    const Vec3 next = r.point(*s);
-    if (next.squaredNorm() <= 1e-30 * scale * scale) {
-      reduce(*s, r, *next_s);
-      std::swap(s, next_s);
-      end.intersecting = true;
-      break;
-    }
-    if (r.n > 1 && next.squaredNorm() >= vv) {  // no progress: rounding has the last word
-      s->n = before;  // the simplex that gave v, so the witnesses are v apart
-      break;
-    }
-    reduce(*s, r, *next_s);
-    std::swap(s, next_s);
-    v = next;
-    if (deciding && decide_near && vv <= decide_at * decide_at) break;  // this close: decided
-  }
-  if (s != &end.s) end.s = *s;
-  return end;
+  };
+  for (int k = 0; k < s.n && k < 3; ++k) add(f.a, f.na, s.ia[k]), add(f.b, f.nb, s.ib[k]);
+  sort(f.a, f.na);
+  sort(f.b, f.nb);
+  return f;
 }
 
-// The witnesses of the simplex's closest point, and its distance.
-void witnesses(const Simplex& s, ConvexDistance& out) {
-  out.on_a = out.on_b = Vec3::Zero();
-  for (int k = 0; k < s.n; ++k) {
-    out.on_a += s.weight[k] * s.a[k];
-    out.on_b += s.weight[k] * s.b[k];
+// The simplex a cached entry describes, at this pose (empty when an index is no longer a vertex).
+Simplex seed_of(const HullPairStart& entry, const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a) {
+  Simplex seed;
+  for (int k = 0; k < entry.simplex; ++k) {
+    const int ia = entry.simplex_a[k], ib = entry.simplex_b[k];
+    if (ia < 0 || ib < 0 || static_cast<std::size_t>(ia) >= a.vertices.size() || static_cast<std::size_t>(ib) >= b.vertices.size()) {
+      return Simplex{};
+    }
+    seed.a[k] = a.vertices[ia], seed.b[k] = b_in_a * b.vertices[ib], seed.w[k] = seed.a[k] - seed.b[k];
+    seed.ia[k] = ia, seed.ib[k] = ib, seed.weight[k] = 0.0;
+    seed.n = k + 1;
   }
-  out.vertex_a = s.ia[0];
-  out.vertex_b = s.ib[0];
-  for (int k = 1; k < s.n; ++k) {
-    if (s.ia[k] != s.ia[0]) out.vertex_a = -1;
-    if (s.ib[k] != s.ib[0]) out.vertex_b = -1;
-  }
+  return seed;
 }
 
-// The normal of a triangle simplex, oriented along `along`: accurate where the difference of the
-// witnesses is not (face against face, far below the shapes' size).
-bool simplex_normal(const Simplex& s, const Vec3& along, Vec3& normal) {
-  if (s.n != 3) return false;
-  normal = (s.w[1] - s.w[0]).cross(s.w[2] - s.w[0]);
-  if (!(normal.norm() > 0)) return false;
-  if (normal.dot(along) < 0) normal = -normal;
-  normal.normalize();
-  return true;
+// The answer from the closest features alone: GJK again on their few vertices from their
+// centroids' difference (witnesses, distance), and the certified bound along its direction and its
+// triangle's normal from supports of the whole hulls climbed from the features' first vertices
+// (a support along those directions is at or next to them). Nothing here depends on how the
+// features were found.
+void finish_on_features(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a, const Features& f, double scale,
+                        ConvexDistance& out) {
+  Vec3 pa[3], pb[3], ca = Vec3::Zero(), cb = Vec3::Zero();
+  for (int k = 0; k < f.na; ++k) pa[k] = a.vertices[f.a[k]], ca += pa[k];
+  for (int k = 0; k < f.nb; ++k) pb[k] = b_in_a * b.vertices[f.b[k]], cb += pb[k];
+  auto best_of = [](const Vec3* p, const int* index, int n, const Vec3& d) {
+    int best = 0;
+    for (int k = 1; k < n; ++k) best = d.dot(p[k]) > d.dot(p[best]) ? k : best;
+    return SupportPoint{p[best], index[best]};
+  };
+  Vec3 start = ca / f.na - cb / f.nb;
+  if (!(start.squaredNorm() > 0.0)) start = pa[0] - pb[0];
+  const GjkEnd end = gjk([&](const Vec3& d) { return best_of(pa, f.a, f.na, d); },
+                         [&](const Vec3& d) { return best_of(pb, f.b, f.nb, d); }, start, scale,
+                         std::numeric_limits<double>::quiet_NaN(), 1e-13 * scale);
+  witnesses(end.s, out);
+  if (out.vertex_a >= 0) out.on_a = a.vertices[out.vertex_a];
+  if (out.vertex_b >= 0) out.on_b = b_in_a * b.vertices[out.vertex_b];
+  out.distance = (out.on_a - out.on_b).norm();
+  if (end.intersecting || out.distance == 0.0) {
+    out.intersecting = true;
+    return;
+  }
+  // The certified bound: the gap between the hulls along a direction, from their support
+  // vertices. The witnesses' difference is the natural direction, but at distances far below the
+  // shapes' size its rounding tilts it; a triangle's normal comes from long edges and stays
+  // accurate (face against face), so the better of the two is kept.
+  const Mat3 Rt = b_in_a.R.transpose();
+  auto gap_along = [&](const Vec3& n) {
+    out.support_queries += 2;
+    const double gap = n.dot(a.vertices[hull_support(a, -n, f.a[0])]) - n.dot(b_in_a * b.vertices[hull_support(b, Rt * n, f.b[0])]);
+    return gap - 1e-13 * scale - 1e-15 * std::abs(gap);
+  };
+  const Vec3 along = (out.on_a - out.on_b) / out.distance;
+  double bound = gap_along(along);
+  if (Vec3 normal; simplex_normal(end.s, along, normal)) bound = std::max(bound, gap_along(normal));
+  out.lower_bound = std::max(0.0, bound);
 }
 
 }  // namespace
@@ -240,40 +127,46 @@ ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const T
     return out;
   }
   const Mat3 Rt = b_in_a.R.transpose();
-  auto b_point = [&](int i) -> Vec3 { return b_in_a * b.vertices[i]; };
-  int last_a = -1, last_b = -1;  // each climb starts from the last support vertex
+  HullPairStart& remembered = hull_pair_start(a, b);
+  const bool warm = remembered.a == &a && remembered.b == &b;
+  // Each climb starts from the last support vertex (at first, the pair's last answer's).
+  int last_a = warm ? remembered.vertex_a : -1, last_b = warm ? remembered.vertex_b : -1;
   auto support_a = [&](const Vec3& d) {
+    ++out.support_queries;
     last_a = hull_support(a, d, last_a);
     return SupportPoint{a.vertices[last_a], last_a};
   };
   auto support_b = [&](const Vec3& d) {
+    ++out.support_queries;
     last_b = hull_support(b, Rt * d, last_b);
-    return SupportPoint{b_point(last_b), last_b};
+    return SupportPoint{b_in_a * b.vertices[last_b], last_b};
   };
   const double scale = a.extent + b.extent + b_in_a.t.norm();
-  const GjkEnd end = gjk(support_a, support_b, a.vertices[0] - b_point(0), scale,
-                         std::numeric_limits<double>::quiet_NaN(), 1e-13 * scale);
-  const Simplex& s = end.s;
-  witnesses(s, out);
-  if (out.vertex_a >= 0) out.on_a = a.vertices[out.vertex_a];
-  if (out.vertex_b >= 0) out.on_b = b_point(out.vertex_b);
-  out.distance = (out.on_a - out.on_b).norm();
-  if (end.intersecting || out.distance == 0.0) {
+  // Cold, from the hulls' box centres (their axis extremes'): the first supports then face each
+  // other, where two arbitrary vertices' difference can point GJK anywhere.
+  auto box_centre = [](const ConvexHull& h) {
+    const std::vector<Vec3>& v = h.vertices;
+    if (h.faces.empty()) return v[0];
+    const std::array<int, 6>& e = h.extremes;
+    return Vec3(0.5 * (v[e[0]].x() + v[e[1]].x()), 0.5 * (v[e[2]].y() + v[e[3]].y()), 0.5 * (v[e[4]].z() + v[e[5]].z()));
+  };
+  Vec3 start = warm ? remembered.direction : box_centre(a) - b_in_a * box_centre(b);
+  if (!(start.squaredNorm() > 0.0)) start = a.vertices[0] - b_in_a * b.vertices[0];
+  const Simplex seed = warm ? seed_of(remembered, a, b, b_in_a) : Simplex{};
+  const GjkEnd end = gjk(support_a, support_b, start, scale, std::numeric_limits<double>::quiet_NaN(), 1e-13 * scale, 0.0,
+                         true, &seed);
+  remembered = {&a, &b, last_a, last_b, end.last_v};
+  if (end.intersecting) {
+    witnesses(end.s, out);
+    if (out.vertex_a >= 0) out.on_a = a.vertices[out.vertex_a];
+    if (out.vertex_b >= 0) out.on_b = b_in_a * b.vertices[out.vertex_b];
+    out.distance = (out.on_a - out.on_b).norm();
     out.intersecting = true;
     return out;
   }
-  // The certified bound: the gap between the hulls along a direction, from their support
-  // vertices. The witnesses' difference is the natural direction, but at distances far below the
-  // shapes' size its rounding tilts it; a triangle simplex's normal comes from long edges and
-  // stays accurate (face against face), so the better of the two is kept.
-  auto gap_along = [&](const Vec3& n) {
-    const double gap = n.dot(support_a(-n).p) - n.dot(support_b(n).p);
-    return gap - 1e-13 * scale - 1e-15 * std::abs(gap);
-  };
-  const Vec3 along = (out.on_a - out.on_b) / out.distance;
-  double bound = gap_along(along);
-  if (Vec3 normal; simplex_normal(s, along, normal)) bound = std::max(bound, gap_along(normal));
-  out.lower_bound = std::max(0.0, bound);
+  remembered.simplex = std::min(end.s.n, 3);
+  for (int k = 0; k < remembered.simplex; ++k) remembered.simplex_a[k] = end.s.ia[k], remembered.simplex_b[k] = end.s.ib[k];
+  finish_on_features(a, b, b_in_a, features_of(end.s), scale, out);
   return out;
 }
 

@@ -50,12 +50,16 @@ struct ConvexDistance {
   Vec3 on_b = Vec3::Zero();   // witness on b's hull, in a's frame
   int vertex_a = -1;          // when on_a is a vertex of a's hull: its index, else -1
   int vertex_b = -1;          // when on_b is a vertex of b's hull: its index, else -1
-  int support_queries = 0;    // support points asked of either set (the work done; ConvexShape queries)
+  int support_queries = 0;    // support points asked of either set (the work done)
 };
 
 // GJK on the two vertex sets. The lower bound does not trust GJK's arithmetic: it is the gap
-// between the two hulls along the final search direction, from exact support values with a
-// rounding margin, so it is a valid bound even when GJK stops early.
+// between the two hulls along GJK's last search direction (or a final triangle's normal, when
+// larger), from exact support values with a rounding margin, so it is a valid bound even when GJK
+// stops early. A pair of hulls asked again by the same thread (a self pair at an interval's
+// midpoint, then at its halves') starts from the simplex and support vertices it ended with: at a
+// nearby pose GJK then takes a step or two, not the seven or eight of a cold start (ur5e's pairs).
+// The answer does not depend on the start.
 ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a);
 
 }  // namespace bvh_collision
