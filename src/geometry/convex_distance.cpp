@@ -17,8 +17,8 @@ using namespace gjk_detail;  // src/geometry/gjk.h
 
 // Where the last distance between two hulls ended, per thread (a small table by the hulls'
 // addresses): a pair asked again at a nearby pose (an interval's midpoint after its parent's)
-// starts GJK from its last direction and climbs from its last support vertices. Any start gives
-// the same answer (a stale entry, where another hull took a freed one's address, only costs
+// starts GJK from its last direction and climbs from its last support vertices. The answer comes
+// from the closest features GJK ends on, whatever the start (a stale entry, where another hull took a freed one's address, only costs
 // steps: hull_support takes any vertex index, or none, as its start).
 struct HullPairStart {
   const ConvexHull* a = nullptr;

@@ -59,7 +59,9 @@ struct ConvexDistance {
 // stops early. A pair of hulls asked again by the same thread (a self pair at an interval's
 // midpoint, then at its halves') starts from the simplex and support vertices it ended with: at a
 // nearby pose GJK then takes a step or two, not the seven or eight of a cold start (ur5e's pairs).
-// The answer does not depend on the start.
+// The answer is computed from the closest features alone: the same bits from any start that ends
+// on the same features (generic poses; where faces lie parallel, equally close features may be
+// found instead, whose answers agree to rounding).
 ConvexDistance convex_distance(const ConvexHull& a, const ConvexHull& b, const Transform& b_in_a);
 
 }  // namespace bvh_collision
