@@ -23,7 +23,8 @@
 // BENCH_PLANNING_LOG=file writes every state and motion call our rows make (full states, in order);
 // BENCH_PLANNING_REPLAY=file then asks a checker the same calls on the same problems instead of
 // planning (function replay_calls, for callgrind: two builds compared on the same calls, where
-// changed answers would otherwise change the plans), and prints what they answered.
+// changed answers would otherwise change the plans), and prints what they answered;
+// BENCH_PLANNING_REPLAY_REPEAT=N replays each problem's calls N times and adds its fastest time.
 #include <fcl/fcl.h>
 
 #include <ompl/base/DiscreteMotionValidator.h>

@@ -39,6 +39,7 @@ LoggedCalls read_call_log(const char* path, std::size_t variables);
 struct ReplayCount {
   std::size_t states = 0, free_states = 0, motions = 0, free_motions = 0, intervals = 0;
   double fractions = 0.0;  // the sum of the colliding motions' last valid fractions
+  double seconds = 0.0;    // per problem the fastest of BENCH_PLANNING_REPLAY_REPEAT replays, summed
 };
 
 // Problem k's calls of one row (0: tolerance 0, 1: 10 mm) asked of a checker built as the
