@@ -52,14 +52,19 @@ bool on_segment(const double* start, const double* delta, int longest, const dou
   return true;
 }
 
-// Two of on_segment's tests, the same expressions on the same fraction: a state off the segment
-// fails one of them in most slots, which a scan of the slots then rejects with no call and no loop
-// (a planner's motion that no slot holds scanned all 128 through on_segment: 7,500 instructions a
-// scan, three scans a motion). True whenever on_segment is.
-inline bool near_segment(const double* start, const double* delta, int longest, int second, const double* state) {
-  const double t = std::clamp((state[longest] - start[longest]) / delta[longest], 0.0, 1.0);
-  return std::abs(start[longest] + t * delta[longest] - state[longest]) <= kOnSegment &&
-         std::abs(start[second] + t * delta[second] - state[second]) <= kOnSegment;
+// A first test of a slot: true whenever on_segment(state) is, with no division and no row read (a
+// planner's motion that no slot holds scans all 128 slots, three scans a motion; dividing there took
+// a twentieth of a certified motion's time). on_segment's fraction t puts the longest variable x
+// within kOnSegment of the segment's at t, so inside its range padded by kOnSegment, and the second,
+// y, within kOnSegment of b + t e (start b, change e), where t = (x - a) / d up to kOnSegment / |d|
+// (clamped only within kOnSegment of an end). So |(x - a) e/d + b - y| <= 2 kOnSegment, |e/d| <= 1,
+// plus the rounding of these few operations, a few units of 1.1e-16 of the values: `slack`
+// (1e-11 and 1e-14 of the values' sizes, remember_free_motion) holds both with a wide margin; a
+// slot it lets through is then decided by on_segment.
+inline bool near_segment(const FreeSegments& f, std::size_t k, const double* state) {
+  const double x = state[f.longest[k]];
+  if (!(x >= f.low[k] && x <= f.high[k])) return false;
+  return std::abs((x - f.start_longest[k]) * f.ratio[k] + (f.start_second[k] - state[f.second[k]])) <= f.slack[k];
 }
 
 }  // namespace
@@ -142,8 +147,7 @@ bool SceneChecker::within_free_motion(const double* start, const double* goal) c
   if (f.n != n) return false;
   for (std::size_t k = 0; k < FreeSegments::kSlots; ++k) {
     const double* from = f.rows.data() + k * 2 * n;
-    if (f.serial[k] != serial_ || !near_segment(from, from + n, f.longest[k], f.second[k], start) ||
-        !near_segment(from, from + n, f.longest[k], f.second[k], goal) || !on_segment(from, from + n, f.longest[k], start, n, nullptr) ||
+    if (f.serial[k] != serial_ || !near_segment(f, k, start) || !near_segment(f, k, goal) || !on_segment(from, from + n, f.longest[k], start, n, nullptr) ||
         !on_segment(from, from + n, f.longest[k], goal, n, nullptr)) {
       continue;
     }
@@ -196,6 +200,14 @@ void SceneChecker::remember_free_motion(const double* start, const double* goal)
   f.serial[k] = serial_;
   f.longest[k] = longest;
   f.second[k] = second;
+  const double a = start[longest], d = goal[longest] - start[longest], b = start[second], e = goal[second] - start[second];
+  const double size = (std::abs(a) + std::abs(d)) + (std::abs(b) + std::abs(e));
+  f.slack[k] = 1e-11 + 1e-14 * size;
+  f.low[k] = std::min(a, a + d) - f.slack[k];
+  f.high[k] = std::max(a, a + d) + f.slack[k];
+  f.start_longest[k] = a;
+  f.start_second[k] = b;
+  f.ratio[k] = e / d;
   f.used[k] = ++f.clock;
 }
 

@@ -51,6 +51,10 @@ struct FreeSegments {
   std::array<int, kSlots> longest{};           // the variable that changes most along it
   std::array<int, kSlots> second{};            // the one that changes next most (the longest again with one variable)
   std::vector<double> rows;                    // kSlots rows of 2n values: the start, then goal - start
+  // A scan's first test, per slot, with no division and no row read (within_free_motion): the
+  // longest variable's range, padded by `slack`; the second's start and its change per unit of the
+  // longest's.
+  std::array<double, kSlots> low{}, high{}, start_longest{}, start_second{}, ratio{}, slack{};
   std::uint64_t clock = 0;
   std::size_t n = 0;
 };
