@@ -76,6 +76,7 @@ struct SceneChecker::MotionScratch {
   // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
   // current interval's (at most those); delta: goal - start.
   std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
+  std::vector<int> chain_reads, read_links;  // interval_speeds' working memory
   std::vector<double> chain_delta, turning_total;  // chain_deltas' (once a motion)
   std::vector<int> turning_moving;
   std::vector<TurningAxis> axes;
@@ -153,8 +154,10 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
     }
     near.push_back(k);
   }
-  IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
-                      s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
+  IntervalRates rates{s.delta.data(),          s.chain_delta.data(),         s.turning_total.data(), s.speed.data(),
+                      s.pair_speed.data(),     s.interval_speed.data(),      s.interval_pair_speed.data(),
+                      &s.sums,                 &s.axes,                      &s.turning_moving,
+                      &s.chain_reads,          &s.read_links};
   interval_speeds(posed, half, near.data(), near.size(), rates);
   // Each pending component's growth; a self pair whose bounding balls, so grown, are apart is
   // certified at once (most of a two-arm robot's pairs end here: one pass, no call a pair).
@@ -443,8 +446,10 @@ void SceneChecker::speeds_over(const double* start, const double* goal, double l
   std::vector<int> every(pair_rates_.size());
   std::iota(every.begin(), every.end(), 0);
   for (const int l : links_) every.push_back(static_cast<int>(pair_rates_.size()) + l);
-  const IntervalRates rates{s.delta.data(), s.chain_delta.data(), s.turning_total.data(), s.speed.data(), s.pair_speed.data(),
-                            s.interval_speed.data(), s.interval_pair_speed.data(), &s.sums, &s.axes, &s.turning_moving};
+  const IntervalRates rates{s.delta.data(),      s.chain_delta.data(),     s.turning_total.data(),
+                            s.speed.data(),      s.pair_speed.data(),      s.interval_speed.data(),
+                            s.interval_pair_speed.data(), &s.sums,         &s.axes,
+                            &s.turning_moving,   &s.chain_reads,           &s.read_links};
   interval_speeds(posed, 0.5 * (hi - lo), every.data(), every.size(), rates);
 }
 

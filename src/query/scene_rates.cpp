@@ -115,11 +115,11 @@ void SceneChecker::interval_chains() {
 // joints' changes and each link's turning total computed once a motion (chain_deltas) and each
 // turning joint's origin and axis once an interval: a good part of the planner's motions is spent
 // here (docs/performance.md).
-double SceneChecker::chain_speed(int l, const Posed& mid, double half, const IntervalRates& rates) const {
+double SceneChecker::chain_speed(int l, const Posed& mid, double half, const IntervalRates& rates, std::size_t joints) const {
   const RobotCollisionModel& m = checker_.collision_model();
   const double cx = mid.centres[l][0], cy = mid.centres[l][1], cz = mid.centres[l][2];
   const double reach = m.bounds()[l].radius + m.paddings()[l] + pose_margin(mid.centre_norms[l]);
-  const std::size_t first = chain_first_[l], end = first + chain_count_[l];
+  const std::size_t first = chain_first_[l], end = first + joints;
   double turning_above = rates.turning_total[l];  // sum of |d_k| over the turning joints above the current one
   double* sums = rates.sums->data();
   const TurningAxis* axes = rates.axes->data();
@@ -184,21 +184,41 @@ void SceneChecker::interval_speeds(const Posed& mid, double half, const int* com
     (*rates.axes)[t] = {frame.R * turning_joints_[t].second, frame.t, pose_margin(frame.t.norm())};
   }
   for (const int l : links_) rates.link_speed[l] = -1.0;
-  auto link = [&](int l) {
-    if (rates.link_speed[l] < 0.0) rates.link_speed[l] = chain_speed(l, mid, half, rates);
-  };
+  // How many of each link's chain joints the components read: a link's speed all of them, a self
+  // pair's the joints below its links' common ancestor only (panda's hand against its fifth link:
+  // two of the hand's seven). Each link's chain is then walked once, as far as any reads it (the
+  // walk's first entries are the same bits however far it goes).
   const auto& pairs = checker_.collision_model().checked_pairs();
   const int pair_count = static_cast<int>(pairs.size());
+  std::vector<int>& reads = *rates.reads;
+  std::vector<int>& read_links = *rates.read_links;
+  reads.resize(chain_first_.size(), 0);
+  read_links.clear();
+  auto read = [&](int l, int joints) {
+    if (joints <= 0) return;
+    if (reads[l] == 0) read_links.push_back(l);
+    reads[l] = std::max(reads[l], joints);
+  };
   for (std::size_t i = 0; i < count; ++i) {
     const int k = components[i];
     if (k >= pair_count) {
-      link(k - pair_count);
-      continue;
+      read(k - pair_count, std::max(1, static_cast<int>(chain_count_[k - pair_count])));
+    } else {
+      read(pairs[k].first, pair_below_[k][0]);
+      read(pairs[k].second, pair_below_[k][1]);
     }
+  }
+  for (const int l : read_links) {
+    const double speed = chain_speed(l, mid, half, rates, std::min<std::size_t>(reads[l], chain_count_[l]));
+    if (reads[l] >= static_cast<int>(chain_count_[l])) rates.link_speed[l] = speed;
+    reads[l] = 0;
+  }
+  const std::vector<double>& sums = *rates.sums;
+  for (std::size_t i = 0; i < count; ++i) {
+    const int k = components[i];
+    if (k >= pair_count) continue;
     const auto [a, b] = pairs[k];
-    link(a), link(b);
     const auto [na, nb] = pair_below_[k];
-    const std::vector<double>& sums = *rates.sums;
     const double relative = (na > 0 ? sums[chain_first_[a] + na - 1] : 0.0) + (nb > 0 ? sums[chain_first_[b] + nb - 1] : 0.0);
     rates.pair_speed[k] = std::min(rates.pair_cap[k], relative);
   }

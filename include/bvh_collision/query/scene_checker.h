@@ -226,9 +226,12 @@ class SceneChecker {
     std::vector<double>* sums = nullptr;  // working memory: per chain joint
     std::vector<TurningAxis>* axes = nullptr;  // working memory: per turning joint, at `mid`
     const std::vector<int>* turning_moving = nullptr;  // the turning joints the motion turns (chain_speed reads only theirs)
+    std::vector<int>* reads = nullptr;  // working memory: per link, how many of its chain joints the components read
+    std::vector<int>* read_links = nullptr;  // working memory: the links with reads set
   };
   void interval_speeds(const Posed& mid, double half, const int* components, std::size_t count, const IntervalRates& rates) const;
-  double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates) const;
+  // Over link l's first `joints` chain joints (from the link up; its speed when that is all of them).
+  double chain_speed(int link, const Posed& mid, double half, const IntervalRates& rates, std::size_t joints) const;
 
 
   // A state this thread found free with this checker, asked again (a tree's node starts every
