@@ -345,8 +345,9 @@ struct SegmentInCells {
 
 // Proves the part [t0, t1] of the segment clear, from pyramid level `level` down (0: `bound`):
 // the level's cells that the part's box spans, widened by `kEdge` of a cell (a value computed on
-// a cell's edge may round either way), when at most two per variable; when one of those holds
-// no more than `clearance`, the next finer level's, each half of the part on its own.
+// a cell's edge may round either way), when at most two per variable (the part halved at this
+// level otherwise); when one of those holds no more than `clearance`, the next finer level's
+// (at the finest, each half of the part on its own).
 class SegmentProof {
  public:
   SegmentProof(const PairClearanceGrid& g, const SegmentInCells& s, double clearance, int max_visits)
@@ -376,8 +377,13 @@ class SegmentProof {
     double length = 0.0;
     for (int k = 0; k < g_.dims; ++k) length = std::max(length, std::abs(s_.at(k, t1) - s_.at(k, t0)));
     if (level == 0 && (lo == hi || length <= 0.5)) return false;
+    // A level down, the whole part's box where it is still narrow there (clear halves it
+    // otherwise): halving the part at every level doubled the boxes at each level down, and on
+    // panda's wrist grids, whose proofs mostly hold a few levels below the top, spent the budget:
+    // 15 boxes a proof and one proof in ten given up (docs/performance.md).
+    if (level > 0) return clear(t0, t1, level - 1);
     const double mid = 0.5 * (t0 + t1);
-    return clear(t0, mid, std::max(level - 1, 0)) && clear(mid, t1, std::max(level - 1, 0));
+    return clear(t0, mid, 0) && clear(mid, t1, 0);
   }
 
  private:
