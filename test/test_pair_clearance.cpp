@@ -190,7 +190,7 @@ TEST_P(PairClearanceOnRobot, ProofOverASegmentAgreesWithTheCellsItCrosses) {
 // And a planner's interval moves the pair across a few finest cells, where a grid's bound mostly
 // holds a few levels below the pyramid's top: halving the segment at every level it went down
 // doubled its boxes at each (15 a proof on panda's wrist grids in planning, one proof in ten given
-// up; 88 % of ur5e's short segments here).
+// up; 87-91 % of ur5e's short segments here).
 TEST_P(PairClearanceOnRobot, ASegmentThroughSettledCellsIsProvenWithTheDefaultBudget) {
   BVH_REQUIRE_ROBOTS();
   const CollisionChecker c = test::load_checker(GetParam());

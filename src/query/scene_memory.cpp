@@ -53,14 +53,15 @@ bool on_segment(const double* start, const double* delta, int longest, const dou
 }
 
 // A first test of a slot: true whenever on_segment(state) is, with no division and no row read (a
-// planner's motion that no slot holds scans all 128 slots, three scans a motion: with a division a
-// slot, the scans took 5 % of the replayed planner calls' time). on_segment's fraction t puts the longest variable x
-// within kOnSegment of the segment's at t, so inside its range padded by kOnSegment, and the second,
-// y, within kOnSegment of b + t e (start b, change e), where t = (x - a) / d up to kOnSegment / |d|
-// (clamped only within kOnSegment of an end). So |(x - a) e/d + b - y| <= 2 kOnSegment, |e/d| <= 1,
-// plus the rounding of these few operations, a few units of 1.1e-16 of the values: `slack`
-// (1e-11 and 1e-14 of the values' sizes, remember_free_motion) holds both with a wide margin; a
-// slot it lets through is then decided by on_segment.
+// planner's motion that no slot holds scans all 128 slots, three scans a motion: with a division
+// a slot, the scans took 5 % of the replayed planner calls' time). on_segment's fraction t puts
+// the longest variable x within kOnSegment of the segment's at t, so inside its range padded by
+// kOnSegment, and the second, y, within kOnSegment of b + t e (start b, change e), where
+// t = (x - a) / d up to kOnSegment / |d| (clamped only within kOnSegment of an end). So
+// |(x - a) e/d + b - y| <= 2 kOnSegment (|e/d| <= 1), plus the rounding of these few operations, a
+// few units of 1.1e-16 of the values: `slack` (1e-11 and 1e-14 of the values' sizes,
+// remember_free_motion) holds both with a wide margin; a slot it lets through is then decided by
+// on_segment.
 inline bool near_segment(const FreeSegments& f, std::size_t k, const double* state) {
   const double x = state[f.longest[k]];
   if (!(x >= f.low[k] && x <= f.high[k])) return false;
@@ -147,8 +148,8 @@ bool SceneChecker::within_free_motion(const double* start, const double* goal) c
   if (f.n != n) return false;
   for (std::size_t k = 0; k < FreeSegments::kSlots; ++k) {
     const double* from = f.rows.data() + k * 2 * n;
-    if (f.serial[k] != serial_ || !near_segment(f, k, start) || !near_segment(f, k, goal) || !on_segment(from, from + n, f.longest[k], start, n, nullptr) ||
-        !on_segment(from, from + n, f.longest[k], goal, n, nullptr)) {
+    if (f.serial[k] != serial_ || !near_segment(f, k, start) || !near_segment(f, k, goal) ||
+        !on_segment(from, from + n, f.longest[k], start, n, nullptr) || !on_segment(from, from + n, f.longest[k], goal, n, nullptr)) {
       continue;
     }
     // The largest offset per variable, from the value of either end farthest from zero (a slide
