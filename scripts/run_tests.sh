@@ -67,8 +67,8 @@ if ! { cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=Release && make -C "$BUILD" -j"
   exit 1
 fi
 
-# The robots' link proxies the tests share (test/robot_data.h: proxy_cache_dir), built afresh by
-# each run: a cache left by other code is not what this code builds.
+# The robots' link proxies and clearance grids the tests share (test/robot_data.h: proxy_cache_dir),
+# built afresh by each run: a cache left by other code is not what this code builds.
 rm -rf "$BUILD/test_proxy_cache"
 
 lint_dir="$BUILD/lint_results"
@@ -90,7 +90,10 @@ if [[ $run_normal == 1 ]]; then
   rm -rf "$BUILD/test_results"
   unit_tests "$BUILD" || status=1
   echo "== launch tests ($BUILD) $(date +%T)"
-  ctest --test-dir "$BUILD" -R '^_ctest_bvh_collision_rostest_' --output-on-failure || status=1
+  # The nodes' default cache ($ROS_HOME/bvh_collision/proxy_cache) in a fresh $ROS_HOME of the
+  # build: proxies and grids another version of the code left in ~/.ros are not what this one builds.
+  rm -rf "$BUILD/ros_home"
+  ROS_HOME="$PWD/$BUILD/ros_home" ctest --test-dir "$BUILD" -R '^_ctest_bvh_collision_rostest_' --output-on-failure || status=1
   # The in-process Python module (docs/python.md) with pytest, its cases counted from its XML.
   echo "== Python module (pytest) $(date +%T)"
   ( set +u; source devel/setup.bash; set -u

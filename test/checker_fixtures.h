@@ -18,14 +18,16 @@ inline RobotModel demo_arm_model() {
   return RobotModel::from_urdf(*load_robot_description_file(source_dir() + "/urdf/demo_arm.urdf"), PackageResolver({}));
 }
 
-// Options whose proxy levels come from the tests' cache (proxy_cache_dir) unless they name a cache
-// of their own: a robot's levels are then built once per `make test` (by the first program that
-// asks), not once per program and again under the sanitizers. What the builder makes is tested
-// uncached, on its own (test_link_proxy); a checker without levels is left as it is, and so is a
-// benchmark's (it times the build).
+// Options whose proxy levels and clearance grids come from the tests' cache (proxy_cache_dir)
+// unless they name a cache of their own: a robot's levels and grids are then built once per
+// `make test` (by the first program that asks), not once per program and again under the
+// sanitizers (pr2's grids: 6 s of CPU in Release, a minute under them). What the builders make is
+// tested uncached, on its own (test_link_proxy, test_pair_clearance's PairClearance::build); a
+// checker with neither is left as it is, and so is a benchmark's (it times the build).
 inline CheckerOptions with_test_proxy_cache(CheckerOptions options) {
 #ifndef BVH_COLLISION_BENCHMARK
-  if (!options.proxy_levels.empty() && options.proxy_cache.empty()) options.proxy_cache = proxy_cache_dir();
+  const bool builds = !options.proxy_levels.empty() || options.pair_clearance_cells > 0;
+  if (builds && options.proxy_cache.empty()) options.proxy_cache = proxy_cache_dir();
 #endif
   return options;
 }

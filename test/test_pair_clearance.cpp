@@ -6,10 +6,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 
+#include <unistd.h>
+
 #include "bvh_collision/query/collision_checker.h"
+#include "bvh_collision/model/detail/pair_clearance_shape.h"
+#include "bvh_collision/model/pair_clearance_cache.h"
 #include "bvh_collision/narrowphase/shape_pairs.h"
 #include "checker_fixtures.h"
 #include "robot_data.h"
@@ -257,6 +265,147 @@ TEST_P(PairClearanceOnRobot, SkippingChangesNoAnswer) {
     }
   }
   EXPECT_GT(skipped, 0u);
+}
+
+// Grids equal in every number, pyramids included.
+void expect_same_grids(const PairClearance& a, const PairClearance& b) {
+  ASSERT_EQ(a.grids().size(), b.grids().size());
+  for (std::size_t i = 0; i < a.grids().size(); ++i) {
+    const PairClearanceGrid &x = a.grids()[i], &y = b.grids()[i];
+    SCOPED_TRACE("grid " + std::to_string(i));
+    EXPECT_EQ(x.pair, y.pair);
+    EXPECT_EQ(x.dims, y.dims);
+    EXPECT_EQ(x.variable, y.variable);
+    EXPECT_EQ(x.lower, y.lower);
+    EXPECT_EQ(x.cell, y.cell);
+    EXPECT_EQ(x.cells, y.cells);
+    EXPECT_EQ(x.periodic, y.periodic);
+    ASSERT_EQ(x.bound.size(), y.bound.size());
+    EXPECT_EQ(0, std::memcmp(x.bound.data(), y.bound.data(), x.bound.size() * sizeof(float)));
+    EXPECT_EQ(x.pyramid, y.pyramid);
+    EXPECT_EQ(a.has_grid(x.pair), b.has_grid(y.pair));
+  }
+}
+
+std::filesystem::path fresh_folder(const std::string& name) {
+  const auto folder = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(folder);
+  return folder;
+}
+
+// The grids a checker reads from a folder are the ones the builder builds, number for number:
+// every kind of grid (one, two and three variables, refined, periodic on pr2's continuous joints)
+// on three robots; a second start reads them and builds nothing.
+TEST_P(PairClearanceOnRobot, ASecondStartReadsTheGridsTheFirstStored) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::load_checker(GetParam());
+  const RobotCollisionModel& m = c.collision_model();
+  const std::size_t cells = CheckerOptions().pair_clearance_cells;
+  const PairClearance built = PairClearance::build(m, cells);  // uncached, as the builder makes them
+  EXPECT_FALSE(built.from_cache());
+  expect_same_grids(built, c.accelerators().pair_clearance());
+
+  const auto folder = fresh_folder("bvh_grid_cache");
+  const PairClearance first = cached_or_built_pair_clearance(m, cells, folder.string());
+  EXPECT_FALSE(first.from_cache());
+  const std::string file = pair_clearance_file(folder.string(), pair_clearance_key(m, cells));
+  ASSERT_TRUE(std::filesystem::exists(file));
+  const PairClearance second = cached_or_built_pair_clearance(m, cells, folder.string());
+  EXPECT_TRUE(second.from_cache());
+  expect_same_grids(built, second);
+  // Which kinds the robot's grids exercise: refined ones have more cells than their pair's shape.
+  const std::vector<PairClearanceGrid> shapes = detail::clearance_grid_shapes(m, cells);
+  std::size_t refined = 0, periodic = 0;
+  for (const PairClearanceGrid& g : built.grids()) {
+    const auto shape = std::find_if(shapes.begin(), shapes.end(), [&](const PairClearanceGrid& s) { return s.pair == g.pair; });
+    ASSERT_NE(shape, shapes.end());
+    refined += shape->cells != g.cells;
+    periodic += g.periodic[0] || g.periodic[1] || g.periodic[2];
+  }
+  if (GetParam() == "ur5e") {
+    EXPECT_GT(refined, 0u);
+  }
+  if (GetParam() == "pr2") {
+    EXPECT_GT(periodic, 0u);
+  }
+  std::filesystem::remove_all(folder);
+}
+
+// A file that does not check out is built again and replaced: a flipped byte, a cut one, and a
+// sealed file whose grids are not the shapes the build gives (another cell budget's grids stored
+// under this budget's key).
+TEST(PairClearanceCache, AFileThatDoesNotCheckOutIsBuiltAgain) {
+  BVH_REQUIRE_ROBOTS();
+  const CollisionChecker c = test::panda_as_moveit();
+  const RobotCollisionModel& m = c.collision_model();
+  const std::size_t cells = CheckerOptions().pair_clearance_cells;
+  const PairClearance& built = c.accelerators().pair_clearance();
+  const auto folder = fresh_folder("bvh_grid_cache_bad");
+  const std::uint64_t key = pair_clearance_key(m, cells);
+  const std::string file = pair_clearance_file(folder.string(), key);
+  ASSERT_TRUE(write_cached_pair_clearance(folder.string(), key, built));
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_GT(bytes.size(), 1000u);
+  auto rewrite = [&](const std::string& content) {
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << content;
+  };
+  for (const std::size_t at : {std::size_t(9), bytes.size() / 2, bytes.size() - 1}) {
+    std::string flipped = bytes;
+    flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
+    rewrite(flipped);
+    EXPECT_FALSE(read_cached_pair_clearance(folder.string(), key, m, cells)) << "byte " << at;
+  }
+  rewrite(bytes.substr(0, bytes.size() / 3));
+  EXPECT_FALSE(read_cached_pair_clearance(folder.string(), key, m, cells));
+  const PairClearance rebuilt = cached_or_built_pair_clearance(m, cells, folder.string());
+  EXPECT_FALSE(rebuilt.from_cache());
+  expect_same_grids(built, rebuilt);
+  const std::optional<PairClearance> read = read_cached_pair_clearance(folder.string(), key, m, cells);
+  ASSERT_TRUE(read) << "the rebuilt grids replaced the bad file";
+  expect_same_grids(built, *read);
+
+  const PairClearance coarser = PairClearance::build(m, cells / 4);
+  ASSERT_FALSE(coarser.grids().empty());
+  ASSERT_TRUE(write_cached_pair_clearance(folder.string(), key, coarser));
+  EXPECT_FALSE(read_cached_pair_clearance(folder.string(), key, m, cells)) << "grids of another shape";
+  std::filesystem::remove_all(folder);
+}
+
+// The key changes with every input of the build: the cell budget, the pairs checked, a link's
+// padding, a joint's limit; it is the same for the same robot loaded twice.
+TEST(PairClearanceCache, KeysTellEveryInputOfTheBuildApart) {
+  BVH_REQUIRE_ROBOTS();
+  const std::size_t cells = CheckerOptions().pair_clearance_cells;
+  CheckerOptions none;
+  none.pair_clearance_cells = 0;
+  const CollisionChecker adjacent = test::load_checker("panda", none), again = test::load_checker("panda", none);
+  const CollisionChecker moveit = test::panda_as_moveit(none);
+  CheckerOptions padded = none;
+  padded.link_padding["panda_hand"] = 0.001;
+  const CollisionChecker hand_padded = test::load_checker("panda", padded);
+  const std::string dir = test::robots_dir() + "/panda";
+  std::ifstream in(dir + "/robot.urdf");
+  std::string urdf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t limit = urdf.find("upper=\"") + 7, end = urdf.find('"', limit);
+  ASSERT_NE(end, std::string::npos);
+  const double upper = std::stod(urdf.substr(limit, end - limit)) - 0.5;  // the first limit, 0.5 lower
+  urdf.replace(limit, end - limit, std::to_string(upper));
+  RobotModel changed = RobotModel::from_urdf(*parse_robot_description(urdf), PackageResolver({dir}));
+  std::size_t differ = 0;
+  for (std::size_t j = 0; j < changed.joints().size(); ++j) differ += changed.joints()[j].upper != adjacent.model().joints()[j].upper;
+  ASSERT_EQ(differ, 1u);
+  const CollisionChecker limited(std::move(changed), AllowedCollisionMatrix::adjacent_links(adjacent.model()), none);
+
+  const std::uint64_t key = pair_clearance_key(adjacent.collision_model(), cells);
+  EXPECT_EQ(key, pair_clearance_key(again.collision_model(), cells));
+  EXPECT_NE(key, pair_clearance_key(adjacent.collision_model(), cells - 1));
+  EXPECT_NE(key, pair_clearance_key(moveit.collision_model(), cells));
+  EXPECT_NE(key, pair_clearance_key(hand_padded.collision_model(), cells));
+  EXPECT_NE(key, pair_clearance_key(limited.collision_model(), cells));
 }
 
 INSTANTIATE_TEST_SUITE_P(Robots, PairClearanceOnRobot, ::testing::Values("panda", "ur5e", "pr2"));

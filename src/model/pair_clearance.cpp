@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "bvh_collision/model/robot_collision_model.h"
+#include "bvh_collision/model/detail/pair_clearance_shape.h"
 #include "bvh_collision/geometry/thread_pool.h"
 #include "bvh_collision/narrowphase/shape_pairs.h"
 
@@ -233,8 +234,55 @@ bool mostly_touching(const RobotCollisionModel& model, int a, int b, const PairC
   return 2 * touching > total;
 }
 
-// The grid's coarser levels (PairClearanceGrid::pyramid), each cell the least of the up to 2^dims
-// cells below it, until every variable has one cell.
+// A grid of one or two variables with cells left without a bound is built again with
+// kRefinedCells times the budget when the finer cells would settle most of those (sampled: a pair
+// that touches there gains nothing, and its finer grid would cost seconds on pr2).
+void refine(const RobotCollisionModel& model, int a, int b, PairClearanceGrid& g, GridFiller& filler, std::size_t max_cells) {
+  if (std::none_of(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); })) return;
+  PairClearanceGrid fine = detail::refined_grid_shape(model, g, max_cells);
+  if (fine.dims == 0) return;
+  const auto open = std::count_if(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); });
+  // More than a quarter of the cells open: the pair is close over much of its range, and the
+  // finer grid would cost tests all over it (pr2's shoulders without an SRDF, solo's legs: a
+  // second or more each).
+  if (4 * static_cast<std::size_t>(open) > g.bound.size() || filler.share_apart(filler.cell_closing(fine), 64) < 0.5) return;
+  // Bounded by the coarse grid's work: a pair whose finer cells need far more tests keeps the
+  // coarse grid, at the cost of the tests spent.
+  GridFiller fine_filler(model, a, b, fine);
+  fine_filler.set_budget(filler.tests() + 8192);
+  fine_filler.fill({0, 0, 0}, fine.cells);
+  if (!fine_filler.over_budget()) g = std::move(fine);
+}
+
+}  // namespace
+
+namespace detail {
+
+std::vector<PairClearanceGrid> clearance_grid_shapes(const RobotCollisionModel& model, std::size_t max_cells) {
+  std::vector<PairClearanceGrid> out;
+  std::vector<int> vars;
+  for (std::size_t p = 0; p < model.checked_pairs().size(); ++p) {
+    const auto [a, b] = model.checked_pairs()[p];
+    if (!path_variables(model.robot(), a, b, vars) || vars.empty() || vars.size() > PairClearanceGrid::kMaxDims) continue;
+    PairClearanceGrid g = grid_shape(model, a, b, vars, std::max<std::size_t>(max_cells, 1));
+    if (g.dims == 0) continue;
+    g.pair = p;
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
+PairClearanceGrid refined_grid_shape(const RobotCollisionModel& model, const PairClearanceGrid& coarse, std::size_t max_cells) {
+  if (coarse.dims == 0 || coarse.dims > 2) return {};
+  const auto [a, b] = model.checked_pairs()[coarse.pair];
+  const std::vector<int> moved(coarse.variable.begin(), coarse.variable.begin() + coarse.dims);
+  PairClearanceGrid fine = grid_shape(model, a, b, moved, std::max<std::size_t>(max_cells, 1) * PairClearance::kRefinedCells);
+  if (fine.dims != coarse.dims || fine.cells[0] * fine.cells[1] <= coarse.cells[0] * coarse.cells[1]) return {};
+  fine.pair = coarse.pair;
+  return fine;
+}
+
+// Each pyramid cell the least of the up to 2^dims cells below it, until every variable has one cell.
 void build_pyramid(PairClearanceGrid& g) {
   g.pyramid.clear();
   for (int level = 1;; ++level) {
@@ -257,44 +305,13 @@ void build_pyramid(PairClearanceGrid& g) {
   }
 }
 
-// A grid of one or two variables with cells left without a bound is built again with
-// kRefinedCells times the budget when the finer cells would settle most of those (sampled: a pair
-// that touches there gains nothing, and its finer grid would cost seconds on pr2).
-void refine(const RobotCollisionModel& model, int a, int b, PairClearanceGrid& g, GridFiller& filler, std::size_t max_cells) {
-  if (std::none_of(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); })) return;
-  const std::vector<int> moved(g.variable.begin(), g.variable.begin() + g.dims);
-  PairClearanceGrid fine = grid_shape(model, a, b, moved, std::max<std::size_t>(max_cells, 1) * PairClearance::kRefinedCells);
-  if (fine.dims != g.dims || fine.cells[0] * fine.cells[1] <= g.cells[0] * g.cells[1]) return;
-  const auto open = std::count_if(g.bound.begin(), g.bound.end(), [](float f) { return std::isinf(f); });
-  // More than a quarter of the cells open: the pair is close over much of its range, and the
-  // finer grid would cost tests all over it (pr2's shoulders without an SRDF, solo's legs: a
-  // second or more each).
-  if (4 * static_cast<std::size_t>(open) > g.bound.size() || filler.share_apart(filler.cell_closing(fine), 64) < 0.5) return;
-  fine.pair = g.pair;
-  // Bounded by the coarse grid's work: a pair whose finer cells need far more tests keeps the
-  // coarse grid, at the cost of the tests spent.
-  GridFiller fine_filler(model, a, b, fine);
-  fine_filler.set_budget(filler.tests() + 8192);
-  fine_filler.fill({0, 0, 0}, fine.cells);
-  if (!fine_filler.over_budget()) g = std::move(fine);
-}
-
-}  // namespace
+}  // namespace detail
 
 PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t max_cells) {
   const auto start = std::chrono::steady_clock::now();
   // The grids' shapes first (cheap), then their cells on the shared pool: pairs cost from
   // microseconds to a quarter second (pr2's elbow), so they are taken one at a time.
-  std::vector<PairClearanceGrid> candidates;
-  std::vector<int> vars;
-  for (std::size_t p = 0; p < model.checked_pairs().size(); ++p) {
-    const auto [a, b] = model.checked_pairs()[p];
-    if (!path_variables(model.robot(), a, b, vars) || vars.empty() || vars.size() > PairClearanceGrid::kMaxDims) continue;
-    PairClearanceGrid g = grid_shape(model, a, b, vars, std::max<std::size_t>(max_cells, 1));
-    if (g.dims == 0) continue;
-    g.pair = p;
-    candidates.push_back(std::move(g));
-  }
+  std::vector<PairClearanceGrid> candidates = detail::clearance_grid_shapes(model, max_cells);
   std::vector<char> kept(candidates.size(), 0);
   ThreadPool::shared().for_each(candidates.size(), 1, [&](std::size_t i) {
     PairClearanceGrid& g = candidates[i];
@@ -303,7 +320,7 @@ PairClearance PairClearance::build(const RobotCollisionModel& model, std::size_t
     GridFiller filler(model, a, b, g);
     filler.fill({0, 0, 0}, g.cells);
     if (g.dims <= 2) refine(model, a, b, g, filler, max_cells);
-    build_pyramid(g);
+    detail::build_pyramid(g);
     kept[i] = 1;
   });
   PairClearance out;

@@ -6,13 +6,16 @@
 #include <cmath>
 #include <optional>
 
+#include "bvh_collision/model/pair_clearance_cache.h"
 #include "bvh_collision/narrowphase/link_proxy_cache.h"
 
 namespace bvh_collision {
 
 RobotAccelerators::RobotAccelerators(const RobotCollisionModel& model, const CheckerOptions& options)
     : proxy_cache_(options.proxy_cache), calibrate_(options.calibrate_proxies) {
-  if (options.pair_clearance_cells > 0) pair_clearance_ = PairClearance::build(model, options.pair_clearance_cells);
+  if (options.pair_clearance_cells > 0) {
+    pair_clearance_ = cached_or_built_pair_clearance(model, options.pair_clearance_cells, options.proxy_cache);
+  }
   // After the grids: the batch plans note which pairs have one.
   std::vector<double> levels = options.proxy_levels;
   std::sort(levels.begin(), levels.end());

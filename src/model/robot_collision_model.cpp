@@ -10,7 +10,6 @@
 
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/thread_pool.h"
-#include "bvh_collision/narrowphase/link_proxy_cache.h"
 #include "bvh_collision/narrowphase/shape_queries.h"
 
 namespace bvh_collision {

@@ -80,14 +80,17 @@ class PairClearance {
   }
   const std::vector<PairClearanceGrid>& grids() const { return grids_; }
   std::size_t memory_bytes() const;
-  double build_seconds() const { return build_seconds_; }
+  double build_seconds() const { return build_seconds_; }  // built or read
+  bool from_cache() const { return from_cache_; }  // read from a folder (model/pair_clearance_cache.h)
 
  private:
+  friend struct PairClearanceFile;  // model/pair_clearance_cache.cpp: stores and restores the grids as built
   static double grid_bound(const PairClearanceGrid& grid, const double* state);
 
   std::vector<PairClearanceGrid> grids_;
   std::vector<int> grid_of_;  // per checked pair: its grid, or -1
   double build_seconds_ = 0.0;
+  bool from_cache_ = false;
 };
 
 }  // namespace bvh_collision

@@ -37,8 +37,10 @@ struct CheckerOptions {
   // builds 5, 10 and 20 mm so, after start-up). Levels of 5 mm and up pay; 2 mm was slower than
   // the exact check on panda.
   std::vector<double> proxy_levels;
-  // A folder where link proxies are kept by content (narrowphase/link_proxy_cache.h): a level whose
-  // links are there is read instead of built. Empty: none (the node's ~proxy_cache has one).
+  // A folder where link proxies and clearance grids are kept by content
+  // (narrowphase/link_proxy_cache.h, model/pair_clearance_cache.h): a level whose links are there,
+  // and grids for the same robot, pairs and cell budget, are read instead of built. Empty: none
+  // (the node's ~proxy_cache has one).
   std::string proxy_cache;
   // Time each self pair both ways on a fixed sample of states when a level is built
   // (model/proxy_calibration.h) and let the proxies answer only the pairs where they were not

@@ -86,8 +86,8 @@ struct NodeParameters {
   // more than kProxySphereBudget spheres is skipped (with those after it). 2 mm is not a default:
   // slow to build, and no faster than the exact path (docs/performance.md).
   std::vector<double> proxy_levels = {0.005, 0.01, 0.02};
-  // Where built link proxies are kept by content (narrowphase/link_proxy_cache.h), so that a restart
-  // reads them instead of building them again. Unset: $ROS_HOME (or ~/.ros)/bvh_collision/proxy_cache;
+  // Where built link proxies and clearance grids are kept by content (narrowphase/link_proxy_cache.h,
+  // model/pair_clearance_cache.h), so that a restart reads them instead of building them again. Unset: $ROS_HOME (or ~/.ros)/bvh_collision/proxy_cache;
   // empty: none.
   std::string proxy_cache;
   // Build the octree's distance field after each cloud (on the cloud thread), so that boolean
