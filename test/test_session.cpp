@@ -43,6 +43,59 @@ TEST(RobotCheckers, ProxyLevelsJoinTheCheckerAsTheyAreBuilt) {
   EXPECT_TRUE(before->accelerators().proxy_levels().empty()) << "a checker a query holds never changes";
 }
 
+// The grids join beside the queries, before the levels: the robot's checker starts without them
+// (no start waits on their build: pr2 without an SRDF 3-6 s on one core), answers the same before
+// and after, and a prepared scene kept since before they joined takes them (it was kept while the
+// snapshot stayed, with the accelerators it was prepared with).
+TEST(RobotCheckers, ClearanceGridsJoinBeforeTheLevelsAndChangeNoAnswer) {
+  BVH_REQUIRE_ROBOTS();
+  CheckerOptions none;
+  none.pair_clearance_cells = 0;
+  none.proxy_cache = test::proxy_cache_dir();
+  const std::size_t cells = CheckerOptions().pair_clearance_cells;
+  std::vector<std::string> log;
+  RobotCheckers checkers(
+      test::panda_as_moveit(none), {0.02}, 50000,
+      [&](SessionLogLevel level, const std::string& line) {
+        EXPECT_EQ(level, SessionLogLevel::kInfo) << line;
+        log.push_back(line);
+      },
+      cells);
+  const std::shared_ptr<const CollisionChecker> before = checkers.current();
+  EXPECT_TRUE(before->accelerators().pair_clearance().grids().empty());
+  auto env = std::make_shared<const Environment>(0.05);
+  const auto scene_before = checkers.prepared(env, true, true, Transform(), 0.0);
+  checkers.start_proxy_levels();
+  checkers.wait_for_proxy_levels();
+  const std::shared_ptr<const CollisionChecker> after = checkers.current();
+  const CollisionChecker direct = test::panda_as_moveit();
+  ASSERT_FALSE(direct.accelerators().pair_clearance().grids().empty());
+  EXPECT_EQ(after->accelerators().pair_clearance().grids().size(), direct.accelerators().pair_clearance().grids().size());
+  ASSERT_EQ(after->accelerators().proxy_levels().size(), 1u);
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_NE(log[0].find("clearance grids ready"), std::string::npos) << log[0];
+  EXPECT_NE(log[1].find("proxy level 0.02 m ready"), std::string::npos) << log[1];
+
+  const auto scene_after = checkers.prepared(env, true, true, Transform(), 0.0);
+  EXPECT_NE(scene_after, scene_before) << "the scene prepared before the grids and the level joined";
+  EXPECT_EQ(&scene_after->checker().accelerators(), &after->accelerators());
+  EXPECT_EQ(checkers.prepared(env, true, true, Transform(), 0.0), scene_after) << "then kept while nothing changes";
+  std::mt19937_64 rng(17);
+  int colliding = 0;
+  for (int i = 0; i < test::sized(300); ++i) {
+    const std::vector<double> q = random_configuration(before->model(), rng);
+    const bool hit = before->check_self(q.data()).collision;
+    colliding += hit;
+    EXPECT_EQ(after->check_self(q.data()).collision, hit);
+  }
+  EXPECT_GT(colliding, 0);
+  for (int i = 0; i < test::sized(60); ++i) {
+    const std::vector<double> a = random_configuration(before->model(), rng), b = random_configuration(before->model(), rng);
+    const MotionResult x = scene_before->check_motion(a.data(), b.data()), y = scene_after->check_motion(a.data(), b.data());
+    EXPECT_EQ(x.valid, y.valid);
+  }
+}
+
 // The sphere budget stops before a level predicted beyond it (a surface's cover grows as the
 // inverse square of the level), not after one that already went past it.
 TEST(RobotCheckers, AFinerLevelPredictedBeyondTheSphereBudgetIsNotBuilt) {

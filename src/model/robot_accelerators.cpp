@@ -95,6 +95,13 @@ RobotAccelerators RobotAccelerators::with_proxy_level(const RobotCollisionModel&
   return copy;
 }
 
+RobotAccelerators RobotAccelerators::with_pair_clearance(const RobotCollisionModel& model, std::size_t cells) const {
+  RobotAccelerators copy = *this;
+  copy.pair_clearance_ = cells > 0 ? cached_or_built_pair_clearance(model, cells, proxy_cache_) : PairClearance();
+  for (ProxyLevel& level : copy.proxy_levels_) level.batch = ProxyBatch(model, copy.pair_clearance_, level);
+  return copy;
+}
+
 RobotAccelerators RobotAccelerators::carrying(const RobotCollisionModel& carried, bool proxies) const {
   RobotAccelerators copy = *this;
   copy.pair_clearance_ = pair_clearance_.for_pairs(carried.checked_pairs().size());

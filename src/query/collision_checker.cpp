@@ -63,6 +63,10 @@ CollisionChecker CollisionChecker::with_proxy_level(double level, const std::ato
   return CollisionChecker(m_, calibrated(m_, std::make_shared<RobotAccelerators>(a_->with_proxy_level(*m_, level, cancel))));
 }
 
+CollisionChecker CollisionChecker::with_pair_clearance(std::size_t cells) const {
+  return CollisionChecker(m_, calibrated(m_, std::make_shared<RobotAccelerators>(a_->with_pair_clearance(*m_, cells))));
+}
+
 std::shared_ptr<const RobotAccelerators> CollisionChecker::calibrated(const std::shared_ptr<const RobotCollisionModel>& model,
                                                                       std::shared_ptr<RobotAccelerators> accelerators) {
   if (accelerators->calibrates() && accelerators->proxy_levels().size() >= 2) {

@@ -109,20 +109,20 @@ void CollisionCheckerNode::load_robot() {
   options.link_padding = params_.link_padding;
   options.limits = params_.limits;
   options.proxy_cache = params_.proxy_cache;
-  // The proxy levels come later, built beside the queries (session/robot_checkers.h).
+  // The clearance grids and the proxy levels come later, built beside the queries
+  // (session/robot_checkers.h): the same answers meanwhile, and no start waits on them.
+  options.pair_clearance_cells = 0;
   try {
     checkers_ = std::make_unique<RobotCheckers>(CollisionChecker(std::move(model), std::move(acm), options), params_.proxy_levels,
                                                 kProxySphereBudget, [](SessionLogLevel level, const std::string& line) {
                                                   if (level == SessionLogLevel::kInfo) ROS_INFO_STREAM("collision_checker: " << line);
                                                   else if (level == SessionLogLevel::kWarning) ROS_WARN_STREAM("collision_checker: " << line);
                                                   else ROS_ERROR_STREAM("collision_checker: " << line);
-                                                });
+                                                },
+                                                CheckerOptions().pair_clearance_cells);
   } catch (const LimitExceeded& e) {
     throw NodeStartupError(std::string("robot '") + summary_.name + "': " + e.what());
   }
-  const PairClearance& grids = checker()->accelerators().pair_clearance();
-  ROS_INFO("collision_checker: clearance grids for %zu of %zu checked pairs, %.1f KiB, built in %.2f s", grids.grids().size(),
-           checker()->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0, grids.build_seconds());
   joint_map_ = std::make_unique<const JointValueMap>(checker()->model());
 }
 

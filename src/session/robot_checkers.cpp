@@ -9,11 +9,13 @@
 
 namespace bvh_collision {
 
-RobotCheckers::RobotCheckers(CollisionChecker robot, std::vector<double> levels, std::size_t sphere_budget, SessionLog log)
+RobotCheckers::RobotCheckers(CollisionChecker robot, std::vector<double> levels, std::size_t sphere_budget, SessionLog log,
+                             std::size_t grid_cells)
     : current_(std::make_shared<const CollisionChecker>(std::move(robot))),
       levels_(std::move(levels)),
       sphere_budget_(sphere_budget),
-      log_(std::move(log)) {
+      log_(std::move(log)),
+      grid_cells_(grid_cells) {
   if (!log_) log_ = [](SessionLogLevel, const std::string&) {};
 }
 
@@ -28,7 +30,7 @@ RobotCheckers::~RobotCheckers() {
 }
 
 void RobotCheckers::start_proxy_levels() {
-  if (levels_.empty() || proxy_builder_.joinable()) return;
+  if ((levels_.empty() && grid_cells_ == 0) || proxy_builder_.joinable()) return;
   proxy_builder_ = std::thread([this] { build_proxy_levels(); });
 }
 
@@ -36,10 +38,12 @@ void RobotCheckers::wait_for_proxy_levels() {
   if (proxy_builder_.joinable()) proxy_builder_.join();
 }
 
-// Coarsest first: the cheapest level serves the widest range of tolerances soonest. Each level
-// is built into a copy of the checker, which then replaces the one queries take (a query in
-// flight keeps the one it took).
+// The grids first (each level's batch plan notes which pairs have one), then the levels coarsest
+// first: the cheapest level serves the widest range of tolerances soonest. Each is built into a
+// copy of the checker, which then replaces the one queries take (a query in flight keeps the one
+// it took).
 void RobotCheckers::build_proxy_levels() {
+  if (grid_cells_ > 0) build_pair_clearance();
   std::vector<double> levels = levels_;
   std::sort(levels.rbegin(), levels.rend());
   for (std::size_t i = 0; i < levels.size() && !stop_; ++i) {
@@ -75,6 +79,21 @@ void RobotCheckers::build_proxy_levels() {
       log_(SessionLogLevel::kError, "proxy level " + std::to_string(levels[i]) + " m not built: " + e.what());
       return;
     }
+  }
+}
+
+void RobotCheckers::build_pair_clearance() {
+  try {
+    auto next = std::make_shared<const CollisionChecker>(current()->with_pair_clearance(grid_cells_));
+    const PairClearance& grids = next->accelerators().pair_clearance();
+    std::atomic_store(&current_, std::shared_ptr<const CollisionChecker>(next));
+    char line[200];
+    std::snprintf(line, sizeof line, "clearance grids ready: %zu of %zu checked pairs, %.1f KiB, %s in %.2f s", grids.grids().size(),
+                  next->collision_model().checked_pairs().size(), grids.memory_bytes() / 1024.0,
+                  grids.from_cache() ? "read from the cache" : "built", grids.build_seconds());
+    log_(SessionLogLevel::kInfo, line);
+  } catch (const std::exception& e) {
+    log_(SessionLogLevel::kError, std::string("clearance grids not built (the same answers go on without them): ") + e.what());
   }
 }
 
@@ -115,7 +134,10 @@ std::shared_ptr<const SceneChecker> RobotCheckers::prepared(const std::shared_pt
   std::lock_guard<std::mutex> lock(scene_mutex_);
   const auto same = [&](const SceneChecker& s) {
     const SceneCheckOptions& o = s.options();
-    return &s.environment() == env.get() && &s.checker().collision_model() == &now->collision_model() && o.self == self &&
+    // (The same accelerators too: a scene prepared before the grids or a level joined goes on
+    // without them otherwise, as long as the snapshot stays.)
+    return &s.environment() == env.get() && &s.checker().collision_model() == &now->collision_model() &&
+           &s.checker().accelerators() == &now->accelerators() && o.self == self &&
            o.environment == environment && o.root_pose.R == root.R && o.root_pose.t == root.t && o.tolerance == tolerance;
   };
   if (!scene_ || !same(*scene_)) {

@@ -73,6 +73,11 @@ class RobotAccelerators {
   // for a bad level.
   RobotAccelerators with_proxy_level(const RobotCollisionModel& model, double level,
                                      const std::atomic<bool>* cancel = nullptr) const;
+  // A copy with the clearance grids of `cells` (read from the proxy cache when it holds them,
+  // model/pair_clearance_cache.h; 0: none), the levels' batch plans made again (they note which
+  // pairs have a grid): it answers every query as this one does. A node builds its grids so,
+  // beside the queries, rather than at construction.
+  RobotAccelerators with_pair_clearance(const RobotCollisionModel& model, std::size_t cells) const;
   // These for `carried` (RobotCollisionModel::carrying of the model these were built from): every
   // level gets the carried links' proxies (from the proxy cache when it holds them), the new self
   // pairs get no clearance grid. A carried object's proxies take what its size asks (a 30 cm box

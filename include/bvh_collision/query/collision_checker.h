@@ -43,6 +43,9 @@ class CollisionChecker {
   // shared. With two levels or more (and CheckerOptions::calibrate_proxies), the self pairs' exact
   // growth of certified motions is chosen again (query/motion_calibration.h).
   CollisionChecker with_proxy_level(double level, const std::atomic<bool>* cancel = nullptr) const;
+  // This checker with the clearance grids of `cells` cells (RobotAccelerators::with_pair_clearance):
+  // the same answers; the model is shared.
+  CollisionChecker with_pair_clearance(std::size_t cells) const;
 
   // This checker carrying `bodies` (AttachedBody, world/environment.h; the model's carrying and
   // its accelerators'): each body one more link, named by its id, after the robot's links; the

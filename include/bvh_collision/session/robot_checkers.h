@@ -1,6 +1,7 @@
-// The checkers a running node answers with, without ROS: the robot's own, to which its proxy
-// levels join as a thread of their own builds them (coarsest first, each put to use when done;
-// until then a tolerance takes the exact path, within the same contract); the one carrying a
+// The checkers a running node answers with, without ROS: the robot's own, to which its clearance
+// grids and then its proxy levels join as a thread of their own builds them (the grids first, read
+// from the proxy cache when it holds them; the levels coarsest first, each put to use when done;
+// until then the same answers come by the exact paths, within the same contract); the one carrying a
 // snapshot's attached objects, built once per attachment (exact at once, its levels built beside
 // the queries); and the prepared scene certified motions go through, kept while the snapshot and
 // the request's checks stay the same.
@@ -28,14 +29,17 @@ class RobotCheckers {
  public:
   // `levels` (m): the proxy levels to build, any order, coarsest first; a finer level predicted
   // (from the one before) to need more than `sphere_budget` spheres is not built, nor any after it.
-  RobotCheckers(CollisionChecker robot, std::vector<double> levels, std::size_t sphere_budget, SessionLog log);
-  ~RobotCheckers();  // stops the builds (at their next link) and waits for them
+  // `grid_cells` > 0: the clearance grids to build before them (CheckerOptions::pair_clearance_cells;
+  // `robot` then has none, so that no start waits on them: pr2 without an SRDF, 3-6 s on one core).
+  RobotCheckers(CollisionChecker robot, std::vector<double> levels, std::size_t sphere_budget, SessionLog log,
+                std::size_t grid_cells = 0);
+  ~RobotCheckers();  // stops the builds (at their next link, or once the grids are built) and waits for them
   RobotCheckers(const RobotCheckers&) = delete;
   RobotCheckers& operator=(const RobotCheckers&) = delete;
 
-  // Starts building the proxy levels (once; nothing when there are none).
+  // Starts building the clearance grids and the proxy levels (once; nothing when there are none).
   void start_proxy_levels();
-  // Waits for the levels' build to end (tests; a node never waits).
+  // Waits for their build to end (tests; a node never waits).
   void wait_for_proxy_levels();
 
   // The robot's checker now. Hold the pointer while using references into it.
@@ -57,12 +61,14 @@ class RobotCheckers {
 
  private:
   void build_proxy_levels();
+  void build_pair_clearance();
   void build_carried_levels(const std::shared_ptr<const Environment>& env) const;  // carried_mutex_ held
 
   std::shared_ptr<const CollisionChecker> current_;  // read and replaced atomically
   std::vector<double> levels_;
   std::size_t sphere_budget_;
   SessionLog log_;
+  std::size_t grid_cells_;
   std::thread proxy_builder_;
   std::atomic<bool> stop_{false};
 
