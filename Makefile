@@ -83,4 +83,5 @@ fuzz: deps
 	@JOBS=$(JOBS) bash scripts/fuzz.sh
 
 clean:
-	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log build-sanitize.build.log build-fuzz build-fuzz.configure.log devel
+	rm -rf $(BUILD) build-sanitize build-sanitize.configure.log build-sanitize.build.log build-sanitize.build.status \
+	  build-sanitize.pass.log build-sanitize.pass.status build-fuzz build-fuzz.configure.log devel
