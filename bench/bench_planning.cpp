@@ -35,6 +35,8 @@
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
 
+#include <algorithm>
+#include <array>
 #include <cctype>
 #include <fstream>
 #include <functional>
@@ -128,6 +130,17 @@ CollisionChecker load_robot(const PlanningRobot& robot, const std::string& cache
 struct CallTimes {
   std::vector<double> states, motions;  // microseconds per call
   double outside_motions_us = 0.0;      // the state calls not made inside a motion call, summed
+  // The simplifier's motion calls (while `simplifying`), colliding [0] and free [1]: how many, and
+  // their time in microseconds.
+  bool simplifying = false;
+  std::array<long, 2> simplifier_motions{};
+  std::array<double, 2> simplifier_motions_us{};
+  void motion(double us, bool valid) {
+    motions.push_back(us);
+    if (!simplifying) return;
+    ++simplifier_motions[valid];
+    simplifier_motions_us[valid] += us;
+  }
 };
 
 // Inside a motion call (FCL's discrete validator calls the state checker): its state calls are
@@ -170,7 +183,7 @@ class TimedMotions : public ob::MotionValidator {
     ++motion_depth;
     const bool v = inner_->checkMotion(a, b);
     --motion_depth;
-    times_->motions.push_back(now_us() - t0);
+    times_->motion(now_us() - t0, v);
     return v;
   }
   bool checkMotion(const ob::State* a, const ob::State* b, std::pair<ob::State*, double>& last) const override {
@@ -179,7 +192,7 @@ class TimedMotions : public ob::MotionValidator {
     ++motion_depth;
     const bool v = inner_->checkMotion(a, b, last);
     --motion_depth;
-    times_->motions.push_back(now_us() - t0);
+    times_->motion(now_us() - t0, v);
     return v;
   }
 
@@ -296,7 +309,7 @@ struct Run {
   std::vector<std::vector<double>> path;  // full states
 };
 
-Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout, const Problem& p, double limit) {
+Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout, const Problem& p, double limit, CallTimes& calls) {
   ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
   const auto& names = layout.group.names;
   const auto& all = layout.checker.model().variable_names();
@@ -315,7 +328,9 @@ Run plan(og::SimpleSetup& setup, const planning::CheckerPlanningContext& layout,
   run.solved = setup.solve(ob::timedPlannerTerminationCondition(limit)) == ob::PlannerStatus::EXACT_SOLUTION;
   if (run.solved) {
     const auto s0 = std::chrono::steady_clock::now();
+    calls.simplifying = true;
     setup.simplifySolution();
+    calls.simplifying = false;
     run.simplify_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -347,20 +362,56 @@ std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& chec
   return {ours, theirs};
 }
 
+// One problem's plan as run: its time, the simplifier's part, and the time inside validity calls.
+struct ProblemTimes {
+  double seconds = 0.0, simplify_seconds = 0.0, check_seconds = 0.0;
+};
+
 struct Tally {
   std::string name;
   int solved = 0, ours_colliding = 0, fcl_colliding = 0;
   std::vector<double> seconds;  // every problem (an unsolved one at the limit)
   CallTimes calls;
-  double planning_seconds = 0.0, simplify_seconds = 0.0;  // summed over every problem as run
+  std::vector<ProblemTimes> problems;
 };
 
-// A run's figures into its checker's tally: its time (an unsolved one at the limit) and, solved,
-// whether its path collides by either re-check.
-void record(Tally& tally, const Run& run, double limit, const CollisionChecker& checker, const Environment& env, FclRobot& fcl) {
+// The tally's calls before a plan, to tell one problem's calls from the others'.
+struct CallMark {
+  std::size_t states = 0, motions = 0;
+  double outside_motions_us = 0.0;
+  std::array<long, 2> simplifier_motions{};
+  std::array<double, 2> simplifier_motions_us{};
+};
+CallMark mark(const CallTimes& c) { return {c.states.size(), c.motions.size(), c.outside_motions_us, c.simplifier_motions, c.simplifier_motions_us}; }
+
+// BENCH_PLANNING_VERBOSE: one problem's plan by one checker, its calls and their times (the
+// simplifier's motions apart, colliding and free).
+void print_calls(const Tally& tally, const Run& run, const CallMark& before) {
+  if (!std::getenv("BENCH_PLANNING_VERBOSE")) return;
+  const CallTimes& c = tally.calls;
+  double in_states = 0, in_motions = 0;
+  for (std::size_t i = before.states; i < c.states.size(); ++i) in_states += c.states[i];
+  for (std::size_t i = before.motions; i < c.motions.size(); ++i) in_motions += c.motions[i];
+  const std::vector<double> motions(c.motions.begin() + static_cast<std::ptrdiff_t>(before.motions), c.motions.end());
+  std::printf("  %s: %s in %.1f ms; %zu states (%.1f ms), %zu motions (%.1f ms; us median %.0f, p90 %.0f, max %.0f); simplifier "
+              "%.1f ms, its motions %ld colliding (%.1f ms) and %ld free (%.1f ms); path of %zu states\n",
+              tally.name.c_str(), run.solved ? "solved" : "failed", 1e3 * run.seconds, c.states.size() - before.states, in_states / 1e3,
+              motions.size(), in_motions / 1e3, bench::median(motions), bench::percentile(motions, 0.9),
+              motions.empty() ? 0.0 : *std::max_element(motions.begin(), motions.end()), 1e3 * run.simplify_seconds,
+              c.simplifier_motions[0] - before.simplifier_motions[0], 1e-3 * (c.simplifier_motions_us[0] - before.simplifier_motions_us[0]),
+              c.simplifier_motions[1] - before.simplifier_motions[1], 1e-3 * (c.simplifier_motions_us[1] - before.simplifier_motions_us[1]),
+              run.path.size());
+}
+
+// A run's figures into its checker's tally: its time (an unsolved one at the limit), where it
+// went, and, solved, whether its path collides by either re-check.
+void record(Tally& tally, const Run& run, const CallMark& before, double limit, const CollisionChecker& checker, const Environment& env,
+            FclRobot& fcl) {
+  print_calls(tally, run, before);
+  double in_calls = tally.calls.outside_motions_us - before.outside_motions_us;
+  for (std::size_t i = before.motions; i < tally.calls.motions.size(); ++i) in_calls += tally.calls.motions[i];
+  tally.problems.push_back({run.solved ? run.seconds : limit, run.simplify_seconds, 1e-6 * in_calls});
   tally.seconds.push_back(run.solved ? run.seconds : limit);
-  tally.planning_seconds += run.seconds;
-  tally.simplify_seconds += run.simplify_seconds;
   if (!run.solved) return;
   ++tally.solved;
   const auto [ours, theirs] = path_collides(run, checker, env, fcl);
@@ -389,19 +440,9 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
   si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<planning::CheckerMotionValidator>(si, context), &tally.calls, hook));
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
-  const std::size_t states0 = tally.calls.states.size(), motions0 = tally.calls.motions.size();
-  const Run run = plan(setup, *context, p, limit);
-  if (std::getenv("BENCH_PLANNING_VERBOSE")) {
-    double in_states = 0, in_motions = 0;
-    for (std::size_t i = states0; i < tally.calls.states.size(); ++i) in_states += tally.calls.states[i];
-    for (std::size_t i = motions0; i < tally.calls.motions.size(); ++i) in_motions += tally.calls.motions[i];
-    const std::vector<double> motions(tally.calls.motions.begin() + static_cast<std::ptrdiff_t>(motions0), tally.calls.motions.end());
-    std::printf("  %s: %s in %.1f ms; %zu states (%.1f ms), %zu motions (%.1f ms; us median %.0f, p90 %.0f, max %.0f)\n",
-                tally.name.c_str(), run.solved ? "solved" : "failed", 1e3 * run.seconds, tally.calls.states.size() - states0,
-                in_states / 1e3, motions.size(), in_motions / 1e3, bench::median(motions), bench::percentile(motions, 0.9),
-                motions.empty() ? 0.0 : *std::max_element(motions.begin(), motions.end()));
-  }
-  record(tally, run, limit, checker, *env, fcl);
+  const CallMark before = mark(tally.calls);
+  const Run run = plan(setup, *context, p, limit, tally.calls);
+  record(tally, run, before, limit, checker, *env, fcl);
 }
 
 void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_ptr<const Environment>& env,
@@ -419,21 +460,31 @@ void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_p
   si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<ob::DiscreteMotionValidator>(si), &tally.calls));
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
-  const Run run = plan(setup, *layout, p, limit);
-  record(tally, run, limit, checker, *env, fcl);
+  const CallMark before = mark(tally.calls);
+  const Run run = plan(setup, *layout, p, limit, tally.calls);
+  record(tally, run, before, limit, checker, *env, fcl);
 }
 
-// Where a checker's plan time went, over all its problems: inside its validity calls (our
-// checks with the adapter's state layout, or FCL's), in OMPL's simplifier, and the rest (OMPL's
-// own sampling, nearest neighbours and bookkeeping).
+// Where a checker's plan time went: inside its validity calls (our checks with the adapter's
+// state layout, or FCL's), in OMPL's simplifier, and the rest (OMPL's own sampling, nearest
+// neighbours and bookkeeping). Over all its problems the few slowest weigh most (a failed plan's
+// ten seconds are mostly OMPL's nearest neighbours); over the middle half of its problems by plan
+// time (the median plan's neighbours) the figures say where a typical plan goes.
 struct TimeShares {
   double checks = 0.0, simplifier = 0.0;  // fractions of the plan time
 };
-TimeShares time_shares(const Tally& t) {
-  double in_calls = t.calls.outside_motions_us;
-  for (const double us : t.calls.motions) in_calls += us;
-  if (!(t.planning_seconds > 0)) return {};
-  return {1e-6 * in_calls / t.planning_seconds, t.simplify_seconds / t.planning_seconds};
+TimeShares time_shares(std::vector<ProblemTimes> problems, bool middle_half) {
+  std::sort(problems.begin(), problems.end(), [](const ProblemTimes& a, const ProblemTimes& b) { return a.seconds < b.seconds; });
+  const std::size_t n = problems.size();
+  const std::size_t first = middle_half ? n / 4 : 0, end = middle_half ? std::max(first + 1, n - n / 4) : n;
+  ProblemTimes sum;
+  for (std::size_t i = first; i < std::min(end, n); ++i) {
+    sum.seconds += problems[i].seconds;
+    sum.simplify_seconds += problems[i].simplify_seconds;
+    sum.check_seconds += problems[i].check_seconds;
+  }
+  if (!(sum.seconds > 0)) return {};
+  return {sum.check_seconds / sum.seconds, sum.simplify_seconds / sum.seconds};
 }
 
 struct RobotRun {
@@ -447,17 +498,19 @@ void report(const std::string& out_dir, const std::vector<RobotRun>& runs, doubl
   Table table("planning", "Planning with RRTConnect among generated MoveIt-style scenes, per robot",
               {"robot", "checker", "problems", "solved", "median plan ms", "p95 plan ms", "median plan / FCL's",
                "per state check us (median)", "per motion check us (median)", "paths colliding (our exact certified re-check)",
-               "paths colliding (FCL every 1e-3 rad)", "time in checks %", "time in simplifier %"});
+               "paths colliding (FCL every 1e-3 rad)", "time in checks %", "time in simplifier %",
+               "middle half: time in checks %", "middle half: time in simplifier %"});
   std::string robots;
   for (const RobotRun& r : runs) {
     const double fcl_median = bench::median(r.tallies[2].seconds);
     for (const Tally& t : r.tallies) {
       if (t.seconds.empty()) continue;  // a row left out (BENCH_PLANNING_CHECKERS)
-      const TimeShares shares = time_shares(t);
+      const TimeShares shares = time_shares(t.problems, false), middle = time_shares(t.problems, true);
       table.row({r.robot, t.name, static_cast<double>(r.problems), static_cast<double>(t.solved), 1e3 * bench::median(t.seconds),
                  1e3 * bench::percentile(t.seconds, 0.95), fcl_median > 0 ? bench::median(t.seconds) / fcl_median : 0.0,
                  bench::median(t.calls.states), bench::median(t.calls.motions), static_cast<double>(t.ours_colliding),
-                 static_cast<double>(t.fcl_colliding), 100.0 * shares.checks, 100.0 * shares.simplifier});
+                 static_cast<double>(t.fcl_colliding), 100.0 * shares.checks, 100.0 * shares.simplifier,
+                 100.0 * middle.checks, 100.0 * middle.simplifier});
     }
     robots += (robots.empty() ? "" : "; ") + r.robot + ": " + std::to_string(r.joints) + " joints, " + std::to_string(r.problems) +
               " problems (" + std::to_string(r.near) + " goals within 5 mm of an obstacle), proxy levels built or read in " +
@@ -469,7 +522,9 @@ void report(const std::string& out_dir, const std::vector<RobotRun>& runs, doubl
              "goal drawn into one). The SRDF's allowed pairs; " + bench::format(limit) + " s a problem, then OMPL's path "
              "simplifier on the same validators; plan times count unsolved problems at the limit. Per-check figures are "
              "medians over every call the planners made (each call timed on its own); time in checks: the sum of those "
-             "calls (for ours the adapter's state layout included) over the plan time, the rest is OMPL's own work. Ours: "
+             "calls (for ours the adapter's state layout included) over the plan time, the rest is OMPL's own work, over every "
+             "problem and over the middle half of the problems by plan time (the median plan's neighbours: over every problem "
+             "the slowest weigh most). Ours: "
              "planning/ompl_validity.h (SceneChecker, certified motions), the node's proxy levels (5, 10 and 20 mm: pr2's 5 mm "
              "level, 415k spheres, fits the node's sphere budget). FCL: BVHModel<OBBRSS> link meshes and primitive URDF shapes, each checked pair "
              "behind an AABB test, primitive objects in a dynamic AABB tree, OMPL's DiscreteMotionValidator at 1 %. Scenes "
