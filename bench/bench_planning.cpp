@@ -36,7 +36,6 @@
 #include <ompl/util/RandomNumbers.h>
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <fstream>
 #include <functional>
@@ -45,6 +44,7 @@
 #include <random>
 
 #include "bench_util.h"
+#include "planning_times.h"
 #include "checker_fixtures.h"
 #include "bvh_collision/query/scene_checker.h"
 #include "bvh_collision/planning/ompl_validity.h"
@@ -61,6 +61,11 @@ namespace {
 namespace ob = ompl::base;
 namespace og = ompl::geometric;
 using bench::Table;
+using bench::CallMark;
+using bench::CallTimes;
+using bench::ProblemTimes;
+using bench::TimedMotions;
+using bench::TimedValidity;
 
 // A robot of the benchmark: its planning group, where the other joints stand, its scenes.
 struct PlanningRobot {
@@ -125,82 +130,10 @@ CollisionChecker load_robot(const PlanningRobot& robot, const std::string& cache
   return checker;
 }
 
-// ---- Timing wrappers: every call timed on its own, for medians ------------------------------------
-
-struct CallTimes {
-  std::vector<double> states, motions;  // microseconds per call
-  double outside_motions_us = 0.0;      // the state calls not made inside a motion call, summed
-  // The simplifier's motion calls (while `simplifying`), colliding [0] and free [1]: how many, and
-  // their time in microseconds.
-  bool simplifying = false;
-  std::array<long, 2> simplifier_motions{};
-  std::array<double, 2> simplifier_motions_us{};
-  void motion(double us, bool valid) {
-    motions.push_back(us);
-    if (!simplifying) return;
-    ++simplifier_motions[valid];
-    simplifier_motions_us[valid] += us;
-  }
-};
-
-// Inside a motion call (FCL's discrete validator calls the state checker): its state calls are
-// the motion's time, not counted twice in the time shares.
-thread_local int motion_depth = 0;
-
-double now_us() {
-  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-class TimedValidity : public ob::StateValidityChecker {
- public:
-  TimedValidity(const ob::SpaceInformationPtr& si, std::function<bool(const ob::State*)> valid, CallTimes* times)
-      : ob::StateValidityChecker(si), valid_(std::move(valid)), times_(times) {}
-  bool isValid(const ob::State* s) const override {
-    const double t0 = now_us();
-    const bool v = valid_(s);
-    const double us = now_us() - t0;
-    times_->states.push_back(us);
-    if (motion_depth == 0) times_->outside_motions_us += us;
-    return v;
-  }
-
- private:
-  std::function<bool(const ob::State*)> valid_;
-  CallTimes* times_;
-};
+// ---- Timing wrappers (planning_times.h), the call log and its replay -------------------------
 
 bench::CallLog call_log;         // BENCH_PLANNING_LOG
 bench::LoggedCalls logged_calls;  // BENCH_PLANNING_REPLAY
-
-class TimedMotions : public ob::MotionValidator {
- public:
-  using Hook = std::function<void(const ob::State*, const ob::State*, bool)>;
-  TimedMotions(const ob::SpaceInformationPtr& si, std::shared_ptr<ob::MotionValidator> inner, CallTimes* times, Hook hook = {})
-      : ob::MotionValidator(si), inner_(std::move(inner)), times_(times), hook_(std::move(hook)) {}
-  bool checkMotion(const ob::State* a, const ob::State* b) const override {
-    if (hook_) hook_(a, b, false);
-    const double t0 = now_us();
-    ++motion_depth;
-    const bool v = inner_->checkMotion(a, b);
-    --motion_depth;
-    times_->motion(now_us() - t0, v);
-    return v;
-  }
-  bool checkMotion(const ob::State* a, const ob::State* b, std::pair<ob::State*, double>& last) const override {
-    if (hook_) hook_(a, b, true);
-    const double t0 = now_us();
-    ++motion_depth;
-    const bool v = inner_->checkMotion(a, b, last);
-    --motion_depth;
-    times_->motion(now_us() - t0, v);
-    return v;
-  }
-
- private:
-  std::shared_ptr<ob::MotionValidator> inner_;
-  CallTimes* times_;
-  Hook hook_;
-};
 
 // ---- Problems ----------------------------------------------------------------------------------
 
@@ -362,11 +295,6 @@ std::pair<bool, bool> path_collides(const Run& run, const CollisionChecker& chec
   return {ours, theirs};
 }
 
-// One problem's plan as run: its time, the simplifier's part, and the time inside validity calls.
-struct ProblemTimes {
-  double seconds = 0.0, simplify_seconds = 0.0, check_seconds = 0.0;
-};
-
 struct Tally {
   std::string name;
   int solved = 0, ours_colliding = 0, fcl_colliding = 0;
@@ -374,15 +302,6 @@ struct Tally {
   CallTimes calls;
   std::vector<ProblemTimes> problems;
 };
-
-// The tally's calls before a plan, to tell one problem's calls from the others'.
-struct CallMark {
-  std::size_t states = 0, motions = 0;
-  double outside_motions_us = 0.0;
-  std::array<long, 2> simplifier_motions{};
-  std::array<double, 2> simplifier_motions_us{};
-};
-CallMark mark(const CallTimes& c) { return {c.states.size(), c.motions.size(), c.outside_motions_us, c.simplifier_motions, c.simplifier_motions_us}; }
 
 // BENCH_PLANNING_VERBOSE: one problem's plan by one checker, its calls and their times (the
 // simplifier's motions apart, colliding and free).
@@ -440,7 +359,7 @@ void plan_ours(Tally& tally, const CollisionChecker& checker, const std::shared_
   si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<planning::CheckerMotionValidator>(si, context), &tally.calls, hook));
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
-  const CallMark before = mark(tally.calls);
+  const CallMark before = bench::mark(tally.calls);
   const Run run = plan(setup, *context, p, limit, tally.calls);
   record(tally, run, before, limit, checker, *env, fcl);
 }
@@ -460,31 +379,9 @@ void plan_fcl(Tally& tally, const CollisionChecker& checker, const std::shared_p
   si->setMotionValidator(std::make_shared<TimedMotions>(si, std::make_shared<ob::DiscreteMotionValidator>(si), &tally.calls));
   setup.setPlanner(std::make_shared<og::RRTConnect>(si));
   setup.setup();
-  const CallMark before = mark(tally.calls);
+  const CallMark before = bench::mark(tally.calls);
   const Run run = plan(setup, *layout, p, limit, tally.calls);
   record(tally, run, before, limit, checker, *env, fcl);
-}
-
-// Where a checker's plan time went: inside its validity calls (our checks with the adapter's
-// state layout, or FCL's), in OMPL's simplifier, and the rest (OMPL's own sampling, nearest
-// neighbours and bookkeeping). Over all its problems the few slowest weigh most (a failed plan's
-// ten seconds are mostly OMPL's nearest neighbours); over the middle half of its problems by plan
-// time (the median plan's neighbours) the figures say where a typical plan goes.
-struct TimeShares {
-  double checks = 0.0, simplifier = 0.0;  // fractions of the plan time
-};
-TimeShares time_shares(std::vector<ProblemTimes> problems, bool middle_half) {
-  std::sort(problems.begin(), problems.end(), [](const ProblemTimes& a, const ProblemTimes& b) { return a.seconds < b.seconds; });
-  const std::size_t n = problems.size();
-  const std::size_t first = middle_half ? n / 4 : 0, end = middle_half ? std::max(first + 1, n - n / 4) : n;
-  ProblemTimes sum;
-  for (std::size_t i = first; i < std::min(end, n); ++i) {
-    sum.seconds += problems[i].seconds;
-    sum.simplify_seconds += problems[i].simplify_seconds;
-    sum.check_seconds += problems[i].check_seconds;
-  }
-  if (!(sum.seconds > 0)) return {};
-  return {sum.check_seconds / sum.seconds, sum.simplify_seconds / sum.seconds};
 }
 
 struct RobotRun {
@@ -505,7 +402,7 @@ void report(const std::string& out_dir, const std::vector<RobotRun>& runs, doubl
     const double fcl_median = bench::median(r.tallies[2].seconds);
     for (const Tally& t : r.tallies) {
       if (t.seconds.empty()) continue;  // a row left out (BENCH_PLANNING_CHECKERS)
-      const TimeShares shares = time_shares(t.problems, false), middle = time_shares(t.problems, true);
+      const bench::TimeShares shares = bench::time_shares(t.problems, false), middle = bench::time_shares(t.problems, true);
       table.row({r.robot, t.name, static_cast<double>(r.problems), static_cast<double>(t.solved), 1e3 * bench::median(t.seconds),
                  1e3 * bench::percentile(t.seconds, 0.95), fcl_median > 0 ? bench::median(t.seconds) / fcl_median : 0.0,
                  bench::median(t.calls.states), bench::median(t.calls.motions), static_cast<double>(t.ours_colliding),
