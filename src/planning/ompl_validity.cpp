@@ -96,10 +96,22 @@ const SceneChecker& CheckerPlanningContext::scene() const {
   return *scene_;
 }
 
+const SceneChecker& CheckerPlanningContext::exact_scene() const {
+  if (tolerance == 0.0) return scene();
+  std::call_once(exact_once_, [&] {
+    SceneCheckOptions options;
+    options.self = self;
+    options.environment = obstacles;
+    options.root_pose = root_pose;
+    exact_scene_ = std::make_unique<const SceneChecker>(checker, environment, options);
+  });
+  return *exact_scene_;
+}
+
 bool CheckerPlanningContext::check_state(const ompl::base::State* state) const {
   thread_local std::vector<double> q;
   full_state(state, q);
-  return !scene().collides(q.data());
+  return !answering().collides(q.data());
 }
 
 MotionAnswer CheckerPlanningContext::check_motion(const ompl::base::State* from, const ompl::base::State* to,
@@ -107,7 +119,7 @@ MotionAnswer CheckerPlanningContext::check_motion(const ompl::base::State* from,
   thread_local std::vector<double> a, b;
   full_state(from, a);
   full_state(to, b);
-  const MotionResult r = scene().check_motion(a.data(), b.data(), earliest);
+  const MotionResult r = answering().check_motion(a.data(), b.data(), earliest);
   return {r.valid, r.last_valid_fraction};
 }
 
@@ -138,6 +150,38 @@ double CheckerPlanningContext::clearance(const ompl::base::State* state) const {
     nearest = r.collision ? 0.0 : std::min(nearest, r.min_distance);
   }
   return nearest;
+}
+
+SearchOutcome solve_tolerance_first(ompl::geometric::SimpleSetup& setup, CheckerPlanningContext& context,
+                                    const ompl::base::PlannerTerminationCondition& ptc, std::uint64_t motions_at_tolerance) {
+  namespace ob = ompl::base;
+  const std::uint64_t start = context.counters->motions;
+  const auto asked = [&] { return context.counters->motions - start; };
+  SearchOutcome outcome;
+  context.exact = false;
+  if (context.tolerance == 0.0) {
+    outcome.status = setup.solve(ptc);
+    outcome.motions_exact = asked();
+    return outcome;
+  }
+  outcome.status = setup.solve(ob::plannerOrTerminationCondition(
+      ptc, ob::PlannerTerminationCondition([&] { return asked() >= motions_at_tolerance; })));
+  outcome.motions_at_tolerance = asked();
+  // Only a search stopped by the count goes on: a solution, a bad start or goal, or the caller's
+  // own limit ends it here (an approximate solution is a search stopped unsolved).
+  const bool stopped = outcome.status == ob::PlannerStatus::TIMEOUT || outcome.status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
+  if (!stopped || ptc()) return outcome;
+  context.exact = true;
+  outcome.went_exact = true;
+  try {
+    outcome.status = setup.solve(ptc);
+  } catch (...) {
+    context.exact = false;
+    throw;
+  }
+  context.exact = false;
+  outcome.motions_exact = asked() - outcome.motions_at_tolerance;
+  return outcome;
 }
 
 }  // namespace bvh_collision::planning

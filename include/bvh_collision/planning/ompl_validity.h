@@ -20,8 +20,11 @@
 
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/SpaceInformation.h>
+#include <ompl/base/PlannerStatus.h>
+#include <ompl/base/PlannerTerminationCondition.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/SimpleSetup.h>
 
 #include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/query/scene_checker.h"
@@ -106,6 +109,9 @@ struct CheckerPlanningContext {
   double tolerance = 0.01;
   Transform root_pose;              // the root link in the environment's frame
   std::shared_ptr<ValidityCounters> counters = std::make_shared<ValidityCounters>();
+  // While set, every answer is exact (tolerance 0) whatever `tolerance` says: what
+  // solve_tolerance_first sets for the rest of a search the tolerance has not solved.
+  std::atomic<bool> exact{false};
 
   // Throws std::invalid_argument when the base state's size or the group does not fit the model.
   CheckerPlanningContext(CollisionChecker checker, std::shared_ptr<const Environment> environment, JointGroup group,
@@ -117,6 +123,8 @@ struct CheckerPlanningContext {
   // The checker the validators ask (query/scene_checker.h), built on first use from the
   // fields above as they are then (set them before planning); shared by both validators.
   const SceneChecker& scene() const;
+  // The checker at tolerance 0 (the same as scene() when `tolerance` is 0), built on first use.
+  const SceneChecker& exact_scene() const;
 
   // The validators' questions (see StateValidity): free of self-collision and of the
   // environment at the tolerance; the certified motion (SceneChecker::check_motion); several
@@ -130,7 +138,31 @@ struct CheckerPlanningContext {
   std::vector<int> variables_;  // the group's entries in the full state
   mutable std::once_flag scene_once_;
   mutable std::unique_ptr<const SceneChecker> scene_;
+  mutable std::once_flag exact_once_;
+  mutable std::unique_ptr<const SceneChecker> exact_scene_;
+  const SceneChecker& answering() const { return exact ? exact_scene() : scene(); }
 };
+
+// A search at a tolerance, then exact (docs/planning.md, "When the tolerance closes a passage").
+// A tolerance only turns free answers within it of a collision into colliding ones, so it can
+// close a passage a few millimetres wider than the robot, where a search then asks until its
+// limit. solve_tolerance_first runs `setup`'s planner (its validators over `context`) until
+// `ptc` at the context's tolerance for the first `motions_at_tolerance` motion checks, and then,
+// unsolved, goes on with exact answers: the planner keeps its trees, since every motion the
+// tolerance let through is free exactly too. The context answers at its tolerance again on
+// return (a simplifier after it takes the tolerance's speed). Motions are counted by the
+// context's counters (a validator of this header); with no tolerance, one plain solve.
+struct SearchOutcome {
+  ompl::base::PlannerStatus status;
+  bool went_exact = false;  // the count ran out unsolved and the search went on exact
+  std::uint64_t motions_at_tolerance = 0, motions_exact = 0;  // all exact at tolerance 0
+};
+// About the 95th percentile of the search motions of the plans the 10 mm rows of bench_planning
+// solve on panda (docs/planning.md): the typical search never gets there.
+constexpr std::uint64_t kMotionsAtTolerance = 1000;
+SearchOutcome solve_tolerance_first(ompl::geometric::SimpleSetup& setup, CheckerPlanningContext& context,
+                                    const ompl::base::PlannerTerminationCondition& ptc,
+                                    std::uint64_t motions_at_tolerance = kMotionsAtTolerance);
 
 namespace detail {
 template <class Context, class = void>
