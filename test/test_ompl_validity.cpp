@@ -254,7 +254,9 @@ class StraightMotionPlanner : public ob::Planner {
   const ob::State* goal_ = nullptr;
 };
 
-og::SimpleSetup straight_setup(const std::shared_ptr<CheckerPlanningContext>& context) {
+// The pass from joint1 at 0 to 1.3 rad, planned by `Planner` over the context's validators.
+template <class Planner>
+og::SimpleSetup pass_setup(const std::shared_ptr<CheckerPlanningContext>& context) {
   og::SimpleSetup setup(context->group.make_space());
   const auto si = setup.getSpaceInformation();
   setup.setStateValidityChecker(std::make_shared<CheckerStateValidityChecker>(si, context));
@@ -262,9 +264,17 @@ og::SimpleSetup straight_setup(const std::shared_ptr<CheckerPlanningContext>& co
   ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
   start[0] = 0.0, goal[0] = 1.3;
   setup.setStartAndGoalStates(start, goal);
-  setup.setPlanner(std::make_shared<StraightMotionPlanner>(si));
+  setup.setPlanner(std::make_shared<Planner>(si));
   setup.setup();
+  context->counters->reset();
   return setup;
+}
+
+// solve_tolerance_first until the context's counters reach `limit` motions.
+SearchOutcome solve_within(og::SimpleSetup& setup, const std::shared_ptr<CheckerPlanningContext>& context, std::uint64_t limit,
+                           std::uint64_t motions_at_tolerance) {
+  const ob::PlannerTerminationCondition ptc([context, limit] { return context->counters->motions.load() >= limit; });
+  return solve_tolerance_first(setup, *context, ptc, motions_at_tolerance);
 }
 
 // A tolerance answers "colliding" within it of a collision: on a passage a few millimetres wider
@@ -290,15 +300,12 @@ TEST(OmplValidity, ASearchTheToleranceStallsGoesOnExact) {
   // At the tolerance alone the search never crosses: 2,000 motions asked, no path.
   const auto motions = [&] { return context->counters->motions.load(); };
   {
-    og::SimpleSetup setup = straight_setup(context);
-    context->counters->reset();
+    og::SimpleSetup setup = pass_setup<StraightMotionPlanner>(context);
     EXPECT_EQ(setup.solve(ob::PlannerTerminationCondition([&] { return motions() >= 2000; })), ob::PlannerStatus::TIMEOUT);
   }
   // Tolerance first for 50 motions, then exact: crossed at the 51st.
-  og::SimpleSetup setup = straight_setup(context);
-  context->counters->reset();
-  const SearchOutcome outcome =
-      solve_tolerance_first(setup, *context, ob::PlannerTerminationCondition([&] { return motions() >= 2000; }), 50);
+  og::SimpleSetup setup = pass_setup<StraightMotionPlanner>(context);
+  const SearchOutcome outcome = solve_within(setup, context, 2000, 50);
   EXPECT_EQ(outcome.status, ob::PlannerStatus::EXACT_SOLUTION);
   EXPECT_TRUE(outcome.went_exact);
   EXPECT_EQ(outcome.motions_at_tolerance, 50u);
@@ -307,16 +314,14 @@ TEST(OmplValidity, ASearchTheToleranceStallsGoesOnExact) {
   EXPECT_FALSE(context->check_motion(a.get(), b.get(), false).valid) << "the context is back at its tolerance";
   // A limit that comes first ends the search at the tolerance; a tolerance of 0 has nothing to
   // go on to.
-  og::SimpleSetup limited = straight_setup(context);
-  context->counters->reset();
-  const SearchOutcome stopped =
-      solve_tolerance_first(limited, *context, ob::PlannerTerminationCondition([&] { return motions() >= 30; }), 50);
+  og::SimpleSetup limited = pass_setup<StraightMotionPlanner>(context);
+  const SearchOutcome stopped = solve_within(limited, context, 30, 50);
   EXPECT_EQ(stopped.status, ob::PlannerStatus::TIMEOUT);
   EXPECT_FALSE(stopped.went_exact);
   EXPECT_EQ(stopped.motions_at_tolerance, 30u);
   EXPECT_EQ(stopped.motions_exact, 0u);
-  og::SimpleSetup at_zero = straight_setup(exact);
-  const SearchOutcome direct = solve_tolerance_first(at_zero, *exact, ob::PlannerTerminationCondition([] { return false; }), 50);
+  og::SimpleSetup at_zero = pass_setup<StraightMotionPlanner>(exact);
+  const SearchOutcome direct = solve_within(at_zero, exact, 2000, 50);
   EXPECT_EQ(direct.status, ob::PlannerStatus::EXACT_SOLUTION);
   EXPECT_FALSE(direct.went_exact);
   EXPECT_EQ(direct.motions_at_tolerance + direct.motions_exact, 1u);
@@ -333,17 +338,8 @@ TEST(OmplValidity, RrtConnectGoesOnExactWithItsTreesAndItsPathIsFree) {
   const auto motions = [&] { return context->counters->motions.load(); };
   int went_exact = 0;
   for (int attempt = 0; attempt < 10; ++attempt) {
-    og::SimpleSetup setup(context->group.make_space());
-    const auto si = setup.getSpaceInformation();
-    setup.setStateValidityChecker(std::make_shared<CheckerStateValidityChecker>(si, context));
-    si->setMotionValidator(std::make_shared<CheckerMotionValidator>(si, context));
-    ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
-    start[0] = 0.0, goal[0] = 1.3;
-    setup.setStartAndGoalStates(start, goal);
-    setup.setPlanner(std::make_shared<og::RRTConnect>(si));
-    context->counters->reset();
-    const SearchOutcome outcome =
-        solve_tolerance_first(setup, *context, ob::PlannerTerminationCondition([&] { return motions() >= 20000; }), 1);
+    og::SimpleSetup setup = pass_setup<og::RRTConnect>(context);
+    const SearchOutcome outcome = solve_within(setup, context, 20000, 1);
     ASSERT_EQ(outcome.status, ob::PlannerStatus::EXACT_SOLUTION) << attempt;
     EXPECT_GE(outcome.motions_at_tolerance, 1u);
     EXPECT_EQ(outcome.motions_at_tolerance + outcome.motions_exact, motions());
