@@ -25,6 +25,8 @@
 // planning (function replay_calls, for callgrind: two builds compared on the same calls, where
 // changed answers would otherwise change the plans), and prints what they answered;
 // BENCH_PLANNING_REPLAY_REPEAT=N replays each problem's calls N times and adds its fastest time.
+// BENCH_PLANNING_MOTIONS_AT_TOLERANCE=N: our searches go on exact after N motions unsolved
+// (planning::solve_tolerance_first; kMotionsAtTolerance by default).
 #include <fcl/fcl.h>
 
 #include <ompl/base/DiscreteMotionValidator.h>
@@ -244,7 +246,8 @@ struct Run {
   std::vector<std::vector<double>> path;  // full states
 };
 
-// `ours`: the search by planning::solve_tolerance_first (exact after 1,000 motions at a tolerance).
+// `ours`: the search by planning::solve_tolerance_first (exact after 1,000 motions at a tolerance,
+// or BENCH_PLANNING_MOTIONS_AT_TOLERANCE).
 Run plan(og::SimpleSetup& setup, planning::CheckerPlanningContext& layout, const Problem& p, double limit, CallTimes& calls,
          bool ours) {
   ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
@@ -264,7 +267,9 @@ Run plan(og::SimpleSetup& setup, planning::CheckerPlanningContext& layout, const
   // when 0.3 ms were checks), whatever the checker.
   const ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(limit);
   if (ours) {
-    const planning::SearchOutcome outcome = planning::solve_tolerance_first(setup, layout, ptc);
+    static const char* at_tolerance = std::getenv("BENCH_PLANNING_MOTIONS_AT_TOLERANCE");
+    const std::uint64_t motions = at_tolerance != nullptr ? std::strtoull(at_tolerance, nullptr, 10) : planning::kMotionsAtTolerance;
+    const planning::SearchOutcome outcome = planning::solve_tolerance_first(setup, layout, ptc, motions);
     run.solved = outcome.status == ob::PlannerStatus::EXACT_SOLUTION;
     run.went_exact = outcome.went_exact;
     run.motions_exact = outcome.motions_exact;
