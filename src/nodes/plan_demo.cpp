@@ -61,9 +61,11 @@ std::vector<std::vector<double>> waypoints_of(const og::PathGeometric& path, std
 }
 
 // One planning run: the validators on `setup`, RRTConnect, the path simplified (its shortcuts
-// checked by the same motion validator).
+// checked by the same motion validator). In-process (`tolerant` given), the search goes on exact
+// when its tolerance has not solved it in planning::kMotionsAtTolerance motions.
 PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::ValidityCounters& counters,
-             const std::vector<double>& start, const std::vector<double>& goal, double seconds) {
+             const std::vector<double>& start, const std::vector<double>& goal, double seconds,
+             planning::CheckerPlanningContext* tolerant = nullptr) {
   PlanRun run;
   run.name = name;
   ob::ScopedState<> a(setup.getStateSpace()), b(setup.getStateSpace());
@@ -76,7 +78,9 @@ PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::Validity
   const auto t0 = ros::WallTime::now();
   // (The limit checked by the planner, as MoveIt gives it: solve(seconds) would check it from a
   // thread of OMPL's that wakes every millisecond, and wait up to that long to join it.)
-  run.solved = setup.solve(ob::timedPlannerTerminationCondition(seconds)) == ob::PlannerStatus::EXACT_SOLUTION;
+  const ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(seconds);
+  const ob::PlannerStatus status = tolerant ? planning::solve_tolerance_first(setup, *tolerant, ptc).status : setup.solve(ptc);
+  run.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
   if (run.solved) setup.simplifySolution();
   run.planning_seconds = (ros::WallTime::now() - t0).toSec();
   run.validity_seconds = counters.seconds();
@@ -264,7 +268,7 @@ int run(ros::NodeHandle& pnh) {
   std::printf("  the straight motion from start to goal: %s\n",
               straight_free ? "free" : ("colliding (free up to " + std::to_string(straight) + " of the way)").c_str());
   print_header();
-  const PlanRun local = plan("in-process", in_process, *context->counters, start, goal, seconds);
+  const PlanRun local = plan("in-process", in_process, *context->counters, start, goal, seconds, context.get());
   print_run(local);
   const PlanRun remote = plan("through the services", through_node, *service->counters, start, goal, seconds);
   print_run(remote);
