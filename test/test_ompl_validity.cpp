@@ -277,6 +277,15 @@ SearchOutcome solve_within(og::SimpleSetup& setup, const std::shared_ptr<Checker
   return solve_tolerance_first(setup, *context, ptc, motions_at_tolerance);
 }
 
+// An outcome's status, whether it went on exact, and its motions at the tolerance and exact.
+void expect_outcome(const SearchOutcome& o, ob::PlannerStatus::StatusType status, bool went_exact, std::uint64_t at_tolerance,
+                    std::uint64_t exact) {
+  EXPECT_EQ(o.status, status);
+  EXPECT_EQ(o.went_exact, went_exact);
+  EXPECT_EQ(o.motions_at_tolerance, at_tolerance);
+  EXPECT_EQ(o.motions_exact, exact);
+}
+
 // A tolerance answers "colliding" within it of a collision: on a passage a few millimetres wider
 // than the robot a search at 1 cm can ask forever. solve_tolerance_first goes on with exact answers
 // after a number of motions (the planner's work kept: what the tolerance let through is free
@@ -305,26 +314,15 @@ TEST(OmplValidity, ASearchTheToleranceStallsGoesOnExact) {
   }
   // Tolerance first for 50 motions, then exact: crossed at the 51st.
   og::SimpleSetup setup = pass_setup<StraightMotionPlanner>(context);
-  const SearchOutcome outcome = solve_within(setup, context, 2000, 50);
-  EXPECT_EQ(outcome.status, ob::PlannerStatus::EXACT_SOLUTION);
-  EXPECT_TRUE(outcome.went_exact);
-  EXPECT_EQ(outcome.motions_at_tolerance, 50u);
-  EXPECT_EQ(outcome.motions_exact, 1u);
+  expect_outcome(solve_within(setup, context, 2000, 50), ob::PlannerStatus::EXACT_SOLUTION, true, 50, 1);
   EXPECT_EQ(motions(), 51u);
   EXPECT_FALSE(context->check_motion(a.get(), b.get(), false).valid) << "the context is back at its tolerance";
   // A limit that comes first ends the search at the tolerance; a tolerance of 0 has nothing to
   // go on to.
   og::SimpleSetup limited = pass_setup<StraightMotionPlanner>(context);
-  const SearchOutcome stopped = solve_within(limited, context, 30, 50);
-  EXPECT_EQ(stopped.status, ob::PlannerStatus::TIMEOUT);
-  EXPECT_FALSE(stopped.went_exact);
-  EXPECT_EQ(stopped.motions_at_tolerance, 30u);
-  EXPECT_EQ(stopped.motions_exact, 0u);
+  expect_outcome(solve_within(limited, context, 30, 50), ob::PlannerStatus::TIMEOUT, false, 30, 0);
   og::SimpleSetup at_zero = pass_setup<StraightMotionPlanner>(exact);
-  const SearchOutcome direct = solve_within(at_zero, exact, 2000, 50);
-  EXPECT_EQ(direct.status, ob::PlannerStatus::EXACT_SOLUTION);
-  EXPECT_FALSE(direct.went_exact);
-  EXPECT_EQ(direct.motions_at_tolerance + direct.motions_exact, 1u);
+  expect_outcome(solve_within(at_zero, exact, 2000, 50), ob::PlannerStatus::EXACT_SOLUTION, false, 0, 1);
 }
 
 // RRTConnect through the same pass, sent on exact after its first iteration with its trees kept:

@@ -19,9 +19,9 @@
 #include <vector>
 
 #include <ompl/base/MotionValidator.h>
-#include <ompl/base/SpaceInformation.h>
 #include <ompl/base/PlannerStatus.h>
 #include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/SimpleSetup.h>
@@ -143,7 +143,7 @@ struct CheckerPlanningContext {
   const SceneChecker& answering() const { return exact ? exact_scene() : scene(); }
 };
 
-// A search at a tolerance, then exact (docs/planning.md, "When the tolerance closes a passage").
+// A search at a tolerance, then exact (docs/planning.md, "A passage the tolerance closes").
 // A tolerance only turns free answers within it of a collision into colliding ones, so it can
 // close a passage a few millimetres wider than the robot, where a search then asks until its
 // limit. solve_tolerance_first runs `setup`'s planner (its validators over `context`) until
