@@ -197,7 +197,7 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
     const double d = compounds_distance(m.compound(a), s.poses[a], m.compound(b), s.poses[b], query_limit_above(limit), true,
                                         wa, wb, stats);
     if (d > limit) return Answer::kFree;
-    s.note_free_radius(d - margin - (pads - grow) - options_.min_clearance, grow);
+    s.note_free_radius(d - margin - (pads - grow) - s.clearance, grow);
     return Answer::kNear;
   }
   if (proxies_decide_self_ && s.tolerant()) return Answer::kHit;
@@ -295,7 +295,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
         const double limit = grown_radius(pad) + margin;
         const double d = link_object_distance(l, s.poses[l], o, limit);
         if (d > limit) return;
-        s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
+        s.note_free_radius(d - margin - m.paddings()[l] - s.clearance, s.grow(l));
         answer = Answer::kNear;
       } else if ((proxies_decide_objects_ && grid_.exact_ball_test(o) && s.tolerant()) ||
                  link_meets_object_exact(l, s.poses[l], o, s.tolerant() ? options_.tolerance : 0.0)) {
@@ -349,7 +349,7 @@ SceneChecker::Answer SceneChecker::link_octree_check(int l, const Posed& s) cons
     }
     d = std::max(d, compound_octree_distance(m.compound(l), s.poses[l], tree, true, query_limit_above(limit), stats).distance);
     if (d > limit) return Answer::kFree;
-    s.note_free_radius(d - margin - m.paddings()[l] - options_.min_clearance, s.grow(l));
+    s.note_free_radius(d - margin - m.paddings()[l] - s.clearance, s.grow(l));
     return Answer::kNear;
   }
   if (proxies_decide_objects_ && s.tolerant()) return Answer::kHit;

@@ -14,17 +14,13 @@
 #include "bvh_collision/geometry/safety_margin.h"
 #include "bvh_collision/geometry/split_column.h"
 #include "bvh_collision/narrowphase/tolerance_policy.h"
+#include "motion_scratch.h"
 
 namespace bvh_collision {
 
 namespace {
 
-// An interval of the motion and the components still pending over it (arena[first, first +
-// count)): those its parent could not certify; the others are free over the parent, so over it.
-struct Interval {
-  double lo, hi;
-  std::size_t first, count;
-};
+using scene_motion::Interval;
 
 // How close (a fraction of the motion) the last valid state of a colliding motion must come to
 // the collision found when the earliest one is asked for.
@@ -70,48 +66,6 @@ double certified_prefix(std::vector<Interval>& done) {
 }
 
 }  // namespace
-
-// A thread's working memory, kept between motions: a planner's millionth motion allocates nothing.
-struct SceneChecker::MotionScratch {
-  // speed, pair_speed: the motion's chain-length rates; interval_speed, interval_pair_speed: the
-  // current interval's (at most those); delta: goal - start.
-  std::vector<double> growth, state, speed, pair_speed, pair_growth, from, to, delta, interval_speed, interval_pair_speed, sums;
-  std::vector<int> chain_reads, read_links;  // interval_speeds' working memory
-  std::vector<double> chain_delta, turning_total;  // chain_deltas' (once a motion)
-  std::vector<int> turning_moving;
-  std::vector<TurningAxis> axes;
-  std::vector<Interval> done;   // certified intervals (check_motion)
-  // Intervals still to check: todo[head, end), taken from the front (breadth first) or the back
-  // (depth first).
-  std::vector<Interval> todo;
-  std::vector<int> order;  // pieces of a motion cut at once (spread_order)
-  std::vector<std::pair<int, int>> runs;
-  std::vector<int> changing;  // the variables a motion changes (check_motion_once)
-  std::vector<int> pending;  // a motion's components still to certify, per interval (check_interval)
-  std::vector<int> near;     // an interval's pending components its chain-length rates do not certify
-  std::vector<int> live;     // an interval's pending components past its bounding-ball sieve
-  // Per component: may the tolerance's shortcut take it on this motion? (-1: not asked yet)
-  std::vector<signed char> tolerant;
-  Posed midpoint;                                   // check_interval's
-  std::array<Posed, 2> ends;                        // check_motion's end states
-  const double* goal = nullptr;                     // the motion's goal, posed into ends[1] once read
-  bool goal_posed = false;
-  std::vector<double> end_growth, end_pair_growth;  // tolerant_component's
-  // moving_links': the kinematic steps and the links with geometry a motion moves (all when the
-  // root pose is not the identity), and the largest centre norm of the others.
-  std::vector<std::uint32_t> moving_steps;
-  std::vector<int> moving;
-  std::vector<char> link_moves;
-  // pose_moving_links' for an interval whose pending components read only some links.
-  std::vector<char> link_needed;
-  std::vector<std::uint32_t> needed_steps;
-  std::vector<int> needed_moving;
-  // The pending list (pending[first, first + count)) they were found for: the halves of an
-  // interval, and the pieces of a motion, share their parent's list (none before a motion's first).
-  std::size_t needed_first = 0, needed_count = 0;
-  bool partial = false;
-  double still_largest = 0.0;
-};
 
 // (Not inlined: a caller keeps the reference it returns, where a thread_local named in a loop
 // costs a call to __tls_get_addr at every use after a call, in a shared library.)
@@ -165,8 +119,9 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   live.clear();
   for (const int k : near) {
     const double g = (k < pairs ? s.interval_pair_speed[k] : s.interval_speed[k - pairs]) * half;
-    // min_clearance on top: a certified interval stays that far from every collision.
-    const double grown = grown_growth(g) + options_.min_clearance;
+    // The component's floor on top (min_clearance, or less for an end closer than that:
+    // end_clearance_floor): a certified interval stays that far from every collision.
+    const double grown = grown_growth(g) + (s.floors_lowered ? s.floor[k] : options_.min_clearance);
     if (k >= pairs) {
       s.growth[k - pairs] = grown;
     } else {
@@ -192,6 +147,7 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   posed.tolerant_flag = false;
   for (const int k : live) {
     posed.component = k;
+    posed.clearance = s.floors_lowered ? s.floor[k] : options_.min_clearance;
     // Over the whole motion, a component grown by more than a piece's growth is not walked: so
     // grown it meets what is near it (its walk goes deep before it fails) and the pieces will
     // check it again. Its midpoint check still runs. It has no exact distance, so it frees no
@@ -238,8 +194,10 @@ SceneChecker::Step SceneChecker::check_interval(double lo, double hi, std::size_
   }
   // Growth below the level is tested by exact distances: a failure with the motion's own growth
   // within min_clearance puts a pair within padding + 2 min_clearance at the midpoint (counted as
-  // colliding, as advancement counts one within min_clearance).
-  if (2.0 * largest <= options_.min_clearance && (largest <= level_ / 2 || proxies_.empty())) {
+  // colliding, as advancement counts one within min_clearance), unless a component that failed
+  // is held to a lower floor by an end closer than that (end_clearance_floor).
+  if (2.0 * largest <= options_.min_clearance && (largest <= level_ / 2 || proxies_.empty()) &&
+      !closer_end_splits(&*failed, arena.data() + arena.size(), half, ends)) {
     return {Step::kCollides, mid, failing, left};
   }
   // Every component that failed did so on an exact distance at the midpoint: each is free for
@@ -274,45 +232,6 @@ bool SceneChecker::failure_within_tolerance(int k, const Posed& mid) const {
   const ProxyLevel* walked = walked_level(grown);
   const double margin = 2.0 * (proxy_pose_margin(walked->links[a], mid.poses[a]) + proxy_pose_margin(walked->links[b], mid.poses[b]));
   return interval_within_tolerance(walked->level, Counterpart::kLink, grown + margin, options_.tolerance);
-}
-
-// The motion's goal into ends[1], the first time a test reads it.
-void SceneChecker::pose_goal(Posed* ends) const {
-  MotionScratch& s = motion_scratch();
-  if (s.goal_posed) return;
-  pose_links(s.goal, ends[1]);
-  s.goal_posed = true;
-}
-
-// At a tolerance, a motion may count as colliding where a component (a self pair, a link against
-// the environment) comes within the tolerance, unless that component already is at one of its
-// ends: a planner must be able to leave a state it accepted. (A failing interval is taken as
-// colliding only where its level's error leaves room for its growth within the tolerance:
-// failure_within_tolerance; the midpoints are answered at the tolerance with any level.) May the
-// shortcut take component k on this motion? Asked only of components that fail somewhere, and
-// answered once per motion: the proxies grown by the tolerance at both ends (`ends`, posed) must
-// prove it clear of the tolerance there.
-bool SceneChecker::tolerant_component(int k, Posed* ends) const {
-  MotionScratch& s = motion_scratch();
-  signed char& known = s.tolerant[k];
-  if (known >= 0) return known != 0;
-  std::vector<double>& growth = s.end_growth;
-  std::vector<double>& pair_growth = s.end_pair_growth;
-  growth.assign(checker_.collision_model().shapes().size(), options_.tolerance);
-  pair_growth.assign(pair_rates_.size(), options_.tolerance);
-  known = 1;
-  pose_goal(ends);
-  for (int e = 0; e < 2 && known; ++e) {
-    Posed& end = ends[e];  // check_motion's own posed ends
-    end.growth = growth.data();
-    end.pair_growth = pair_growth.data();
-    end.from = end.to = nullptr;
-    end.tolerant_flag = true;  // no exact distances: the proxies decide or it is not clear
-    end.ends = nullptr;
-    end.half = 0.0;
-    if (component_check(k, end) != Answer::kFree) known = 0;
-  }
-  return known != 0;
 }
 
 // Per link and per self pair, how fast they can move (close) per unit fraction of this segment.
@@ -535,6 +454,7 @@ MotionResult SceneChecker::check_motion_once(const double* start, const double* 
     return result;
   }
   s.tolerant.assign(pair_rates_.size() + checker_.collision_model().shapes().size(), tolerance_asked_ ? -1 : 0);
+  s.floors_asked = s.floors_lowered = false;
   motion_speeds(start, goal);
   moving_links(start, goal, ends[0]);
   std::vector<int>& arena = s.pending;

@@ -19,7 +19,9 @@ struct MotionRequest {
   Transform root_pose;        // the root link in the world frame
   // Certified: a motion answered free stays farther than this from every collision; one that
   // comes within it may count as colliding (an exact contact can be approached, never proven
-  // apart: this bounds the work near one, and is a tolerance of its own).
+  // apart: this bounds the work near one, and is a tolerance of its own). A self pair or link
+  // that is closer than twice this at one of the motion's ends (a valid state a planner must
+  // reach and leave) keeps at least a quarter of its clearance there instead (query/scene_checker.h).
   double min_clearance = 1e-5;
   // Certified: beyond this many states checked the motion is not certified (invalid, with a
   // message).

@@ -25,11 +25,16 @@
 //   for the self pairs and links (components) that are clear of t at both ends of the motion; one
 //   within t at an end is settled exactly (a planner must be able to leave the state it stands
 //   in, and a base resting on the floor must not make every motion exact). Free means free at
-//   every instant, farther than min_clearance from every collision, at any tolerance.
+//   every instant, farther than min_clearance from every collision, at any tolerance; a component
+//   closer than twice min_clearance at an end (a valid state, 0.2 um from a contact) keeps the
+//   largest min_clearance / 2^j whose double both ends clear instead, at least 10 nm (a quarter to
+//   a half of the nearer end's clearance): a planner can reach and leave any state it accepted
+//   beyond 20 nm of a contact (scene_ends.cpp).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -134,6 +139,9 @@ class SceneChecker {
     // frees nothing (0).
     double half = 0.0;
     mutable double free_radius = 0.0;
+    // The clearance the interval keeps for `component` (end_clearance_floor); a stretch is freed
+    // only where the component stays farther than it (infinite: none is).
+    double clearance = std::numeric_limits<double>::infinity();
     // Since the last clear_gaps: did every failure of a component come from an exact distance at
     // the midpoint beyond its padding (1), another failure (0), or none yet (-1)? All beyond: the
     // midpoint itself is free of that component.
@@ -189,6 +197,10 @@ class SceneChecker {
   Step check_interval(double lo, double hi, std::size_t first, std::size_t count, At&& at,
                       Posed* ends) const;
   bool tolerant_component(int k, Posed* ends) const;
+  // Is component k clear by more than `grow` at both ends? (`exact` false: proxies alone decide.)
+  bool clear_at_ends(int k, Posed* ends, double grow, bool exact) const;
+  double end_clearance_floor(int k, Posed* ends) const;
+  bool closer_end_splits(const int* first, const int* last, double half, Posed* ends) const;
   bool failure_within_tolerance(int k, const Posed& mid) const;
   void pose_goal(Posed* ends) const;
   void pose_links(const double* state, Posed& posed) const;
