@@ -58,8 +58,8 @@ bool SceneChecker::clear_at_ends(int k, Posed* ends, double grow, bool exact) co
 // ends are proven clear of, by exact distances: about a quarter to a half of the nearer end's
 // clearance, so the intervals next to it can be certified once their growth is below that, and
 // the bisection still ends. Not below kLeastClearance: closer than twice that, the poses'
-// rounding margins (1e-9 of a metre's coordinates, safety_margin.h) are most of the clearance,
-// and the motion is answered colliding there as before. Once a motion per component, and only
+// rounding margins (1e-9 of a metre's coordinates, safety_margin.h) are a fifth of the clearance
+// and more, and the motion is answered colliding there as before. Once a motion per component, and only
 // for a component about to end a bisection.
 double SceneChecker::end_clearance_floor(int k, Posed* ends) const {
   constexpr double kLeastClearance = 1e-8;
