@@ -10,23 +10,21 @@
 #include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/io/scene_file.h"
 #include "checker_fixtures.h"
+#include "scene_file_fixtures.h"
 #include "planning_scenes.h"
 
 namespace bvh_collision {
 namespace {
+
+using test::read_text;
+using test::read_yaml;
+using test::tetrahedron;
 
 Transform posed(double x, double y, double z, double angle, const Vec3& axis) {
   Transform t;
   t.R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
   t.t = Vec3(x, y, z);
   return t;
-}
-
-TriangleMesh tetrahedron(double s) {
-  TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  return m;
 }
 
 // Every kind a scene can hold, an object of several shapes and a posed object.
@@ -47,11 +45,6 @@ std::string text_of(const SceneFile& s) {
   std::ostringstream out;
   write_scene_text(s, out);
   return out.str();
-}
-
-SceneFile read_text(const std::string& text) {
-  std::istringstream in(text);
-  return read_scene_text(in, "test.scene");
 }
 
 void expect_same_scene(const SceneFile& a, const SceneFile& b) {
@@ -318,11 +311,6 @@ allowed_collision_matrix:
 object_colors: []
 is_diff: false
 )";
-
-SceneFile read_yaml(const std::string& text) {
-  std::istringstream in(text);
-  return read_scene_yaml(in, "test.yaml");
-}
 
 TEST(SceneFile, ReadsAPlanningSceneInYaml) {
   const SceneFile yaml = read_yaml(kEveryKindYaml);

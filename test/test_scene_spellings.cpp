@@ -12,19 +12,14 @@
 #include "bvh_collision/query/collision_checker.h"
 #include "bvh_collision/io/scene_file.h"
 #include "checker_fixtures.h"
+#include "scene_file_fixtures.h"
 
 namespace bvh_collision {
 namespace {
 
-SceneFile read_yaml(const std::string& text) {
-  std::istringstream in(text);
-  return read_scene_yaml(in, "test.yaml");
-}
-
-SceneFile read_text(const std::string& text) {
-  std::istringstream in(text);
-  return read_scene_text(in, "test.scene");
-}
+using test::read_text;
+using test::read_yaml;
+using test::tetrahedron;
 
 Transform random_pose(std::mt19937_64& rng, double spread) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -32,13 +27,6 @@ Transform random_pose(std::mt19937_64& rng, double spread) {
   t.R = Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng) + 1.5).normalized()).toRotationMatrix();
   t.t = Vec3(u(rng), u(rng), u(rng) + 1.0) * spread;
   return t;
-}
-
-TriangleMesh tetrahedron(double s) {
-  TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  return m;
 }
 
 // A scene of every kind around the demo arm: posed objects of one to three shapes (boxes,
