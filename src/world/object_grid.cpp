@@ -57,11 +57,11 @@ ObjectGrid::ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi
   const std::size_t cells = static_cast<std::size_t>(n_[0]) * n_[1] * n_[2];
   start_.assign(cells + 1, 0);
   // A cell lists an object when the object's box comes within reach of the cell's box (the ball
-  // of a query centred in the cell, of radius up to reach, can then meet it).
+  // of a query centred in the cell, of radius up to reach, can then meet it). The lists are
+  // counted first and then written into one array, in object order within a cell: a list per cell
+  // cost an allocation for each of a scene's thousands of cells that any object came near.
   const double half_diagonal = 0.5 * std::sqrt(3.0) * cell;
-  std::vector<std::vector<std::uint32_t>> lists(cells);
-  for (std::size_t o = 0; o < solids_.size(); ++o) {
-    const Solid& s = solids_[o];
+  auto for_each_cell_near = [&](const Solid& s, auto&& f) {
     int first[3], last[3];
     for (int i = 0; i < 3; ++i) {
       first[i] = first_cell((s.lo[i] - reach - lo[i]) / cell, n_[i]);
@@ -73,14 +73,18 @@ ObjectGrid::ObjectGrid(const ObjectList& objects, const Vec3& lo, const Vec3& hi
           const Vec3 centre = lo + cell * Vec3(x + 0.5, y + 0.5, z + 0.5);
           const double within = reach + half_diagonal;
           if (squared_box_distance(centre, s.lo, s.hi) > within * within * (1 + 1e-9)) continue;
-          lists[(static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x].push_back(static_cast<std::uint32_t>(o));
+          f((static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x);
         }
       }
     }
+  };
+  for (const Solid& s : solids_) for_each_cell_near(s, [&](std::size_t c) { ++start_[c + 1]; });
+  for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
+  list_.resize(start_.back());
+  std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
+  for (std::size_t o = 0; o < solids_.size(); ++o) {
+    for_each_cell_near(solids_[o], [&](std::size_t c) { list_[next[c]++] = static_cast<std::uint32_t>(o); });
   }
-  for (std::size_t c = 0; c < cells; ++c) start_[c + 1] = start_[c] + static_cast<std::uint32_t>(lists[c].size());
-  list_.reserve(start_.back());
-  for (const auto& l : lists) list_.insert(list_.end(), l.begin(), l.end());
   cell_bounds(half_diagonal);
 }
 
