@@ -138,7 +138,7 @@ double plan_once(const CollisionChecker& checker, const EnvironmentStore& store,
   setup.setStartAndGoalStates(s, g);
   if (!context->check_state(s.get()) || !context->check_state(g.get())) return -1.0;
   const bool solved = setup.solve(ob::timedPlannerTerminationCondition(limit)) == ob::PlannerStatus::EXACT_SOLUTION;
-  if (solved) setup.simplifySolution();
+  if (solved) planning::simplify_or_keep(setup);
   return solved ? std::chrono::duration<double>(Clock::now() - t0).count() : limit;
 }
 

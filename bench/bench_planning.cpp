@@ -242,6 +242,7 @@ struct Run {
   bool solved = false;
   double seconds = 0.0, simplify_seconds = 0.0;
   bool went_exact = false;          // ours at a tolerance: the search went on exact (planning::SearchOutcome)
+  bool simplify_restored = false;   // ours: planning::simplify_certified went back to the path found
   std::uint64_t motions_exact = 0;  // and asked this many motions after
   std::vector<std::vector<double>> path;  // full states
 };
@@ -266,10 +267,11 @@ Run plan(og::SimpleSetup& setup, planning::CheckerPlanningContext& layout, const
   // that wakes every millisecond, and its join took 1.0 ms of the median plan (3.5 ms at 10 mm,
   // when 0.3 ms were checks), whatever the checker.
   const ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(limit);
+  planning::SearchOutcome outcome;
   if (ours) {
     static const char* at_tolerance = std::getenv("BENCH_PLANNING_MOTIONS_AT_TOLERANCE");
     const std::uint64_t motions = at_tolerance != nullptr ? std::strtoull(at_tolerance, nullptr, 10) : planning::kMotionsAtTolerance;
-    const planning::SearchOutcome outcome = planning::solve_tolerance_first(setup, layout, ptc, motions);
+    outcome = planning::solve_tolerance_first(setup, layout, ptc, motions);
     run.solved = outcome.status == ob::PlannerStatus::EXACT_SOLUTION;
     run.went_exact = outcome.went_exact;
     run.motions_exact = outcome.motions_exact;
@@ -279,7 +281,12 @@ Run plan(og::SimpleSetup& setup, planning::CheckerPlanningContext& layout, const
   if (run.solved) {
     const auto s0 = std::chrono::steady_clock::now();
     calls.simplifying = true;
-    setup.simplifySolution();
+    if (ours) {
+      // On the answers the search ended on; a result OMPL's simplifier rejects is not kept.
+      run.simplify_restored = planning::simplify_certified(setup, layout, outcome).restored;
+    } else {
+      setup.simplifySolution();  // as MoveIt runs it
+    }
     calls.simplifying = false;
     run.simplify_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
   }
@@ -316,6 +323,7 @@ struct Tally {
   std::string name;
   int solved = 0, ours_colliding = 0, fcl_colliding = 0;
   int went_exact = 0, solved_exact = 0;  // searches that went on exact after the tolerance's motions, and solved so
+  int restored = 0;  // simplified paths OMPL's simplifier rejected, gone back to the path found (planning::simplify_certified)
   std::vector<double> seconds;  // every problem (an unsolved one at the limit)
   CallTimes calls;
   std::vector<ProblemTimes> problems;
@@ -331,6 +339,7 @@ void print_calls(const Tally& tally, const Run& run, const CallMark& before) {
   for (std::size_t i = before.motions; i < c.motions.size(); ++i) in_motions += c.motions[i];
   const std::vector<double> motions(c.motions.begin() + static_cast<std::ptrdiff_t>(before.motions), c.motions.end());
   if (run.went_exact) std::printf("  %s: went on exact, %lu motions after\n", tally.name.c_str(), static_cast<unsigned long>(run.motions_exact));
+  if (run.simplify_restored) std::printf("  %s: the simplifier's result rejected, the path found simplified exact\n", tally.name.c_str());
   std::printf("  %s: %s in %.1f ms; %zu states (%.1f ms), %zu motions (%.1f ms; us median %.0f, p90 %.0f, max %.0f); simplifier "
               "%.1f ms, its motions %ld colliding (%.1f ms) and %ld free (%.1f ms); path of %zu states\n",
               tally.name.c_str(), run.solved ? "solved" : "failed", 1e3 * run.seconds, c.states.size() - before.states, in_states / 1e3,
@@ -348,6 +357,7 @@ void record(Tally& tally, const Run& run, const CallMark& before, double limit, 
   print_calls(tally, run, before);
   tally.went_exact += run.went_exact;
   tally.solved_exact += run.went_exact && run.solved;
+  tally.restored += run.simplify_restored;
   double in_calls = tally.calls.outside_motions_us - before.outside_motions_us;
   for (std::size_t i = before.motions; i < tally.calls.motions.size(); ++i) in_calls += tally.calls.motions[i];
   tally.problems.push_back({run.solved ? run.seconds : limit, run.simplify_seconds, 1e-6 * in_calls});
@@ -357,6 +367,7 @@ void record(Tally& tally, const Run& run, const CallMark& before, double limit, 
   const auto [ours, theirs] = path_collides(run, checker, env, fcl);
   tally.ours_colliding += ours;
   tally.fcl_colliding += theirs;
+  if (ours || theirs) std::printf("  path collides: certified re-check %d, FCL every 1e-3 rad %d\n", int(ours), int(theirs));
 }
 
 // One problem planned by one of our configurations (tolerance 0 or 10 mm).
@@ -433,14 +444,16 @@ void report(const std::string& out_dir, const std::vector<RobotRun>& runs, doubl
     robots += (robots.empty() ? "" : "; ") + r.robot + ": " + std::to_string(r.joints) + " joints, " + std::to_string(r.problems) +
               " problems (" + std::to_string(r.near) + " goals within 5 mm of an obstacle), proxy levels built or read in " +
               bench::format(r.build_seconds) + " s, 10 mm searches gone on exact " + std::to_string(r.tallies[1].went_exact) +
-              " (solved " + std::to_string(r.tallies[1].solved_exact) + ")";
+              " (solved " + std::to_string(r.tallies[1].solved_exact) + "), simplified paths rejected and gone back to the path found " +
+              std::to_string(r.tallies[0].restored + r.tallies[1].restored);
   }
   table.note(robots + ". One scene a problem: panda's and ur5e's 20-60 boxes, cylinders and spheres (tables, shelves, open "
              "boxes, cages, clutter; every other panda scene a shelf of thin boards, a dense cage of thin bars or a drawer, "
              "the goal drawn inside it), pr2's a table with a cabinet between the arms, shelves on each side and clutter (the "
              "goal drawn into one). The SRDF's allowed pairs; " + bench::format(limit) + " s a problem, then OMPL's path "
              "simplifier on the same validators (ours at 10 mm: exact after 1,000 search motions unsolved, "
-             "planning::solve_tolerance_first); plan times count unsolved problems at the limit. Per-check figures are "
+             "planning::solve_tolerance_first, and the simplifier on the answers the search ended on, a result it rejects "
+             "not kept: planning::simplify_certified); plan times count unsolved problems at the limit. Per-check figures are "
              "medians over every call the planners made (each call timed on its own); time in checks: the sum of those "
              "calls (for ours the adapter's state layout included) over the plan time, the rest is OMPL's own work, over every "
              "problem and over the middle half of the problems by plan time (the median plan's neighbours: over every problem "

@@ -79,9 +79,12 @@ PlanRun plan(const std::string& name, og::SimpleSetup& setup, planning::Validity
   // (The limit checked by the planner, as MoveIt gives it: solve(seconds) would check it from a
   // thread of OMPL's that wakes every millisecond, and wait up to that long to join it.)
   const ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(seconds);
-  const ob::PlannerStatus status = tolerant ? planning::solve_tolerance_first(setup, *tolerant, ptc).status : setup.solve(ptc);
-  run.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
-  if (run.solved) setup.simplifySolution();
+  const planning::SearchOutcome search =
+      tolerant ? planning::solve_tolerance_first(setup, *tolerant, ptc) : planning::SearchOutcome{setup.solve(ptc)};
+  run.solved = search.status == ob::PlannerStatus::EXACT_SOLUTION;
+  // A simplified path its simplifier rejects is not kept (planning::simplify_or_keep).
+  if (run.solved && tolerant) planning::simplify_certified(setup, *tolerant, search);
+  if (run.solved && !tolerant) planning::simplify_or_keep(setup);
   run.planning_seconds = (ros::WallTime::now() - t0).toSec();
   run.validity_seconds = counters.seconds();
   run.state_checks = counters.states;

@@ -184,4 +184,37 @@ SearchOutcome solve_tolerance_first(ompl::geometric::SimpleSetup& setup, Checker
   return outcome;
 }
 
+bool simplify_or_keep(ompl::geometric::SimpleSetup& setup, const ompl::base::PlannerTerminationCondition& ptc) {
+  ompl::geometric::PathGeometric& path = setup.getSolutionPath();
+  const ompl::geometric::PathGeometric found = path;
+  if (setup.getPathSimplifier()->simplify(path, ptc)) return true;
+  path = found;
+  return false;
+}
+
+SimplifyOutcome simplify_certified(ompl::geometric::SimpleSetup& setup, CheckerPlanningContext& context, const SearchOutcome& search,
+                                   const ompl::base::PlannerTerminationCondition& ptc) {
+  // Simplifies on exact answers or the tolerance's; the context is back at its tolerance after.
+  const auto simplify = [&](bool exact) {
+    context.exact = exact;
+    try {
+      const bool kept = simplify_or_keep(setup, ptc);
+      context.exact = false;
+      return kept;
+    } catch (...) {
+      context.exact = false;
+      throw;
+    }
+  };
+  SimplifyOutcome outcome;
+  outcome.exact = search.went_exact || context.tolerance == 0.0;
+  outcome.simplified = simplify(outcome.exact);
+  if (outcome.simplified) return outcome;
+  outcome.restored = true;
+  if (outcome.exact) return outcome;  // rejected on exact answers already: the path found stands
+  outcome.exact = true;
+  outcome.simplified = simplify(true);
+  return outcome;
+}
+
 }  // namespace bvh_collision::planning

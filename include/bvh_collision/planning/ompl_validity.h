@@ -150,7 +150,7 @@ struct CheckerPlanningContext {
 // `ptc` at the context's tolerance for the first `motions_at_tolerance` motion checks, and then,
 // unsolved, goes on with exact answers: the planner keeps its trees, since every motion the
 // tolerance let through is free exactly too. The context answers at its tolerance again on
-// return (a simplifier after it takes the tolerance's speed). Motions are counted by the
+// return (simplify_certified below simplifies on the answers the search ended on). Motions are counted by the
 // context's counters (a validator of this header); with no tolerance, one plain solve.
 struct SearchOutcome {
   ompl::base::PlannerStatus status;
@@ -163,6 +163,31 @@ constexpr std::uint64_t kMotionsAtTolerance = 1000;
 SearchOutcome solve_tolerance_first(ompl::geometric::SimpleSetup& setup, CheckerPlanningContext& context,
                                     const ompl::base::PlannerTerminationCondition& ptc,
                                     std::uint64_t motions_at_tolerance = kMotionsAtTolerance);
+
+// OMPL's path simplifier on `setup`'s solution path, its result kept only when the simplifier
+// accepts it; else the path found is put back (returns false). The simplifier takes only a
+// shortcut its validators find free, but it ends by re-checking every segment and "repairs" one
+// they reject by sampling states near it: when no repair serves, it leaves the last sampled state
+// in the path, with motions no check found free, and says so by its answer, which
+// SimpleSetup::simplifySolution drops. Certified validators at a tolerance can reject a segment
+// they or exact answers accepted before (a tolerance lets, not makes, a motion within it of a
+// collision count as colliding), so over them a simplifier's result needs this check.
+bool simplify_or_keep(ompl::geometric::SimpleSetup& setup,
+                      const ompl::base::PlannerTerminationCondition& ptc = ompl::base::plannerNonTerminatingCondition());
+
+// simplify_or_keep for a path solve_tolerance_first found (docs/planning.md, "Simplifying a
+// path"). A search that went on exact can return a segment within the tolerance of an obstacle,
+// which the tolerance's answers may reject: its path is simplified on exact answers. A result the
+// simplifier rejects at the tolerance goes back to the path found, simplified exact (a segment
+// found free is free exactly, and so is every part of it); rejected exact too, the path found
+// stands. The context answers at its tolerance again on return.
+struct SimplifyOutcome {
+  bool simplified = false;  // the simplifier's result was kept (else the path found, unchanged)
+  bool exact = false;       // on exact answers
+  bool restored = false;    // a result was rejected and the path found went back (simplified exact once more)
+};
+SimplifyOutcome simplify_certified(ompl::geometric::SimpleSetup& setup, CheckerPlanningContext& context, const SearchOutcome& search,
+                                   const ompl::base::PlannerTerminationCondition& ptc = ompl::base::plannerNonTerminatingCondition());
 
 namespace detail {
 template <class Context, class = void>
