@@ -449,9 +449,12 @@ TEST(OmplValidity, APathFoundExactIsSimplifiedExactAndStaysFree) {
     EXPECT_TRUE(simplified.exact);
     EXPECT_FALSE(simplified.restored) << "exact answers accept a path found exact";
   }
-  // A caller who says the path was found at the tolerance (it was not): the segments from the
-  // eighth state on, simplified at 1 cm, which OMPL's simplifier sometimes rejects (1 of 10 draws
-  // when this test was written); a rejected result goes back and is simplified exact.
+  // A caller who says the path was found at the tolerance (it was not): its eighth to tenth states
+  // (the rejected segment and the next), simplified at 1 cm, which OMPL's simplifier sometimes
+  // rejects (1 of 10 draws when this test was written); a rejected result goes back and is
+  // simplified exact. (With OMPL's simplifier at the tolerance and its verdict dropped, as before
+  // simplify_certified, this test failed in 3 of 3 runs: one or two of its 13 draws left a
+  // colliding segment.)
   search.went_exact = false;
   og::PathGeometric tail(si);
   for (std::size_t w = 7; w < found.getStateCount() - 1; ++w) tail.append(found.getState(w));
@@ -479,4 +482,3 @@ TEST(OmplValidity, BadGroupsAndStatesAreNamed) {
 
 }  // namespace
 }  // namespace bvh_collision::planning
-
