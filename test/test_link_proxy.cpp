@@ -7,6 +7,7 @@
 // subtree's leaves; (d) proxies_overlap equals brute force over all leaf pairs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -214,14 +215,21 @@ TEST(LinkProxy, BuildWorkGrowsAsNLogNOfTheLeaves) {
   EXPECT_LE(growth, 1.5 * leaves * std::log2(static_cast<double>(work[1].leaves)) / std::log2(static_cast<double>(work[0].leaves)));
 }
 
-// Over the same tree on both sides and over trees of different sizes (the walk opens the larger
-// sphere of a pair: both sides get opened, and a leaf meets an inner sphere).
-TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
+// Panda's finger at 10 mm and its hand at 20 mm (trees of different sizes).
+struct FingerAndHand {
   const std::string dir = "panda/moveit_resources_panda_description/meshes/collision/";
   const Bvh<Obb> finger = Bvh<Obb>::build(test::robot_mesh(dir + "finger.stl"));
   const Bvh<Obb> hand = Bvh<Obb>::build(test::robot_mesh(dir + "hand.stl"));
   const LinkProxy finger_proxy = LinkProxy::build({BodyShape{ShapeRef{&finger, nullptr, Primitive{}}, Transform()}}, 0.01);
   const LinkProxy hand_proxy = LinkProxy::build({BodyShape{ShapeRef{&hand, nullptr, Primitive{}}, Transform()}}, 0.02);
+};
+
+// Over the same tree on both sides and over trees of different sizes (the walk opens the larger
+// sphere of a pair: both sides get opened, and a leaf meets an inner sphere).
+TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
+  const FingerAndHand proxies;
+  const LinkProxy& finger_proxy = proxies.finger_proxy;
+  const LinkProxy& hand_proxy = proxies.hand_proxy;
   for (const LinkProxy* other : {&finger_proxy, &hand_proxy}) {
     const std::vector<ProxySphere> la = leaves(finger_proxy), lb = leaves(*other);
     std::mt19937_64 rng(9);
@@ -245,6 +253,58 @@ TEST(LinkProxy, OverlapEqualsBruteForceOverLeafPairs) {
     EXPECT_GT(overlaps, 0);
     EXPECT_LT(overlaps, test::sized(400));
   }
+}
+
+// A witness (the leaf pair that last met) changes no answer: along a walk of small steps (where it
+// is mostly still met), with indices that are not a leaf pair of these proxies, and with one from
+// the other proxy; a true answer leaves in it a leaf pair that meets (brute force).
+TEST(LinkProxy, AWitnessChangesNoAnswerAndHoldsALeafPairThatMeets) {
+  const FingerAndHand proxies;
+  const LinkProxy& finger_proxy = proxies.finger_proxy;
+  const LinkProxy& hand_proxy = proxies.hand_proxy;
+  const auto& sf = finger_proxy.spheres();
+  const auto& sh = hand_proxy.spheres();
+  std::int32_t inner = 0;  // a sphere of the hand's that is not a leaf
+  while (sh[inner].skip == inner + 1) ++inner;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> step(-0.01, 0.01);
+  Transform pa = test::random_rotation(rng), pb = test::random_rotation(rng, Vec3(0.02, 0.0, 0.0));
+  ProxyWitness carried;
+  int overlaps = 0, witness_met = 0;
+  for (int i = 0; i < test::sized(600); ++i) {
+    // A small turn and shift of the finger each step: the walk drifts in and out of contact.
+    const Vec3 axis = Vec3(step(rng), step(rng), step(rng)).normalized();
+    pa.R = Mat3(Eigen::AngleAxisd(0.05, axis)) * pa.R;
+    pa.t = Vec3(std::clamp(pa.t[0] + step(rng), -0.15, 0.15), std::clamp(pa.t[1] + step(rng), -0.15, 0.15),
+                std::clamp(pa.t[2] + step(rng), -0.15, 0.15));
+    bool brute = false;
+    for (const ProxySphere& a : leaves(finger_proxy)) {
+      for (const ProxySphere& b : leaves(hand_proxy)) brute = brute || ((pa * a.center) - (pb * b.center)).norm() <= a.radius + b.radius;
+    }
+    const ProxyWitness before = carried;
+    const bool with = proxies_overlap(finger_proxy, pa, hand_proxy, pb, 0.0, &carried);
+    EXPECT_EQ(with, brute) << i;
+    if (with) {
+      ASSERT_GE(carried.a, 0);
+      ASSERT_GE(carried.b, 0);
+      const ProxySphere& a = sf[carried.a];
+      const ProxySphere& b = sh[carried.b];
+      EXPECT_EQ(a.skip, carried.a + 1) << "a leaf of the finger's";
+      EXPECT_EQ(b.skip, carried.b + 1) << "a leaf of the hand's";
+      EXPECT_LE(((pa * a.center) - (pb * b.center)).norm(), a.radius + b.radius + 1e-9) << i;
+      witness_met += before.a == carried.a && before.b == carried.b;
+    }
+    overlaps += brute;
+    for (ProxyWitness junk : {ProxyWitness{-7, 3}, ProxyWitness{1 << 28, 0}, ProxyWitness{0, inner},
+                              ProxyWitness{static_cast<std::int32_t>(sf.size()), static_cast<std::int32_t>(sh.size())},
+                              ProxyWitness{carried.b, carried.a}}) {
+      EXPECT_EQ(proxies_overlap(finger_proxy, pa, hand_proxy, pb, 0.0, &junk), brute) << i;
+    }
+  }
+  std::printf("%d of %d steps overlap, %d kept the witness they began with\n", overlaps, test::sized(600), witness_met);
+  EXPECT_GT(overlaps, test::sized(600) / 10);
+  EXPECT_LT(overlaps, test::sized(600) * 9 / 10);
+  EXPECT_GT(witness_met, 0);
 }
 
 // The self check through the proxies keeps docs/design.md's contract against the exact check, on

@@ -63,8 +63,10 @@ void open_larger(const SphereTreeView& a, std::int32_t i, const SphereTreeView& 
 // sphere is opened, b's centre is carried into a's frame once for all its children, and the
 // pairs that are apart never reach the stack (the same tests, the same bits, as a walk by
 // depth_first_pair_walk; pr2's arm past its tucked arm walks hundreds of sphere pairs a test).
+// A witness's leaf pair meeting answers true as the walk would on reaching it: its ancestors
+// contain it, so they meet too (up to rounding, which the walk's margin covers).
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
-                     double padding) {
+                     double padding, ProxyWitness* witness) {
   if (a.empty() || b.empty()) return false;
   const ProxySphere* sa = a.spheres().data();
   const ProxySphere* sb = b.spheres().data();
@@ -78,8 +80,17 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
     return !((sa[i].center - cb).squaredNorm() > reach * reach);
   };
   auto leaf = [](const ProxySphere* s, std::int32_t i) { return s[i].skip == i + 1; };
+  auto found = [witness](std::int32_t i, std::int32_t j) {
+    if (witness != nullptr) *witness = {i, j};
+    return true;
+  };
+  if (witness != nullptr && witness->a >= 0 && witness->b >= 0 && witness->a < static_cast<std::int32_t>(a.spheres().size()) &&
+      witness->b < static_cast<std::int32_t>(b.spheres().size()) && leaf(sa, witness->a) && leaf(sb, witness->b) &&
+      meets(witness->a, apply(r, t, sb[witness->b].center), sb[witness->b].radius)) {
+    return true;
+  }
   if (!meets(0, apply(r, t, sb[0].center), sb[0].radius)) return false;
-  if (leaf(sa, 0) && leaf(sb, 0)) return true;
+  if (leaf(sa, 0) && leaf(sb, 0)) return found(0, 0);
   TraversalStack<NodePair<std::int32_t, std::int32_t>> stack;
   stack.push({0, 0});
   while (!stack.empty()) {
@@ -90,14 +101,14 @@ bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProx
       const bool b_leaf = leaf(sb, j);
       for (std::int32_t k = i + 1; k < sa[i].skip; k = sa[k].skip) {
         if (!meets(k, cb, sb[j].radius)) continue;
-        if (b_leaf && leaf(sa, k)) return true;
+        if (b_leaf && leaf(sa, k)) return found(k, j);
         stack.push({k, j});
       }
     } else {
       const bool a_leaf = leaf(sa, i);
       for (std::int32_t k = j + 1; k < sb[j].skip; k = sb[k].skip) {
         if (!meets(i, apply(r, t, sb[k].center), sb[k].radius)) continue;
-        if (a_leaf && leaf(sb, k)) return true;
+        if (a_leaf && leaf(sb, k)) return found(i, k);
         stack.push({i, k});
       }
     }

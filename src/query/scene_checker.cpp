@@ -184,7 +184,10 @@ SceneChecker::Answer SceneChecker::pair_check(std::size_t p, const Posed& s) con
   // Past the balls (and a grid, which puts the pair within a few centimetres when it cannot bound
   // it), one level's spheres: the finest worth walking (walked_level).
   const ProxyLevel* walked = walked_level(grow);
-  if (walked != nullptr && !proxies_overlap(walked->links[a], s.poses[a], walked->links[b], s.poses[b], pads)) return Answer::kFree;
+  if (walked != nullptr) {
+    if (s.witnesses.size() != m.checked_pairs().size()) s.witnesses.assign(m.checked_pairs().size(), ProxyWitness{});
+    if (!proxies_overlap(walked->links[a], s.poses[a], walked->links[b], s.poses[b], pads, &s.witnesses[p])) return Answer::kFree;
+  }
   if (s.growth != nullptr) {
     // Beside a link the motion does not move relative to it but by one joint, the pair's clearance
     // along that joint, proven once (held_pair_clearance.h).

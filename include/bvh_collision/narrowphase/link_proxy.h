@@ -84,10 +84,20 @@ class LinkProxy {
   std::size_t leaves_ = 0;
 };
 
+// A leaf sphere of each of two proxies that last met (indices into their spheres(); -1: none).
+// A planner's next state, or a motion's next interval, mostly meets where the last one did, and
+// that one test spares the walk down to it.
+struct ProxyWitness {
+  std::int32_t a = -1;
+  std::int32_t b = -1;
+};
+
 // Do the proxies (posed in the world) come within `padding` of each other? A conservative test:
 // true whenever two leaf spheres are within padding (rounding can only make it answer true).
+// With a witness, its leaf pair is tested first (any indices: ones that are not a leaf pair of
+// these proxies are passed over), and a leaf pair found to meet is written to it.
 bool proxies_overlap(const LinkProxy& a, const Transform& pose_a, const LinkProxy& b, const Transform& pose_b,
-                     double padding);
+                     double padding, ProxyWitness* witness = nullptr);
 
 // A lower bound on the distance between the two links: the smallest gap between a leaf sphere of
 // each, less a rounding margin, clamped at 0; `best` (or more) when no pair of leaves is closer

@@ -128,6 +128,9 @@ class SceneChecker {
     // The caller has already tested each pair's bounding balls with this growth (an interval's
     // sieve, a state's): pair_check does not test them again.
     mutable bool balls_sieved = false;
+    // Per checked pair, the leaf spheres that last met on this posed scratch (proxies_overlap):
+    // its next interval or state is mostly close to its last.
+    mutable std::vector<ProxyWitness> witnesses;
     const SceneChecker* checker = nullptr;
     Posed* ends = nullptr;
     int component = -1;
