@@ -310,6 +310,50 @@ TEST(LinkProxy, AWitnessChangesNoAnswerAndHoldsALeafPairThatMeets) {
   EXPECT_GT(witness_met, 0);
 }
 
+// The same for a link against an obstacle (a ball here): the witness leaf is asked first, and an
+// answer is that of the walk without it, brute force over the leaves.
+TEST(LinkProxy, AnObstacleWitnessChangesNoAnswer) {
+  const FingerAndHand proxies;
+  const LinkProxy& hand = proxies.hand_proxy;
+  const std::vector<ProxySphere> hand_leaves = leaves(hand);
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> step(-0.01, 0.01);
+  const double ball = 0.06;  // the obstacle: a ball at the origin
+  Transform pose = test::random_rotation(rng, Vec3(0.05, 0.0, 0.0));
+  std::int32_t carried = -1;
+  int overlaps = 0, kept = 0;
+  constexpr int kSteps = 600;
+  for (int i = 0; i < kSteps; ++i) {
+    pose.R = Mat3(Eigen::AngleAxisd(0.05, Vec3(step(rng), step(rng), step(rng)).normalized())) * pose.R;
+    pose.t = Vec3(std::clamp(pose.t[0] + step(rng), -0.1, 0.1), std::clamp(pose.t[1] + step(rng), -0.1, 0.1),
+                  std::clamp(pose.t[2] + step(rng), -0.1, 0.1));
+    const double padding = i % 3 == 0 ? 0.005 : 0.0;
+    const double grow = padding + proxy_pose_margin(hand, pose);
+    auto meets = [ball](const Vec3& c, double r, bool) { return c.norm() <= ball + r; };
+    bool brute = false;
+    for (const ProxySphere& leaf : hand_leaves) brute = brute || meets(pose * leaf.center, leaf.radius + grow, true);
+    const std::int32_t before = carried;
+    const bool with = proxy_meets_obstacle(hand, pose, padding, meets, &carried);
+    EXPECT_EQ(with, brute) << i;
+    if (with) {
+      ASSERT_GE(carried, 0);
+      const ProxySphere& leaf = hand.spheres()[carried];
+      EXPECT_EQ(leaf.skip, carried + 1) << "a leaf";
+      EXPECT_TRUE(meets(pose * leaf.center, leaf.radius + grow, true)) << i;
+      kept += before == carried;
+    }
+    overlaps += brute;
+    for (std::int32_t junk : {-4, 0, static_cast<std::int32_t>(hand.spheres().size()), 1 << 29}) {
+      EXPECT_EQ(proxy_meets_obstacle(hand, pose, padding, meets, &junk), brute) << i;
+    }
+    EXPECT_EQ(proxy_meets_obstacle(hand, pose, padding, meets), brute) << i;
+  }
+  std::printf("%d of %d steps meet the ball, %d kept the witness they began with\n", overlaps, kSteps, kept);
+  EXPECT_GT(overlaps, kSteps / 10);
+  EXPECT_LT(overlaps, kSteps * 9 / 10);
+  EXPECT_GT(kept, 0);
+}
+
 // The self check through the proxies keeps docs/design.md's contract against the exact check, on
 // panda's uniform random states and on the near-contact ones among them (exact distance under
 // 4 cm): no false negative, and every collision it reports is within padding + tolerance.

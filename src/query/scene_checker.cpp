@@ -252,6 +252,8 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
     // must free it too. Any other failure frees nothing: the walk stops there.)
     auto done = [&] { return answer == Answer::kHit || (answer == Answer::kNear && !(s.free_radius > 0.0)); };
     const ProxyLevel* walked = walked_level(s.grow(l));
+    const std::size_t objects = env_->objects().size();
+    if (s.object_witnesses.size() != m.bounds().size() * objects) s.object_witnesses.assign(m.bounds().size() * objects, -1);
     grid_.for_each_near(c, r, [&](int o) {
       if (done()) {
         s.gaps = 0;  // (an object left unexamined: the midpoint's own check must look)
@@ -266,6 +268,7 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
       bool proven = false;
       const bool local = grid_.exact_ball_test(o);
       const Transform in_object = local ? grid_.to_local(o) * s.poses[l] : Transform();
+      std::int32_t* witness = &s.object_witnesses[l * objects + o];
       const bool apart = walked != nullptr && [&](const ProxyLevel* level) {
         const LinkProxy& proxy = level->links[l];
         const double margin = proxy_pose_margin(proxy, s.poses[l]);
@@ -275,13 +278,13 @@ SceneChecker::Answer SceneChecker::link_objects_check(int l, const Posed& s) con
             if (!grid_.local_ball_meets(o, p, pr, margin)) return false;
             if (leaf && s.growth == nullptr && !proven) proven = grid_.local_depth(o, p, margin) > slack;
             return true;
-          });
+          }, witness);
         }
         return !proxy_meets_obstacle(proxy, s.poses[l], pad, [&](const Vec3& pc, double pr, bool leaf) {
           if (!grid_.ball_meets(o, pc, pr)) return false;
           if (leaf && s.growth == nullptr && !proven) proven = grid_.depth(o, pc) > slack;
           return true;
-        });
+        }, witness);
       }(walked);
       if (apart) return;
       if (proven) {

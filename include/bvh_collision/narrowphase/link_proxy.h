@@ -131,15 +131,23 @@ inline double proxy_pose_margin(const LinkProxy& proxy, const Transform& pose) {
 // `meets(centre, radius, leaf)` must answer true whenever the ball meets it; for a ball that is
 // not a leaf it may answer true more often (a cheap test that only prunes). True means the link lies within padding + level / 2
 // of the obstacle; false that it is farther than padding.
+// With `witness` (a leaf's index, as ProxyWitness keeps them for a pair; any other value is passed
+// over), that leaf is asked first, and the leaf that meets is written to it.
 template <class BallMeets>
-bool proxy_meets_obstacle(const LinkProxy& proxy, const Transform& pose, double padding, BallMeets&& meets) {
+bool proxy_meets_obstacle(const LinkProxy& proxy, const Transform& pose, double padding, BallMeets&& meets,
+                          std::int32_t* witness = nullptr) {
   if (proxy.empty()) return false;
   const std::vector<ProxySphere>& s = proxy.spheres();
   const double grow = padding + proxy_pose_margin(proxy, pose);
+  if (witness != nullptr && *witness >= 0 && *witness < static_cast<std::int32_t>(s.size()) && s[*witness].skip == *witness + 1 &&
+      meets(Vec3(pose * s[*witness].center), s[*witness].radius + grow, true)) {
+    return true;
+  }
   bool hit = false;
   skip_walk(static_cast<std::int32_t>(s.size()), [&](std::int32_t i) { return s[i].skip; }, [&](std::int32_t i, bool leaf) {
     if (!meets(Vec3(pose * s[i].center), s[i].radius + grow, leaf)) return Visit::kSkip;
     hit = leaf;
+    if (leaf && witness != nullptr) *witness = i;
     return leaf ? Visit::kStop : Visit::kEnter;
   });
   return hit;

@@ -131,6 +131,8 @@ class SceneChecker {
     // Per checked pair, the leaf spheres that last met on this posed scratch (proxies_overlap):
     // its next interval or state is mostly close to its last.
     mutable std::vector<ProxyWitness> witnesses;
+    // Per link and object (link * objects + object), the leaf sphere of the link's that last met it.
+    mutable std::vector<std::int32_t> object_witnesses;
     const SceneChecker* checker = nullptr;
     Posed* ends = nullptr;
     int component = -1;
