@@ -1,8 +1,11 @@
 // The proxy build benchmark (make bench, table proxy_build, section 1 of the report): what the link
 // proxies cost to build at a first start (no cache), per robot and level, on one core: panda,
 // ur5e, pr2, a generated two-arm robot and a 30 cm attached box at 5, 10 and 20 mm.
-// Usage: bench_proxy_build [OUTPUT_DIR] [--quick]   (quick: 20 mm, panda, the two-arm robot, the box)
+// Usage: bench_proxy_build [OUTPUT_DIR] [--quick]   (quick: 20 mm, panda, the two-arm robot, the box;
+// BENCH_PROXY_BUILD_ROBOTS keeps some robots' rows, below)
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #include "bench_util.h"
 #include "bvh_collision/geometry/mesh.h"
@@ -90,11 +93,22 @@ void proxy_build_rows(const std::string& robot, const std::vector<std::vector<Bo
   }
 }
 
+// BENCH_PROXY_BUILD_ROBOTS (a comma-separated list of the rows' robots, e.g. "pr2,two-arm") keeps
+// those rows only: a profile of one robot's build.
+bool wanted(const std::string& robot) {
+  const char* only = std::getenv("BENCH_PROXY_BUILD_ROBOTS");
+  if (only == nullptr || *only == '\0') return true;
+  const std::string list = std::string(",") + only + ",";
+  const std::string first = robot.substr(0, robot.find(' '));
+  return list.find("," + robot + ",") != std::string::npos || list.find("," + first + ",") != std::string::npos;
+}
+
 void proxy_build_section(const std::string& dir, bool quick) {
   Table table("proxy_build", "Link proxies built at a first start (no cache), one core: every link of the robot, per level",
               {"robot", "level mm", "links", "triangles", "leaves", "seconds", "low", "high", "MB", "cubes and pieces",
                "surface queries", "sphere tests per cube or piece"});
   for (const char* name : quick ? std::vector<const char*>{"panda"} : std::vector<const char*>{"panda", "ur5e", "pr2"}) {
+    if (!wanted(name)) continue;
     const CollisionChecker checker = robot_checker(name);
     proxy_build_rows(name, link_shapes(checker), quick, table);
   }
@@ -105,10 +119,10 @@ void proxy_build_section(const std::string& dir, bool quick) {
   for (int arm = 0; arm < 2; ++arm) {
     for (const auto& link : link_shapes(panda)) two_arms.push_back(link);
   }
-  proxy_build_rows("two-arm (generated)", two_arms, quick, table);
+  if (wanted("two-arm (generated)")) proxy_build_rows("two-arm (generated)", two_arms, quick, table);
   std::vector<BodyShape> box(1);
   box[0].shape.primitive = Primitive::box(Vec3(0.3, 0.3, 0.3));
-  proxy_build_rows("attached box 30 cm", {box}, quick, table);
+  if (wanted("attached box 30 cm")) proxy_build_rows("attached box 30 cm", {box}, quick, table);
   table.note("What a first start pays for the levels the node builds (~proxy_levels 5, 10, 20 mm; later starts read "
              "them from ~proxy_cache in milliseconds). The bound of every sphere is proven as it is built "
              "(narrowphase/link_proxy.h); the work grows as n log n of the leaves (a cube or surface piece asks the "

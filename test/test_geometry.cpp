@@ -2,6 +2,8 @@
 // intersection (random, grid-degenerate and named hard cases) and distances with witnesses.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "bvh_collision/geometry/distance.h"
@@ -187,6 +189,50 @@ void expect_witnesses_consistent(const ClosestPoints& d, const Triangle& a, cons
   EXPECT_NEAR((d.on_a - d.on_b).norm(), d.distance, slack + 1e-12 * d.distance);
   EXPECT_LE((closest_point_on_triangle(d.on_a, a[0], a[1], a[2]) - d.on_a).norm(), slack);
   EXPECT_LE((closest_point_on_triangle(d.on_b, b[0], b[1], b[2]) - d.on_b).norm(), slack);
+}
+
+// triangle_plane_beyond lets a query skip a triangle without its closest point: wherever it says
+// so, the exact distance (CGAL's, the point as a zero-area triangle) and the computed one are at
+// least the limit. Limits are drawn within a millionth of the exact distance, points near the
+// plane, on it, far from the origin, and triangles degenerate on a grid; the skip must also be
+// taken where the plane is twice the limit away.
+TEST(Distance, TrianglePlaneBeyondSkipsOnlyTrianglesAtLeastTheLimitAway) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int skipped = 0, must_skip = 0, cases = 0;
+  for (int i = 0; i < 6000; ++i, ++cases) {
+    const bool grid = i % 3 == 2;
+    const Vec3 offset = i % 4 == 1 ? random_point(-1e3, 1e3) : Vec3::Zero();
+    const Triangle t = grid ? tri(grid_point(3, 0.5, 8), grid_point(3, 0.5, 8), grid_point(3, 0.5, 8))
+                            : tri(offset + random_point(), offset + random_point(), offset + random_point());
+    const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+    // A point off the plane by a chosen height (some on it, some within a few ulps of it).
+    const double height = i % 5 == 0 ? 0.0 : std::pow(10.0, -1.0 - 14.0 * std::abs(unit(rng())));
+    const Vec3 on_plane = t[0] + random_point(-1, 1);
+    const Vec3 along = n.norm() > 0.0 ? Vec3(n.normalized()) : Vec3::UnitZ();
+    const Vec3 p = on_plane - along * (along.dot(on_plane - t[0])) + along * height * (unit(rng()) < 0 ? -1.0 : 1.0);
+    const double exact = cgal_triangle_distance(t, tri(p, p, p));
+    const double computed = (closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm();
+    for (const double factor : {0.0, 0.5, 1.0 - 1e-6, 1.0, 1.0 + 1e-6, 2.0}) {
+      const double limit = exact * factor;
+      if (!triangle_plane_beyond(p, t[0], t[1], t[2], limit)) continue;
+      ++skipped;
+      ASSERT_GT(exact, limit) << "case " << i << " factor " << factor;
+      ASSERT_GE(computed, limit) << "case " << i << " factor " << factor;
+    }
+    // Taken where it should be: a plane farther than twice the limit, well above the slack.
+    if (n.norm() > 1e-6 && height > 1e-6) {
+      ++must_skip;
+      ASSERT_TRUE(triangle_plane_beyond(p, t[0], t[1], t[2], 0.5 * height)) << "case " << i;
+    }
+  }
+  EXPECT_GT(must_skip, cases / 5);  // (heights above 1e-6: about 5 in 14 of those off the plane)
+  EXPECT_GT(skipped, cases / 4);
+  for (const double limit : {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    EXPECT_FALSE(triangle_plane_beyond(Vec3(0, 0, 5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), limit));
+  }
+  EXPECT_FALSE(triangle_plane_beyond(Vec3(0, 0, 5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0), 1.0));  // no plane
+  EXPECT_TRUE(triangle_plane_beyond(Vec3(0, 0, 5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 4.9));
+  EXPECT_FALSE(triangle_plane_beyond(Vec3(0, 0, 5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 5.0));
 }
 
 TEST(Distance, TriangleTriangleMatchesCgalOnRandomPairs) {

@@ -451,6 +451,7 @@ DistanceResult point_distance(const Bvh<BV>& bvh, const Transform& pose, const V
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++result.stats.primitive_tests;
       const Triangle& t = bvh.triangles()[i];
+      if (triangle_plane_beyond(q, t[0], t[1], t[2], best)) continue;
       const Vec3 c = closest_point_on_triangle(q, t[0], t[1], t[2]);
       const double d = (c - q).norm();
       if (d < best) {
@@ -480,6 +481,7 @@ void walk_within(const Bvh<BV>& bvh, const Vec3& q, double radius, QueryStats& s
     for (std::int32_t i = n.first; i < n.first + n.count; ++i) {
       ++s.primitive_tests;
       const Triangle& t = bvh.triangles()[i];
+      if (triangle_plane_beyond(q, t[0], t[1], t[2], radius)) continue;
       if ((closest_point_on_triangle(q, t[0], t[1], t[2]) - q).norm() < radius && found(i)) return true;
     }
     return false;

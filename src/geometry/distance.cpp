@@ -57,6 +57,17 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   return candidates[best];
 }
 
+bool triangle_plane_beyond(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double limit) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const Vec3 n = ab.cross(ac);
+  const double s = ap.dot(n), nn = n.squaredNorm();
+  // The plane's distance is |s| / |n|; its rounding and the closest point's are within a few
+  // units of 1e-16 of these sizes, far below the slack.
+  const double slack = 1e-9 * (limit + ap.cwiseAbs().sum() + ab.cwiseAbs().sum() + ac.cwiseAbs().sum());
+  const double reach = limit + slack;
+  return nn > 0.0 && s * s > reach * reach * nn;
+}
+
 namespace {
 
 // End points against the other segment, plus the common perpendicular when it falls inside both:
