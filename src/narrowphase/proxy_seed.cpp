@@ -73,7 +73,8 @@ std::vector<Vec3> interior_points(const ShapeField& field, double spacing) {
 // covers one more; of equal gains, the later candidate. Lazily: a candidate's gain only falls as
 // targets are covered, so a gain counted earlier bounds the true one, and the candidate on top of
 // the queue whose recount equals its entry has the largest true gain of all. The targets each
-// candidate covers are kept flat (first[c] .. first[c + 1] in covers), and a recount reads them.
+// candidate covers are kept flat (first[c] .. first[c + 1] in covers), and a recount reads those
+// it left uncovered (first[c] .. end[c]).
 std::vector<Chosen> choose_cover(const std::vector<Vec3>& targets, const std::vector<Chosen>& candidates, double margin) {
   const PointTree tree(targets);
   std::vector<std::uint32_t> covers, first(candidates.size() + 1, 0);
@@ -84,18 +85,23 @@ std::vector<Chosen> choose_cover(const std::vector<Vec3>& targets, const std::ve
   std::priority_queue<std::pair<std::size_t, std::size_t>> queue;  // (gain when counted, candidate)
   for (std::size_t c = 0; c < candidates.size(); ++c) queue.emplace(first[c + 1] - first[c], c);
   std::vector<char> covered(targets.size(), 0);
+  std::vector<std::uint32_t> end(first.begin() + 1, first.end());  // a recount keeps the uncovered before it
   std::vector<Chosen> chosen;
   while (!queue.empty()) {
     const auto [gain, c] = queue.top();
     queue.pop();
-    std::size_t now = 0;
-    for (std::uint32_t k = first[c]; k < first[c + 1]; ++k) now += covered[covers[k]] == 0;
-    if (now == 0) continue;
-    if (now < gain) {
-      queue.emplace(now, c);
+    std::uint32_t now = first[c];
+    for (std::uint32_t k = first[c]; k < end[c]; ++k) {
+      covers[now] = covers[k];
+      now += covered[covers[k]] == 0;
+    }
+    end[c] = now;  // (a target once covered stays covered: the next recount reads only the rest)
+    if (now == first[c]) continue;
+    if (now - first[c] < gain) {
+      queue.emplace(now - first[c], c);
       continue;
     }
-    for (std::uint32_t k = first[c]; k < first[c + 1]; ++k) covered[covers[k]] = 1;
+    for (std::uint32_t k = first[c]; k < end[c]; ++k) covered[covers[k]] = 1;
     chosen.push_back(candidates[c]);
   }
   return chosen;
