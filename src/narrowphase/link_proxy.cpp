@@ -25,7 +25,12 @@ ProxySphere enclosing_sphere(const std::vector<Chosen>& leaves, std::size_t begi
   auto reach = [&](const Vec3& c, std::size_t& farthest) {
     double r = 0.0;
     for (std::size_t i = begin; i < end; ++i) {
-      const double d = (leaves[i].center - c).norm() + leaves[i].radius;
+      const double squared = (leaves[i].center - c).squaredNorm();
+      // A leaf short of r by far more than the rounding (1e-12 r) cannot be the farthest: its
+      // square root, the most of this loop, is not taken (the same r and farthest).
+      const double room = r - leaves[i].radius - 1e-12 * r;
+      if (room > 0.0 && squared < room * room) continue;
+      const double d = std::sqrt(squared) + leaves[i].radius;
       if (d > r) r = d, farthest = i;
     }
     return r;

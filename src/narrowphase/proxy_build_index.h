@@ -31,7 +31,10 @@ class SphereGrid {
     std::uint32_t next;  // the entry before it in its cell, or kNone
   };
 
-  explicit SphereGrid(double finest_cell) : finest_(finest_cell), inverse_(1.0 / finest_cell), keys_(kInitialSlots, kEmpty), heads_(kInitialSlots) {}
+  explicit SphereGrid(double finest_cell) : finest_(finest_cell), inverse_(1.0 / finest_cell), keys_(kInitialSlots, kEmpty), heads_(kInitialSlots) {
+    double cell = finest_, inverse = inverse_;  // (each scale's: products by powers of two, exact)
+    for (int scale = 0; scale < kScales; ++scale, cell *= 2.0, inverse *= 0.5) cells_[scale] = cell, inverses_[scale] = inverse;
+  }
 
   void insert(std::uint32_t id, const Vec3& centre, double radius) {
     int scale = 0;
@@ -51,9 +54,9 @@ class SphereGrid {
   // them) until it returns true; whether one did.
   template <class Visit>
   bool any_near(const Vec3& p, double min_radius, Visit&& visit) const {
-    double cell = finest_, inverse = inverse_;
-    for (int scale = 0; scale < kScales; ++scale, cell *= 2.0, inverse *= 0.5) {
-      if (!(used_ & (1u << scale))) continue;
+    for (std::uint32_t used = used_; used != 0; used &= used - 1) {  // (the scales in use only)
+      const int scale = __builtin_ctz(used);
+      const double cell = cells_[scale], inverse = inverses_[scale];
       if (kFill * cell < min_radius && scale < kScales - 1) continue;  // every sphere here is smaller
       // The lower corner cell of the 2 x 2 x 2 around p: a centre within kFill cells of p lies in
       // one of them, rounding aside (room of 0.01 cell).
@@ -109,6 +112,7 @@ class SphereGrid {
   }
 
   double finest_, inverse_;
+  std::array<double, kScales> cells_{}, inverses_{};  // per scale: its cell and the cell's inverse
   std::uint32_t used_ = 0;
   std::size_t count_ = 0;              // cells in use
   std::vector<std::uint64_t> occupied_ = std::vector<std::uint64_t>(std::size_t{1} << (kFilterBits - 6), 0);  // the filter's bits

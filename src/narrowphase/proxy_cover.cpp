@@ -171,7 +171,7 @@ class PolyhedralCover {
   PolyhedralCover(const ShapeField& field, double half_level, std::vector<Chosen> seed)
       : field_(field), half_level_(half_level), delta_(0.125 * half_level), chosen_(std::move(seed)),
         builder_(field, half_level), added_(2.05 * half_level) {
-    for (const Chosen& s : chosen_) held_r2_.push_back(reach_squared(s));
+    for (const Chosen& s : chosen_) held_r2_.push_back(reach_squared(s.radius));
     if (field_.mesh == nullptr) return;
     for (const Triangle& t : field_.mesh->triangles()) {
       const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
@@ -271,30 +271,29 @@ class PolyhedralCover {
   bool held(const Vec3& a, const Vec3& b, const Vec3& c, std::size_t begin) {
     ++field_.stats->sphere_tests;
     // (holds(s, p, delta_) for the three corners, with the sphere's reach at delta_ kept squared.)
-    auto all = [&](std::size_t s) {
-      const Vec3& o = chosen_[s].center;
-      const double r2 = held_r2_[s];
+    auto all = [&](const Vec3& o, double r2) {
       return (a - o).squaredNorm() <= r2 && (b - o).squaredNorm() <= r2 && (c - o).squaredNorm() <= r2;
     };
-    if (last_ < chosen_.size() && all(last_)) return true;
+    if (last_ < chosen_.size() && all(chosen_[last_].center, held_r2_[last_])) return true;
     for (std::size_t k = begin; k < piece_lists_.size(); ++k) {
       ++field_.stats->sphere_tests;
-      if (all(piece_lists_[k])) return last_ = piece_lists_[k], true;
+      const std::uint32_t s = piece_lists_[k];
+      if (all(chosen_[s].center, held_r2_[s])) return last_ = s, true;
     }
-    return added_.any_near(a, delta_, [&](const SphereGrid::Entry& s) {
+    return added_.any_near(a, delta_, [&](const SphereGrid::Entry& s) {  // (the entry's own values: no other read)
       ++field_.stats->sphere_tests;
-      return all(s.id) ? (last_ = s.id, true) : false;
+      return all(s.centre, reach_squared(s.radius)) ? (last_ = s.id, true) : false;
     });
   }
   // holds(s, p, delta_) is |p - s.center|^2 <= this (negative where the reach is not positive).
-  double reach_squared(const Chosen& s) const {
-    const double r = (s.radius - delta_) * (1.0 - kVolumeMargin) - kVolumeMargin;
+  double reach_squared(double radius) const {
+    const double r = (radius - delta_) * (1.0 - kVolumeMargin) - kVolumeMargin;
     return r > 0.0 ? r * r : -1.0;
   }
   void add(const Chosen& s) {
     added_.insert(static_cast<std::uint32_t>(chosen_.size()), s.center, s.radius);
     chosen_.push_back(s);
-    held_r2_.push_back(reach_squared(s));
+    held_r2_.push_back(reach_squared(s.radius));
   }
   // The piece a b c, whose candidate spheres are piece_lists_[begin, end()).
   void surface(const Vec3& a, const Vec3& b, const Vec3& c, int depth, std::size_t begin) {
