@@ -31,7 +31,8 @@ class SphereGrid {
     std::uint32_t next;  // the entry before it in its cell, or kNone
   };
 
-  explicit SphereGrid(double finest_cell) : finest_(finest_cell), inverse_(1.0 / finest_cell), keys_(kInitialSlots, kEmpty), heads_(kInitialSlots) {
+  explicit SphereGrid(double finest_cell)
+      : finest_(finest_cell), inverse_(1.0 / finest_cell), keys_(kInitialSlots, kEmpty), heads_(kInitialSlots) {
     double cell = finest_, inverse = inverse_;  // (each scale's: products by powers of two, exact)
     for (int scale = 0; scale < kScales; ++scale, cell *= 2.0, inverse *= 0.5) cells_[scale] = cell, inverses_[scale] = inverse;
   }
@@ -42,7 +43,8 @@ class SphereGrid {
     while (radius > kFill * cell && scale < kScales - 1) cell *= 2.0, inverse *= 0.5, ++scale;
     used_ |= 1u << scale;
     if (2 * (count_ + 1) > keys_.size()) grow();
-    const std::uint64_t key = key_of(scale, cell_of(centre.x(), inverse), cell_of(centre.y(), inverse), cell_of(centre.z(), inverse));
+    const std::uint64_t key =
+        key_of(scale, cell_of(centre.x(), inverse), cell_of(centre.y(), inverse), cell_of(centre.z(), inverse));
     std::size_t slot = slot_of(key);
     if (keys_[slot] == kEmpty) keys_[slot] = key, heads_[slot] = kNone, ++count_;
     occupied_[filter_bit(key) >> 6] |= 1ull << (filter_bit(key) & 63);
@@ -60,7 +62,8 @@ class SphereGrid {
       if (kFill * cell < min_radius && scale < kScales - 1) continue;  // every sphere here is smaller
       // The lower corner cell of the 2 x 2 x 2 around p: a centre within kFill cells of p lies in
       // one of them, rounding aside (room of 0.01 cell).
-      const std::int64_t x = cell_of(p.x() * inverse - 0.5), y = cell_of(p.y() * inverse - 0.5), z = cell_of(p.z() * inverse - 0.5);
+      const std::int64_t x = cell_of(p.x() * inverse - 0.5), y = cell_of(p.y() * inverse - 0.5),
+                         z = cell_of(p.z() * inverse - 0.5);
       for (int k = 0; k < 8; ++k) {
         const std::uint64_t key = key_of(scale, x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1));
         if (!(occupied_[filter_bit(key) >> 6] & (1ull << (filter_bit(key) & 63)))) continue;  // an empty cell, mostly
@@ -92,7 +95,9 @@ class SphereGrid {
   // A bit per hashed key, set for every cell in use: most of a query's cells are empty (95 % on
   // panda's build), and the filter's 32 KB answers those without a probe of the table.
   static constexpr int kFilterBits = 18;
-  static std::size_t filter_bit(std::uint64_t key) { return static_cast<std::size_t>((key * 0xC2B2AE3D27D4EB4Full) >> (64 - kFilterBits)); }
+  static std::size_t filter_bit(std::uint64_t key) {
+    return static_cast<std::size_t>((key * 0xC2B2AE3D27D4EB4Full) >> (64 - kFilterBits));
+  }
   // The key's slot, or the empty one where it would go (linear probing; the table is at most half full).
   std::size_t slot_of(std::uint64_t key) const {
     const std::size_t mask = keys_.size() - 1;
