@@ -8,18 +8,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
+#include <cmath>
 #include <iostream>
-#include <iterator>
 #include <map>
 #include <random>
 
-#include <unistd.h>
-
 #include "bvh_collision/bvh/queries.h"
 #include "bvh_collision/narrowphase/link_proxy.h"
-#include "bvh_collision/narrowphase/link_proxy_cache.h"
 #include "bvh_collision/narrowphase/proxy_octree.h"
 #include "bvh_collision/octree/scan.h"
 #include "bvh_collision/model/robot_collision_model.h"
@@ -451,102 +446,6 @@ TEST(ProxyOctree, AMissIsApartAndAHitWithinHalfTheLevel) {
   std::cout << hits << " hits, " << misses << " misses (" << near_misses << " of them within the level)\n";
   EXPECT_GT(hits, test::sized(600) / 10);
   EXPECT_GT(misses, test::sized(600) / 10);
-}
-
-// Issue 33, point 3: proxies kept on disk by content. The first build stores every link's proxy,
-// a second reads every one back (the same spheres, bit for bit, and the same answers); a file that
-// does not check out (a flipped byte, cut short, another link's file under this key) is rebuilt
-// and replaced; another level or changed geometry has another key.
-TEST(LinkProxyCache, ASecondBuildReadsWhatTheFirstStored) {
-  namespace fs = std::filesystem;
-  const fs::path folder = fs::temp_directory_path() / ("bvh_proxy_cache_" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  CheckerOptions options;
-  options.proxy_levels = {0.02};
-  options.proxy_cache = folder.string();
-  // The level answers every pair in both checkers: calibrated, each times which pairs it answers
-  // when it is built, and on a busy host two builds chose differently (a state within the level's
-  // 2 cm answered colliding by one, free by the other: a CI replica failed so).
-  options.calibrate_proxies = false;
-  const CollisionChecker first = test::demo_arm_checker(options);
-  const ProxyLevel& built = first.accelerators().proxy_levels().front();
-  std::size_t with_geometry = 0;
-  for (const LinkProxy& p : built.links) with_geometry += !p.empty();
-  ASSERT_GT(with_geometry, 0u);
-  EXPECT_EQ(built.links_from_cache, 0u);
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(folder)) {
-    if (e.path().extension() == ".proxy") files.push_back(e.path());  // the robot's grids are there too
-  }
-  std::sort(files.begin(), files.end());
-  EXPECT_LE(files.size(), with_geometry) << "one file a distinct link";
-  ASSERT_FALSE(files.empty());
-
-  const CollisionChecker second = test::demo_arm_checker(options);
-  const ProxyLevel& read = second.accelerators().proxy_levels().front();
-  EXPECT_EQ(read.links_from_cache, with_geometry);
-  ASSERT_EQ(read.links.size(), built.links.size());
-  for (std::size_t l = 0; l < built.links.size(); ++l) {
-    const auto& a = built.links[l].spheres();
-    const auto& b = read.links[l].spheres();
-    ASSERT_EQ(a.size(), b.size()) << "link " << l;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(a[i].center, b[i].center);
-      EXPECT_EQ(a[i].radius, b[i].radius);
-      EXPECT_EQ(a[i].skip, b[i].skip);
-    }
-    EXPECT_EQ(built.links[l].hausdorff_bound(), read.links[l].hausdorff_bound());
-    EXPECT_EQ(built.links[l].leaf_count(), read.links[l].leaf_count());
-  }
-  std::mt19937_64 rng(3);
-  SelfCollisionRequest at_level;
-  at_level.tolerance = 0.02;
-  for (int i = 0; i < 200; ++i) {
-    const std::vector<double> q = random_configuration(first.model(), rng);
-    EXPECT_EQ(first.check_self(q.data(), at_level).collision, second.check_self(q.data(), at_level).collision);
-  }
-
-  // Files that do not check out are rebuilt, and replaced by good ones.
-  const auto bytes = [](const fs::path& f) {
-    std::ifstream in(f, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  };
-  const auto put = [](const fs::path& f, const std::string& b) { std::ofstream(f, std::ios::binary | std::ios::trunc) << b; };
-  const std::string good = bytes(files[0]);
-  std::string flipped = good;
-  flipped[flipped.size() / 2] ^= 0x10;
-  const std::vector<std::string> bad = {flipped, good.substr(0, good.size() - 9), good.substr(0, 20), "",
-                                         files.size() > 1 ? bytes(files[1]) : std::string("x")};
-  for (const std::string& b : bad) {
-    put(files[0], b);
-    const CollisionChecker again = test::demo_arm_checker(options);
-    EXPECT_LT(again.accelerators().proxy_levels().front().links_from_cache, with_geometry);
-    EXPECT_EQ(bytes(files[0]), good) << "a file that did not check out is replaced by the one built";
-  }
-  // Another level: other keys, nothing read.
-  options.proxy_levels = {0.01};
-  EXPECT_EQ(test::demo_arm_checker(options).accelerators().proxy_levels().front().links_from_cache, 0u);
-  fs::remove_all(folder);
-}
-
-TEST(LinkProxyCache, KeysTellEveryNumberOfTheGeometryApart) {
-  const CollisionChecker checker = test::demo_arm_checker();
-  const RobotCollisionModel& m = checker.collision_model();
-  std::size_t link = 0;
-  while (m.shapes()[link].empty()) ++link;
-  std::vector<BodyShape> shapes = m.placed_shapes(static_cast<int>(link));
-  const std::uint64_t key = link_proxy_key(shapes, 0.01);
-  EXPECT_EQ(link_proxy_key(shapes, 0.01), key);
-  EXPECT_NE(link_proxy_key(shapes, 0.0100000001), key);
-  shapes[0].origin.t.x() += 1e-12;
-  EXPECT_NE(link_proxy_key(shapes, 0.01), key);
-  shapes = m.placed_shapes(static_cast<int>(link));
-  if (shapes[0].shape.mesh == nullptr) {
-    shapes[0].shape.primitive.radius *= 1.000001;
-    shapes[0].shape.primitive.half *= 1.000001;
-    shapes[0].shape.primitive.half_length *= 1.000001;
-    EXPECT_NE(link_proxy_key(shapes, 0.01), key);
-  }
 }
 
 }  // namespace

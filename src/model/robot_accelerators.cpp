@@ -32,10 +32,21 @@ ProxyLevel RobotAccelerators::build_proxy_level(const RobotCollisionModel& model
   ProxyLevel out;
   out.level = level;
   out.links.resize(model.shapes().size());
+  // A link whose shapes are an earlier link's (a robot's two arms, its casters) takes that proxy.
+  std::vector<std::vector<BodyShape>> placed(model.shapes().size());
+  for (std::size_t l = 0; l < placed.size(); ++l) {
+    if (!model.shapes()[l].empty()) placed[l] = model.placed_shapes(static_cast<int>(l));
+  }
+  const std::vector<std::size_t> alike = first_alike(placed);
   for (std::size_t l = 0; l < model.shapes().size(); ++l) {
     if (model.shapes()[l].empty()) continue;
     if (cancel != nullptr && cancel->load()) throw ProxyBuildCancelled();
-    out.links[l] = cached_or_built_proxy(model, static_cast<int>(l), level, out.links_from_cache);
+    if (alike[l] != l) {
+      out.links[l] = out.links[alike[l]];
+      ++out.links_shared;
+    } else {
+      out.links[l] = cached_or_built_proxy(model, static_cast<int>(l), level, out.links_from_cache);
+    }
     out.leaves += out.links[l].leaf_count();
     out.memory_bytes += out.links[l].memory_bytes();
   }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <unordered_map>
 
 #include "bvh_collision/narrowphase/cache_file.h"
 
@@ -77,6 +78,54 @@ std::uint64_t link_proxy_key(const std::vector<BodyShape>& shapes, double level)
   h.value(level);
   h.shapes(shapes);
   return h.h;
+}
+
+bool same_shapes(const std::vector<BodyShape>& a, const std::vector<BodyShape>& b) {
+  if (a.size() != b.size()) return false;
+  // Bit for bit, as the key hashes them (a -0.0 is not 0.0 there either).
+  const auto same = [](const auto& x, const auto& y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+  const auto same_vec = [&](const Vec3& x, const Vec3& y) { return same(x[0], y[0]) && same(x[1], y[1]) && same(x[2], y[2]); };
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const BodyShape &s = a[i], &t = b[i];
+    for (int r = 0; r < 3; ++r) {
+      if (!same_vec(s.origin.R.row(r).transpose(), t.origin.R.row(r).transpose())) return false;
+    }
+    if (!same_vec(s.origin.t, t.origin.t) || (s.shape.mesh == nullptr) != (t.shape.mesh == nullptr)) return false;
+    if (s.shape.mesh == nullptr) {
+      const Primitive &p = s.shape.primitive, &q = t.shape.primitive;
+      if (p.kind != q.kind || !same_vec(p.half, q.half) || !same(p.radius, q.radius) || !same(p.half_length, q.half_length)) return false;
+      continue;
+    }
+    if (s.shape.mesh == t.shape.mesh) continue;
+    const auto& x = s.shape.mesh->triangles();
+    const auto& y = t.shape.mesh->triangles();
+    if (s.shape.mesh->closed() != t.shape.mesh->closed() || x.size() != y.size()) return false;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      for (int v = 0; v < 3; ++v) {
+        if (!same_vec(x[k][v], y[k][v])) return false;
+      }
+    }
+  }
+  return true;
+}
+
+std::vector<std::size_t> first_alike(const std::vector<std::vector<BodyShape>>& links) {
+  std::vector<std::size_t> first(links.size());
+  std::unordered_multimap<std::uint64_t, std::size_t> by_key;  // links with shapes, by their content's hash
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    first[l] = l;
+    if (links[l].empty()) continue;
+    const std::uint64_t key = link_proxy_key(links[l], 0.0);
+    const auto [from, to] = by_key.equal_range(key);
+    for (auto it = from; it != to; ++it) {
+      if (same_shapes(links[it->second], links[l])) {
+        first[l] = it->second;
+        break;
+      }
+    }
+    if (first[l] == l) by_key.emplace(key, l);
+  }
+  return first;
 }
 
 std::string link_proxy_file(const std::string& folder, std::uint64_t key) { return cache_file(folder, key, ".proxy"); }

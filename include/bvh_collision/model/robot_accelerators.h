@@ -24,6 +24,7 @@ struct ProxyLevel {
   std::vector<LinkProxy> links;  // per link (empty for links without geometry)
   std::size_t leaves = 0, memory_bytes = 0;
   std::size_t links_from_cache = 0;  // read from CheckerOptions::proxy_cache, not built
+  std::size_t links_shared = 0;      // copies of an earlier link's whose shapes are the same (first_alike)
   double build_seconds = 0.0;  // the calibration included
   // Per checked pair, what the calibration measured (model/proxy_calibration.h; empty when
   // CheckerOptions::calibrate_proxies is off), and the pairs where the exact test was faster:

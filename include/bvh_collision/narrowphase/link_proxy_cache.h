@@ -21,6 +21,16 @@ constexpr std::uint32_t kLinkProxyBuildVersion = 1;
 
 std::uint64_t link_proxy_key(const std::vector<BodyShape>& shapes, double level);
 
+// Whether two links' shapes have every number the key covers the same, bit for bit (the same
+// meshes' triangles at the same origins: a robot's left and right arm, its four casters). Such
+// links have the same proxy at every level.
+bool same_shapes(const std::vector<BodyShape>& a, const std::vector<BodyShape>& b);
+
+// Per link, the first link whose shapes are the same (same_shapes), itself when none before it is:
+// a link alike an earlier one takes a copy of that one's proxy instead of a build of its own. (A
+// link without shapes is its own.)
+std::vector<std::size_t> first_alike(const std::vector<std::vector<BodyShape>>& links);
+
 // The file that holds the proxy of `key` in `folder`.
 std::string link_proxy_file(const std::string& folder, std::uint64_t key);
 
