@@ -101,10 +101,12 @@ class SeedBuilder {
  public:
   SeedBuilder(const ShapeField& field, double half_level) : field_(field), half_level_(half_level) {}
 
-  // A proven interior sphere at p (inside the solid): radius depth + e/2.
-  std::optional<Chosen> interior_sphere(const Vec3& p) const {
-    if (!field_.inside(p)) return std::nullopt;
-    return sphere_inside(p, std::numeric_limits<double>::infinity());
+  // A proven interior sphere at p, a point of the solid whose depth is below `limit` (any upper
+  // bound: the nearest triangle is the same, found sooner): radius depth + e/2.
+  // (Its depth into `depth`.)
+  Chosen interior_sphere(const Vec3& p, double limit, double& depth) const {
+    depth = field_.surface_distance(p, true, limit, nullptr);
+    return Chosen{p, depth * (1.0 - kVolumeMargin) - kVolumeMargin + half_level_};  // as sphere_inside
   }
   // The (nearly) largest ball inside the solid that touches the surface at q, grown by e/2.
   // Whether a centre is in the solid is asked once: a ball free of the surface that overlaps one
@@ -124,8 +126,9 @@ class SeedBuilder {
       const double mid = 0.5 * (good + bad);
       (fits(mid) ? good : bad) = mid;
     }
-    // Its depth is at most good (q is on the surface): a search bounded there finds it.
-    return sphere_inside(q + good * inward, 2.0 * good);
+    // Its depth is at most good (q is on the surface, within rounding: 1e-16 of the sizes, far
+    // below the room left above good): a search bounded there finds it, and sooner than at 2 good.
+    return sphere_inside(q + good * inward, good * (1.0 + 1e-9) + 1e-12);
   }
 
  private:

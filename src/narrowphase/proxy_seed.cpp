@@ -129,9 +129,16 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
       if (auto s = builder.medial_sphere(q, inward, 2.0 * size)) candidates.push_back(*s);
     }
   }
+  // (interior_points' points are in the solid.) A point's depth is at most the one before it's
+  // plus the step between them (depth is 1-Lipschitz), which bounds its nearest search: the same
+  // depth, with room above it for rounding (1e-9 of it), found sooner.
+  Vec3 before = Vec3::Zero();
+  double depth_before = std::numeric_limits<double>::infinity();
   for (const Vec3& p : interior_points(field, std::max(spacing, size / 12.0))) {
     targets.push_back(p);
-    if (auto s = builder.interior_sphere(p)) candidates.push_back(*s);
+    const double limit = (depth_before + (p - before).norm()) * (1.0 + 1e-9) + 1e-12;
+    candidates.push_back(builder.interior_sphere(p, limit, depth_before));
+    before = p;
   }
   field.stats->candidates += candidates.size();
   return choose_cover(targets, candidates, margin);
