@@ -101,11 +101,9 @@ class SeedBuilder {
  public:
   SeedBuilder(const ShapeField& field, double half_level) : field_(field), half_level_(half_level) {}
 
-  // A proven interior sphere at p, a point of the solid whose depth is below `limit` (any upper
-  // bound: the nearest triangle is the same, found sooner): radius depth + e/2.
-  // (Its depth into `depth`.)
-  Chosen interior_sphere(const Vec3& p, double limit, double& depth) const {
-    depth = field_.surface_distance(p, true, limit, nullptr);
+  // The proven interior sphere at p, a point of the solid `depth` from its surface: radius
+  // depth + e/2.
+  Chosen interior_sphere(const Vec3& p, double depth) const {
     return Chosen{p, depth * (1.0 - kVolumeMargin) - kVolumeMargin + half_level_};  // as sphere_inside
   }
   // The (nearly) largest ball inside the solid that touches the surface at q, grown by e/2.

@@ -2,6 +2,7 @@
 // surface points and on an interior grid, chosen by a greedy set cover of the samples.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <queue>
 
@@ -50,18 +51,34 @@ std::vector<std::pair<Vec3, Vec3>> surface_samples(const ShapeField& field, doub
   return out;
 }
 
-// Grid points inside the solid, about `spacing` apart.
-std::vector<Vec3> interior_points(const ShapeField& field, double spacing) {
+// Grid points inside the solid, about `spacing` apart, each with its depth (into `depths`). A
+// point's depth is at most the last point's plus the step between them (depth is 1-Lipschitz),
+// which bounds its nearest search (the same depth, with room above it for rounding, found
+// sooner); a point within the last one's free ball (the step below its depth, by more than
+// rounding) is in the solid too, as its ray would say (no surface between them).
+std::vector<Vec3> interior_points(const ShapeField& field, double spacing, std::vector<double>& depths) {
   std::vector<Vec3> out;
+  depths.clear();
   if (!field.solid()) return out;
   const auto [center, half] = field.box();
   const Eigen::Vector3i n = (2.0 * half / spacing).array().ceil().cast<int>().max(1);
+  Vec3 before = Vec3::Zero();
+  double depth_before = std::numeric_limits<double>::infinity(), step = 0.0;
+  const auto within_ball = [&](const Vec3& p) {
+    step = (p - before).norm();
+    return !out.empty() && step < depth_before * (1.0 - 1e-9) - 1e-12;
+  };
   for (int x = 0; x < n.x(); ++x) {
     for (int y = 0; y < n.y(); ++y) {
       for (int z = 0; z < n.z(); ++z) {
         const Vec3 p = center - half + Vec3((x + 0.5) * 2.0 * half.x() / n.x(), (y + 0.5) * 2.0 * half.y() / n.y(),
                                             (z + 0.5) * 2.0 * half.z() / n.z());
-        if (field.inside(p)) out.push_back(p);
+        if (!within_ball(p) && !field.inside(p)) continue;
+        const double limit = (depth_before + step) * (1.0 + 1e-9) + 1e-12;
+        depth_before = field.surface_distance(p, true, limit, nullptr);
+        before = p;
+        out.push_back(p);
+        depths.push_back(depth_before);
       }
     }
   }
@@ -129,16 +146,11 @@ std::vector<Chosen> greedy_seed(const ShapeField& field, double half_level, doub
       if (auto s = builder.medial_sphere(q, inward, 2.0 * size)) candidates.push_back(*s);
     }
   }
-  // (interior_points' points are in the solid.) A point's depth is at most the one before it's
-  // plus the step between them (depth is 1-Lipschitz), which bounds its nearest search: the same
-  // depth, with room above it for rounding (1e-9 of it), found sooner.
-  Vec3 before = Vec3::Zero();
-  double depth_before = std::numeric_limits<double>::infinity();
-  for (const Vec3& p : interior_points(field, std::max(spacing, size / 12.0))) {
-    targets.push_back(p);
-    const double limit = (depth_before + (p - before).norm()) * (1.0 + 1e-9) + 1e-12;
-    candidates.push_back(builder.interior_sphere(p, limit, depth_before));
-    before = p;
+  std::vector<double> depths;
+  const std::vector<Vec3> inner = interior_points(field, std::max(spacing, size / 12.0), depths);
+  for (std::size_t i = 0; i < inner.size(); ++i) {
+    targets.push_back(inner[i]);
+    candidates.push_back(builder.interior_sphere(inner[i], depths[i]));
   }
   field.stats->candidates += candidates.size();
   return choose_cover(targets, candidates, margin);
