@@ -154,11 +154,6 @@ class PolyhedralCover {
     bool kept;                     // whether the mesh's triangles near it were kept (few enough):
     std::uint32_t near_begin, near_end;  // in near_, those within 2 h + delta of its centre, nearest first
   };
-  // A triangle's plane: unit normal (zero for a degenerate triangle: no bound) and offset.
-  struct Plane {
-    Vec3 normal;
-    double offset;
-  };
   // Triangles kept per split cube at most: more, and its cubes ask the mesh's BVH.
   static constexpr std::size_t kMaxKept = 64;
   // A kept triangle: its index in the mesh's BVH and its distance from the split cube's centre.
@@ -172,12 +167,6 @@ class PolyhedralCover {
       : field_(field), half_level_(half_level), delta_(0.125 * half_level), chosen_(std::move(seed)),
         builder_(field, half_level), added_(2.05 * half_level) {
     for (const Chosen& s : chosen_) held_r2_.push_back(reach_squared(s.radius));
-    if (field_.mesh == nullptr) return;
-    for (const Triangle& t : field_.mesh->triangles()) {
-      const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
-      const Vec3 unit = n.norm() > 0.0 ? Vec3(n.normalized()) : Vec3::Zero();
-      planes_.push_back({unit, unit.dot(t[0])});
-    }
   }
 
   void run() {
@@ -390,8 +379,8 @@ class PolyhedralCover {
     double best = limit;
     for (std::uint32_t k = from.near_begin; k < from.near_end && !beyond(near_[k], offset, limit); ++k) {
       ++field_.stats->triangle_tests;
-      if (plane_beyond(near_[k].triangle, q.center, best)) continue;
       const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(near_[k].triangle)];
+      if (triangle_plane_beyond(q.center, t[0], t[1], t[2], best)) continue;
       const double d = (closest_point_on_triangle(q.center, t[0], t[1], t[2]) - q.center).norm();
       if (d < best) {
         best = d;
@@ -399,14 +388,6 @@ class PolyhedralCover {
       }
     }
     return best;
-  }
-  // Whether the triangle's distance from p, as closest_point_on_triangle gives it, is surely at
-  // least `limit`: its plane's distance, a lower bound, is beyond it by far more than the rounding
-  // of either (1e-9 m against ~1e-15 m), so a triangle skipped here is one the exact test would
-  // not take. (About half the triangles a cube asks; the plane costs a tenth of the test.)
-  bool plane_beyond(std::int32_t triangle, const Vec3& p, double limit) const {
-    const Plane& plane = planes_[static_cast<std::size_t>(triangle)];
-    return std::abs(plane.normal.dot(p) - plane.offset) > limit + 1e-9;
   }
   // Whether a kept triangle, and every one after it (they are kept nearest first), is at least
   // `limit` from a point `offset` or less from the centre it was measured from: its distance
@@ -424,8 +405,8 @@ class PolyhedralCover {
     const std::size_t begin = out.size();
     auto keep = [&](std::int32_t triangle) {
       ++field_.stats->triangle_tests;
-      if (plane_beyond(triangle, q.center, reach)) return;
       const Triangle& t = field_.mesh->triangles()[static_cast<std::size_t>(triangle)];
+      if (triangle_plane_beyond(q.center, t[0], t[1], t[2], reach)) return;
       const double d = (closest_point_on_triangle(q.center, t[0], t[1], t[2]) - q.center).norm();
       if (d < reach) out.push_back({triangle, d});
     };
@@ -488,7 +469,6 @@ class PolyhedralCover {
   std::vector<SplitCube> split_;         // the cubes split into this level's, by Cube::parent
   std::vector<std::uint32_t> lists_;     // their spheres, by SplitCube::begin/end
   std::vector<NearTriangle> near_;       // their kept triangles, by SplitCube::near_begin/near_end
-  std::vector<Plane> planes_;            // per triangle of the mesh
   std::vector<std::int32_t> found_;      // a BVH query's triangles (scratch)
   std::int8_t cube_in_ = -1;
 };
